@@ -1,0 +1,162 @@
+//! The contract between the render graph and a pass kind. A pass kind declares its slots and
+//! params in one place (a [`PassKind`] entry); the graph validates wiring against those
+//! declarations before any GPU work, then asks each node to `prepare` (create pipelines and its
+//! output resources) and, per iteration, to `execute` (record its GPU work).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use crate::gpu::GpuContext;
+
+/// What flows along an edge. Edges must connect slots of the same kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ResourceKind {
+    /// Per-pixel `vec4<f32>`: RGB radiance sum in xyz, sample count in w. Sums and counts, never
+    /// averages, so that images from several runs merge exactly.
+    Radiance,
+    /// Hit points recorded by the camera pass at photon-mapped vertices.
+    HitPoints,
+    /// A BVH over hit points, in the layout the photon pass traverses.
+    HitPointTree,
+    /// Per-hit-point photon count and flux gathered in one iteration.
+    Deposits,
+}
+
+impl ResourceKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            ResourceKind::Radiance => "radiance",
+            ResourceKind::HitPoints => "hit_points",
+            ResourceKind::HitPointTree => "hit_point_tree",
+            ResourceKind::Deposits => "deposits",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SlotDir {
+    In,
+    Out,
+}
+
+/// One named input or output of a pass kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SlotDecl {
+    pub name: &'static str,
+    pub kind: ResourceKind,
+    pub dir: SlotDir,
+    /// The contents survive from one iteration to the next (accumulators, per-pixel statistics).
+    pub persistent: bool,
+    /// An input that may stay unconnected; the pass then does without it.
+    pub optional: bool,
+}
+
+impl SlotDecl {
+    pub const fn input(name: &'static str, kind: ResourceKind) -> Self {
+        Self {
+            name,
+            kind,
+            dir: SlotDir::In,
+            persistent: false,
+            optional: false,
+        }
+    }
+    pub const fn output(name: &'static str, kind: ResourceKind) -> Self {
+        Self {
+            name,
+            kind,
+            dir: SlotDir::Out,
+            persistent: false,
+            optional: false,
+        }
+    }
+    pub const fn persistent(mut self) -> Self {
+        self.persistent = true;
+        self
+    }
+    pub const fn optional(mut self) -> Self {
+        self.optional = true;
+        self
+    }
+}
+
+/// A GPU resource bound to a slot.
+#[derive(Debug, Clone)]
+pub struct Resource {
+    pub kind: ResourceKind,
+    pub buffer: Arc<wgpu::Buffer>,
+    /// Number of elements (pixels for `Radiance`).
+    pub len: u64,
+}
+
+/// What a pass sees when it is prepared: the device, the scene's shared resources, the resources
+/// its inputs are connected to, and the render's size and seed.
+pub struct PrepareCtx<'a> {
+    pub gpu: &'a GpuContext,
+    pub scene: &'a crate::render::SceneResources,
+    pub shaders: &'a crate::shaders::ShaderLibrary,
+    pub inputs: HashMap<&'static str, Resource>,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Per-iteration information handed to `execute`.
+pub struct ExecCtx<'a> {
+    pub gpu: &'a GpuContext,
+    pub scene: &'a crate::render::SceneResources,
+    /// 0-based iteration index; with the seed it decorrelates random streams between iterations.
+    pub iteration: u64,
+    pub seed: u64,
+}
+
+/// Statistics a pass reports after the render (read back from the GPU once, not per iteration).
+#[derive(Debug, Clone, Default)]
+pub struct PassStats {
+    pub rays: u64,
+    pub discarded_samples: u64,
+}
+
+pub trait Pass {
+    /// Create pipelines and output resources. Returns the resource for every output slot.
+    fn prepare(
+        &mut self,
+        ctx: PrepareCtx<'_>,
+    ) -> Result<HashMap<&'static str, Resource>, crate::Error>;
+
+    /// Record this iteration's GPU work.
+    fn execute(&mut self, ctx: &ExecCtx<'_>, encoder: &mut wgpu::CommandEncoder);
+
+    /// Camera samples per pixel this pass adds each iteration (0 for passes that add none).
+    fn samples_per_iteration(&self) -> u32 {
+        0
+    }
+
+    /// Counters gathered on the GPU so far (may read back; called rarely).
+    fn stats(&self, _gpu: &GpuContext) -> Result<PassStats, crate::Error> {
+        Ok(PassStats::default())
+    }
+}
+
+/// A pass kind as the registry knows it: its name, slots, parameter names and constructor.
+/// `construct` receives the node's `params` exactly as written in the graph file (RON text, e.g.
+/// `(max_depth: 12)`, or `()` when absent) and parses it with `#[serde(deny_unknown_fields)]`, so
+/// a parse error's position is relative to that text.
+pub struct PassKind {
+    pub name: &'static str,
+    pub description: &'static str,
+    pub slots: &'static [SlotDecl],
+    pub construct: fn(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError>,
+}
+
+impl PassKind {
+    pub fn slot(&self, name: &str) -> Option<&'static SlotDecl> {
+        self.slots.iter().find(|s| s.name == name)
+    }
+}
+
+/// Parses a pass's params from the text of its `params` field.
+pub fn parse_params<P: serde::de::DeserializeOwned>(
+    params: &str,
+) -> Result<P, ron::error::SpannedError> {
+    ron::Options::default().from_str(params)
+}
