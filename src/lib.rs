@@ -1,9 +1,11 @@
 //! hppm: a GPU renderer that combines path tracing with progressive photon mapping, built as a
 //! render graph of wgpu compute passes described in RON.
 
+pub mod bench;
 pub mod error;
 pub mod gpu;
 pub mod graph;
+pub mod image;
 pub mod passes;
 pub mod render;
 pub mod scene;

@@ -1,1 +1,253 @@
-fn main() {}
+//! The `hppm` command line: render, info, graph, bench.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use clap::{Args, Parser, Subcommand};
+use hppm::gpu::{GpuContext, GpuError};
+use hppm::image::Provenance;
+use hppm::render::{Budget, Renderer};
+use hppm::{Error, bench, graph, passes, scene};
+
+/// hppm: path tracing + progressive photon mapping on the GPU, as a render graph.
+#[derive(Parser)]
+#[command(name = "hppm", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene through a graph.
+    Render(RenderArgs),
+    /// List GPU adapters and the features hppm uses.
+    Info,
+    /// Validate a graph file and print its schedule.
+    Graph {
+        file: PathBuf,
+        /// Print Graphviz instead of the schedule.
+        #[arg(long)]
+        dot: bool,
+    },
+    /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes.
+    Bench(BenchArgs),
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file (.xml Mitsuba 3, .ron, .obj); default: the bundled Cornell box.
+    scene: Option<PathBuf>,
+    /// Render graph (RON); default: graphs/pt.ron.
+    #[arg(long)]
+    graph: Option<PathBuf>,
+    /// Samples per pixel to render.
+    #[arg(long, conflicts_with = "time")]
+    spp: Option<u64>,
+    /// Seconds to render for.
+    #[arg(long)]
+    time: Option<f64>,
+    /// Image size WxH (default: the scene's film).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Output image: .exr (linear float) or .png (sRGB).
+    #[arg(long, default_value = "render.exr")]
+    out: PathBuf,
+    /// Adapter index (see `hppm info`) or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// Adapter index (see `hppm info`) or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Samples per pixel for each measurement.
+    #[arg(long, default_value_t = 64)]
+    spp: u64,
+    /// Append the results to this Markdown file (e.g. BENCHMARKS.md).
+    #[arg(long)]
+    write: Option<PathBuf>,
+}
+
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, e.g. 512x512, got {text:?}"))?;
+    let parse = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&v| (1..=16384).contains(&v))
+            .ok_or_else(|| format!("size {s:?} is not a whole number from 1 to 16384"))
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+/// A file shipped with hppm, found relative to the working directory or, failing that, to the
+/// source tree the binary was built from.
+fn bundled(relative: &str) -> PathBuf {
+    let local = PathBuf::from(relative);
+    if local.exists() {
+        return local;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+fn cancel_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let handler_flag = flag.clone();
+    // A second handler cannot be installed (e.g. in an embedding program): rendering still works,
+    // only Ctrl-C then ends the process without writing.
+    let _ = ctrlc::set_handler(move || handler_flag.store(true, Ordering::Relaxed));
+    flag
+}
+
+fn progress_bar(budget: Budget) -> indicatif::ProgressBar {
+    let (length, template) = match (budget.spp, budget.seconds) {
+        (Some(spp), _) => (spp, "{bar:40} {pos}/{len} spp  {msg}  eta {eta}"),
+        (None, Some(s)) => ((s * 1000.0) as u64, "{bar:40} {msg}  eta {eta}"),
+        (None, None) => (0, "{msg}"),
+    };
+    let bar = indicatif::ProgressBar::new(length);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+fn render(args: RenderArgs) -> Result<(), Error> {
+    let scene_path = args
+        .scene
+        .unwrap_or_else(|| bundled("scenes/cornell_box.ron"));
+    let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/pt.ron"));
+    let scene = scene::load(&scene_path)?;
+    let graph = graph::load_graph(&graph_path, passes::registry())?;
+    for warning in &graph.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let gpu = GpuContext::new(args.adapter.as_deref())?;
+    eprintln!("adapter: {}", gpu.adapter_label());
+    let (width, height) = args
+        .size
+        .unwrap_or((scene.camera.width, scene.camera.height));
+    let budget = Budget {
+        spp: args
+            .spp
+            .or(if args.time.is_none() {
+                scene.spp_hint.map(u64::from)
+            } else {
+                None
+            })
+            .or(if args.time.is_none() { Some(64) } else { None }),
+        seconds: args.time,
+    };
+    let mut renderer = Renderer::new(&gpu, &scene, graph, width, height, args.seed)?;
+    let cancel = cancel_flag();
+    let bar = progress_bar(budget);
+    let summary = renderer.run(budget, &cancel, |r, seconds| {
+        let spp = r.samples_per_pixel();
+        match budget.spp {
+            Some(_) => bar.set_position(spp),
+            None => bar.set_position((seconds * 1000.0) as u64),
+        }
+        bar.set_message(format!("{:.1} spp/s", spp as f64 / seconds.max(1e-9)));
+    })?;
+    bar.finish_and_clear();
+    let stats = renderer.stats()?;
+    let image = renderer.image()?;
+    let provenance = Provenance::default()
+        .with("hppm_adapter", gpu.adapter_label())
+        .with("hppm_scene", scene_path.display())
+        .with("hppm_graph", graph_path.display())
+        .with("hppm_spp", summary.samples_per_pixel)
+        .with("hppm_seed", args.seed)
+        .with("hppm_seconds", format!("{:.3}", summary.seconds));
+    image.write(&args.out, &provenance)?;
+    if summary.cancelled {
+        eprintln!("interrupted: wrote what was rendered so far");
+    }
+    println!(
+        "{}: {}x{}, {} spp in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
+        args.out.display(),
+        width,
+        height,
+        summary.samples_per_pixel,
+        summary.seconds,
+        stats.rays as f64 / summary.seconds.max(1e-9) / 1e6,
+        stats.discarded_samples,
+        gpu.adapter_label()
+    );
+    Ok(())
+}
+
+fn info() -> Result<(), Error> {
+    let adapters = hppm::gpu::list_adapters();
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter.into());
+    }
+    for (i, (info, features, limits)) in adapters.iter().enumerate() {
+        println!("{i}: {}", hppm::gpu::adapter_label(info));
+        println!("   driver: {} {}", info.driver, info.driver_info);
+        let has = |f: wgpu::Features| if features.contains(f) { "yes" } else { "no" };
+        println!(
+            "   float32 atomics: {}   timestamp queries: {}   subgroups: {}",
+            has(wgpu::Features::SHADER_FLOAT32_ATOMIC),
+            has(wgpu::Features::TIMESTAMP_QUERY),
+            has(wgpu::Features::SUBGROUP)
+        );
+        println!(
+            "   max storage binding: {} MiB   max buffer: {} MiB",
+            limits.max_storage_buffer_binding_size >> 20,
+            limits.max_buffer_size >> 20
+        );
+    }
+    println!("pass kinds:");
+    for kind in passes::registry() {
+        println!("   {:<20} {}", kind.name, kind.description);
+    }
+    Ok(())
+}
+
+fn show_graph(file: &Path, dot: bool) -> Result<(), Error> {
+    let graph = graph::load_graph(file, passes::registry())?;
+    for warning in &graph.warnings {
+        eprintln!("warning: {warning}");
+    }
+    if dot {
+        print!("{}", graph.to_dot());
+    } else {
+        print!("{}", graph.schedule_text());
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render(args),
+        Command::Info => info(),
+        Command::Graph { file, dot } => show_graph(&file, dot),
+        Command::Bench(args) => bench::run(
+            args.adapter.as_deref(),
+            args.spp,
+            args.write.as_deref(),
+            bundled,
+        ),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error}");
+            match error {
+                Error::Gpu(GpuError::NoAdapter) => ExitCode::from(2),
+                _ => ExitCode::FAILURE,
+            }
+        }
+    }
+}

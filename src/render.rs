@@ -1,4 +1,247 @@
-//! Drives a validated graph over a scene.
+//! Drives a validated graph over a scene: uploads the scene, prepares every node in schedule
+//! order (wiring each input to the resource its producer made), then runs iterations until a
+//! budget is met.
 
-/// Placeholder until the scene upload lands.
-pub struct SceneResources {}
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::gpu::binding::{Access, bind_buffers};
+use crate::graph::ValidGraph;
+use crate::graph::pass::{ExecCtx, PassStats, PrepareCtx, Resource};
+use crate::image::Image;
+use crate::scene::Scene;
+use crate::scene::gpu_layout::{GpuScene, GpuSceneUniform};
+use crate::shaders::ShaderLibrary;
+
+/// The scene on the GPU: bind group 0 of every pass.
+pub struct SceneResources {
+    pub layout: wgpu::BindGroupLayout,
+    pub bind_group: wgpu::BindGroup,
+    pub uniform: GpuSceneUniform,
+    _buffers: Vec<wgpu::Buffer>,
+}
+
+impl SceneResources {
+    pub fn upload(gpu: &GpuContext, scene: &GpuScene) -> Result<Self, Error> {
+        use bytemuck::{bytes_of, cast_slice};
+        let storage = wgpu::BufferUsages::STORAGE;
+        let buffers = vec![
+            gpu.create_buffer_init(
+                "scene uniform",
+                bytes_of(&scene.uniform),
+                wgpu::BufferUsages::UNIFORM,
+            )?,
+            gpu.create_buffer_init("scene bvh nodes", cast_slice(&scene.bvh_nodes), storage)?,
+            gpu.create_buffer_init(
+                "scene prim indices",
+                cast_slice(&scene.prim_indices),
+                storage,
+            )?,
+            gpu.create_buffer_init("scene triangles", cast_slice(&scene.triangles), storage)?,
+            gpu.create_buffer_init("scene spheres", cast_slice(&scene.spheres), storage)?,
+            gpu.create_buffer_init("scene materials", cast_slice(&scene.materials), storage)?,
+            gpu.create_buffer_init("scene lights", cast_slice(&scene.lights), storage)?,
+            gpu.create_buffer_init("scene light cdf", cast_slice(&scene.light_cdf), storage)?,
+        ];
+        let entries: Vec<_> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                (
+                    if i == 0 {
+                        Access::Uniform
+                    } else {
+                        Access::Read
+                    },
+                    b,
+                )
+            })
+            .collect();
+        let (layout, bind_group) = bind_buffers(&gpu.device, "scene", &entries);
+        Ok(Self {
+            layout,
+            bind_group,
+            uniform: scene.uniform,
+            _buffers: buffers,
+        })
+    }
+}
+
+/// When to stop rendering. With both set, whichever comes first.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Budget {
+    pub spp: Option<u64>,
+    pub seconds: Option<f64>,
+}
+
+/// A graph prepared on a device for one scene, ready to iterate.
+pub struct Renderer<'a> {
+    gpu: &'a GpuContext,
+    scene: SceneResources,
+    graph: ValidGraph,
+    output: Resource,
+    width: u32,
+    height: u32,
+    seed: u64,
+    iteration: u64,
+    spp_per_iteration: u64,
+}
+
+impl<'a> Renderer<'a> {
+    pub fn new(
+        gpu: &'a GpuContext,
+        scene: &Scene,
+        mut graph: ValidGraph,
+        width: u32,
+        height: u32,
+        seed: u64,
+    ) -> Result<Self, Error> {
+        let scene_resources = SceneResources::upload(gpu, &GpuScene::new(scene, width, height))?;
+        let shaders = ShaderLibrary::new(gpu.has_float_atomics(), HashMap::new());
+        let mut produced: HashMap<(usize, &'static str), Resource> = HashMap::new();
+        let order = graph.order.clone();
+        for &node in &order {
+            let inputs = graph
+                .inputs_of(node)
+                .filter_map(|e| {
+                    produced
+                        .get(&(e.from_node, e.from_slot))
+                        .map(|r| (e.to_slot, r.clone()))
+                })
+                .collect();
+            let ctx = PrepareCtx {
+                gpu,
+                scene: &scene_resources,
+                shaders: &shaders,
+                inputs,
+                width,
+                height,
+            };
+            let outputs = graph.nodes[node].pass.prepare(ctx)?;
+            for (slot, resource) in outputs {
+                produced.insert((node, slot), resource);
+            }
+        }
+        let output = produced.remove(&graph.output).ok_or_else(|| {
+            Error::Other(format!(
+                "node \"{}\" did not produce its output slot \"{}\"",
+                graph.nodes[graph.output.0].name, graph.output.1
+            ))
+        })?;
+        let spp_per_iteration = graph
+            .nodes
+            .iter()
+            .map(|n| n.pass.samples_per_iteration() as u64)
+            .max()
+            .unwrap_or(0);
+        gpu.check_errors()?;
+        Ok(Self {
+            gpu,
+            scene: scene_resources,
+            graph,
+            output,
+            width,
+            height,
+            seed,
+            iteration: 0,
+            spp_per_iteration,
+        })
+    }
+
+    /// Records and submits one iteration of every node, in schedule order.
+    pub fn iterate(&mut self) -> Result<(), Error> {
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("iteration"),
+            });
+        let ctx = ExecCtx {
+            gpu: self.gpu,
+            scene: &self.scene,
+            iteration: self.iteration,
+            seed: self.seed,
+        };
+        for &node in &self.graph.order {
+            self.graph.nodes[node].pass.execute(&ctx, &mut encoder);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.iteration += 1;
+        Ok(())
+    }
+
+    pub fn iterations(&self) -> u64 {
+        self.iteration
+    }
+
+    pub fn samples_per_pixel(&self) -> u64 {
+        self.iteration * self.spp_per_iteration
+    }
+
+    pub fn spp_per_iteration(&self) -> u64 {
+        self.spp_per_iteration
+    }
+
+    /// Reads the output slot back and averages it.
+    pub fn image(&self) -> Result<Image, Error> {
+        let sums: Vec<[f32; 4]> = self
+            .gpu
+            .read_pod(&self.output.buffer, self.output.len as usize)?;
+        Ok(Image::from_sums(self.width, self.height, &sums))
+    }
+
+    /// Counters summed over every node.
+    pub fn stats(&self) -> Result<PassStats, Error> {
+        let mut total = PassStats::default();
+        for node in &self.graph.nodes {
+            let s = node.pass.stats(self.gpu)?;
+            total.rays += s.rays;
+            total.discarded_samples += s.discarded_samples;
+        }
+        Ok(total)
+    }
+
+    /// Iterates until `budget` is met or `cancel` is raised, calling `progress` after each
+    /// iteration with the seconds elapsed.
+    pub fn run(
+        &mut self,
+        budget: Budget,
+        cancel: &AtomicBool,
+        mut progress: impl FnMut(&Self, f64),
+    ) -> Result<RunSummary, Error> {
+        let start = Instant::now();
+        let target_iterations = budget
+            .spp
+            .map(|spp| spp.div_ceil(self.spp_per_iteration.max(1)));
+        loop {
+            let elapsed = start.elapsed().as_secs_f64();
+            let spp_done = target_iterations.is_some_and(|t| self.iteration >= t);
+            let time_done = budget.seconds.is_some_and(|s| elapsed >= s);
+            if spp_done || time_done || cancel.load(Ordering::Relaxed) {
+                break;
+            }
+            self.iterate()?;
+            // Waiting each iteration keeps the queue short, so the time budget and Ctrl-C are
+            // honoured within one iteration.
+            self.gpu.wait()?;
+            progress(self, start.elapsed().as_secs_f64());
+        }
+        Ok(RunSummary {
+            seconds: start.elapsed().as_secs_f64(),
+            iterations: self.iteration,
+            samples_per_pixel: self.samples_per_pixel(),
+            cancelled: cancel.load(Ordering::Relaxed),
+        })
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct RunSummary {
+    pub seconds: f64,
+    pub iterations: u64,
+    pub samples_per_pixel: u64,
+    pub cancelled: bool,
+}

@@ -1,4 +1,142 @@
-//! WGSL composition with naga_oil.
+//! WGSL composition with naga_oil. Shared modules live in `shaders/common/` (each with a
+//! `#define_import_path` matching its path), one entry file per pass in `shaders/passes/`. The
+//! sources are compiled into the binary, so `hppm` runs from any directory.
 
-/// Placeholder until the shader library lands.
-pub struct ShaderLibrary {}
+use std::collections::HashMap;
+
+use naga_oil::compose::{
+    ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue,
+};
+use wgpu::naga;
+
+/// Importable modules in dependency order (a module may import only those above it).
+pub const COMMON_MODULES: &[(&str, &str)] = &[
+    (
+        "shaders/common/rng.wgsl",
+        include_str!("../shaders/common/rng.wgsl"),
+    ),
+    (
+        "shaders/common/sampling.wgsl",
+        include_str!("../shaders/common/sampling.wgsl"),
+    ),
+    (
+        "shaders/common/scene.wgsl",
+        include_str!("../shaders/common/scene.wgsl"),
+    ),
+    (
+        "shaders/common/camera.wgsl",
+        include_str!("../shaders/common/camera.wgsl"),
+    ),
+    (
+        "shaders/common/lights.wgsl",
+        include_str!("../shaders/common/lights.wgsl"),
+    ),
+    (
+        "shaders/common/bsdf.wgsl",
+        include_str!("../shaders/common/bsdf.wgsl"),
+    ),
+];
+
+/// Entry-point files, one per pass kind that runs a kernel.
+pub const PASS_SHADERS: &[(&str, &str)] = &[(
+    "shaders/passes/path_trace.wgsl",
+    include_str!("../shaders/passes/path_trace.wgsl"),
+)];
+
+/// Composes pass shaders for one device and one scene (its shader defs).
+pub struct ShaderLibrary {
+    capabilities: naga::valid::Capabilities,
+    defs: HashMap<String, ShaderDefValue>,
+}
+
+impl ShaderLibrary {
+    /// `float_atomics`: the device has SHADER_FLOAT32_ATOMIC, so modules may use `atomic<f32>`.
+    pub fn new(float_atomics: bool, defs: HashMap<String, ShaderDefValue>) -> Self {
+        let mut capabilities = naga::valid::Capabilities::default();
+        if float_atomics {
+            capabilities |= naga::valid::Capabilities::SHADER_FLOAT32_ATOMIC;
+        }
+        Self { capabilities, defs }
+    }
+
+    pub fn defs(&self) -> &HashMap<String, ShaderDefValue> {
+        &self.defs
+    }
+
+    fn composer(&self) -> Result<Composer, crate::Error> {
+        let mut composer = Composer::default().with_capabilities(self.capabilities);
+        for (path, source) in COMMON_MODULES {
+            let added = composer.add_composable_module(ComposableModuleDescriptor {
+                source,
+                file_path: path,
+                shader_defs: self.defs.clone(),
+                ..Default::default()
+            });
+            if let Err(e) = added {
+                return Err(crate::Error::Shader(e.emit_to_string(&composer)));
+            }
+        }
+        Ok(composer)
+    }
+
+    /// Composes and validates the entry file `path` (one of `PASS_SHADERS`).
+    pub fn compose(&self, path: &str) -> Result<naga::Module, crate::Error> {
+        let source = PASS_SHADERS
+            .iter()
+            .find(|(p, _)| *p == path)
+            .map(|(_, s)| *s)
+            .ok_or_else(|| crate::Error::Shader(format!("no pass shader named {path}")))?;
+        self.compose_source(path, source)
+    }
+
+    /// Composes an entry file given as text; `path` names it in error messages.
+    pub fn compose_source(&self, path: &str, source: &str) -> Result<naga::Module, crate::Error> {
+        let mut composer = self.composer()?;
+        composer
+            .make_naga_module(NagaModuleDescriptor {
+                source,
+                file_path: path,
+                shader_defs: self.defs.clone(),
+                ..Default::default()
+            })
+            .map_err(|e| crate::Error::Shader(e.emit_to_string(&composer)))
+    }
+
+    /// A compute pipeline for `entry` in the pass shader `path`, with an explicit layout.
+    pub fn compute_pipeline(
+        &self,
+        gpu: &crate::gpu::GpuContext,
+        path: &str,
+        entry: &str,
+        layouts: &[&wgpu::BindGroupLayout],
+    ) -> Result<wgpu::ComputePipeline, crate::Error> {
+        let module = self.compose(path)?;
+        let shader = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(path),
+                source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
+            });
+        let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> =
+            layouts.iter().map(|l| Some(*l)).collect();
+        let layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(path),
+                bind_group_layouts: &layout_refs,
+                immediate_size: 0,
+            });
+        let pipeline = gpu
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(path),
+                layout: Some(&layout),
+                module: &shader,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        gpu.check_errors()?;
+        Ok(pipeline)
+    }
+}

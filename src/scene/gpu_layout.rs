@@ -1,1 +1,314 @@
-//! TODO
+//! The scene as the GPU reads it. Each struct mirrors one in `shaders/common/scene.wgsl`
+//! (std430 layout: a `vec3<f32>` takes 12 bytes but aligns to 16, so each is followed by a
+//! 4-byte scalar). Keep the two in step; `tests/shaders.rs` checks the sizes against naga's.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::bvh::{self, BvhNode};
+use super::{Bsdf, Scene};
+
+pub const MATERIAL_DIFFUSE: u32 = 0;
+pub const MATERIAL_DIELECTRIC: u32 = 1;
+pub const MATERIAL_MIRROR: u32 = 2;
+
+pub const LIGHT_TRIANGLE: u32 = 0;
+pub const LIGHT_SPHERE: u32 = 1;
+pub const LIGHT_POINT: u32 = 2;
+
+/// `light` of a primitive that emits nothing.
+pub const NO_LIGHT: u32 = u32::MAX;
+/// `max_depth` / `rr_depth` meaning "unbounded" / "never".
+pub const UNBOUNDED: u32 = u32::MAX;
+
+/// Ray offsets are this fraction of the scene's extent, so a scene scaled by 1e-3 or 1e3
+/// renders the same image.
+const RELATIVE_EPSILON: f32 = 3e-5;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuTriangle {
+    pub vertex: [f32; 3],
+    pub material: u32,
+    pub edge_a: [f32; 3],
+    pub light: u32,
+    pub edge_b: [f32; 3],
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuSphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: u32,
+    pub light: u32,
+    pub flip_normals: u32,
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuMaterial {
+    pub albedo: [f32; 3],
+    pub kind: u32,
+    pub emission: [f32; 3],
+    pub int_ior: f32,
+    pub ext_ior: f32,
+    pub _pad: [u32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuLight {
+    /// Point lights: position. Area lights: unused.
+    pub position: [f32; 3],
+    pub kind: u32,
+    /// Point lights: intensity (W/sr). Area lights: emitted radiance.
+    pub radiance: [f32; 3],
+    /// Triangle or sphere index of an area light.
+    pub prim: u32,
+    /// Probability that next-event estimation picks this light.
+    pub select_prob: f32,
+    pub area: f32,
+    pub _pad: [u32; 2],
+}
+
+/// Camera, bounds, counts and integrator settings: one uniform shared by every pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuSceneUniform {
+    pub camera_origin: [f32; 3],
+    pub tan_half_x: f32,
+    pub camera_right: [f32; 3],
+    pub tan_half_y: f32,
+    pub camera_up: [f32; 3],
+    pub width: u32,
+    pub camera_forward: [f32; 3],
+    pub height: u32,
+    pub bounds_min: [f32; 3],
+    pub epsilon: f32,
+    pub bounds_max: [f32; 3],
+    pub scene_radius: f32,
+    pub num_triangles: u32,
+    pub num_spheres: u32,
+    pub num_lights: u32,
+    pub max_depth: u32,
+    pub rr_depth: u32,
+    pub _pad: [u32; 3],
+}
+
+/// Everything the GPU needs to trace rays through a scene. Arrays are never empty (a zeroed
+/// element is added) because wgpu rejects empty storage bindings; the counts in `uniform` say
+/// how many entries are real.
+pub struct GpuScene {
+    pub uniform: GpuSceneUniform,
+    pub bvh_nodes: Vec<BvhNode>,
+    pub prim_indices: Vec<u32>,
+    pub triangles: Vec<GpuTriangle>,
+    pub spheres: Vec<GpuSphere>,
+    pub materials: Vec<GpuMaterial>,
+    pub lights: Vec<GpuLight>,
+    /// Inclusive prefix sums of `select_prob`, searched to pick a light.
+    pub light_cdf: Vec<f32>,
+}
+
+fn mean(v: Vec3) -> f32 {
+    (v.x + v.y + v.z) / 3.0
+}
+
+fn gpu_material(bsdf: &Bsdf, emission: Vec3) -> GpuMaterial {
+    let (kind, albedo, int_ior, ext_ior) = match *bsdf {
+        Bsdf::Diffuse { reflectance } => (MATERIAL_DIFFUSE, reflectance, 1.0, 1.0),
+        Bsdf::Dielectric { int_ior, ext_ior } => (MATERIAL_DIELECTRIC, Vec3::ONE, int_ior, ext_ior),
+        Bsdf::Mirror => (MATERIAL_MIRROR, Vec3::ONE, 1.0, 1.0),
+    };
+    GpuMaterial {
+        albedo: albedo.to_array(),
+        kind,
+        emission: emission.to_array(),
+        int_ior,
+        ext_ior,
+        _pad: [0; 3],
+    }
+}
+
+/// Lights with their unnormalised power (what NEE picks in proportion to).
+fn collect_lights(scene: &Scene) -> Vec<(GpuLight, f32)> {
+    let mut lights = Vec::new();
+    let emission = |m: u32| {
+        scene
+            .materials
+            .get(m as usize)
+            .map_or(Vec3::ZERO, |mat| mat.emission)
+    };
+    let area_light = |kind, prim, radiance: Vec3, area: f32| {
+        let light = GpuLight {
+            position: [0.0; 3],
+            kind,
+            radiance: radiance.to_array(),
+            prim,
+            select_prob: 0.0,
+            area,
+            _pad: [0; 2],
+        };
+        // One-sided Lambertian emitter: power = pi * area * radiance.
+        (light, std::f32::consts::PI * area * mean(radiance))
+    };
+    for (i, t) in scene.triangles.iter().enumerate() {
+        let radiance = emission(t.material);
+        let area = 0.5 * (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).length();
+        if radiance.max_element() > 0.0 && area > 0.0 {
+            lights.push(area_light(LIGHT_TRIANGLE, i as u32, radiance, area));
+        }
+    }
+    for (i, s) in scene.spheres.iter().enumerate() {
+        let radiance = emission(s.material);
+        let area = 4.0 * std::f32::consts::PI * s.radius * s.radius;
+        if radiance.max_element() > 0.0 && area > 0.0 {
+            lights.push(area_light(LIGHT_SPHERE, i as u32, radiance, area));
+        }
+    }
+    for p in &scene.point_lights {
+        if p.intensity.max_element() > 0.0 {
+            let light = GpuLight {
+                position: p.position.to_array(),
+                kind: LIGHT_POINT,
+                radiance: p.intensity.to_array(),
+                prim: 0,
+                select_prob: 0.0,
+                area: 0.0,
+                _pad: [0; 2],
+            };
+            lights.push((light, 4.0 * std::f32::consts::PI * mean(p.intensity)));
+        }
+    }
+    lights
+}
+
+/// Normalises light powers into selection probabilities and their CDF.
+fn normalise_lights(mut lights: Vec<(GpuLight, f32)>) -> (Vec<GpuLight>, Vec<f32>) {
+    let total: f64 = lights.iter().map(|(_, p)| *p as f64).sum();
+    let mut cdf = Vec::with_capacity(lights.len());
+    let mut running = 0.0f64;
+    for (light, power) in &mut lights {
+        let prob = if total > 0.0 {
+            *power as f64 / total
+        } else {
+            0.0
+        };
+        light.select_prob = prob as f32;
+        running += prob;
+        cdf.push(running as f32);
+    }
+    if let Some(last) = cdf.last_mut() {
+        *last = 1.0;
+    }
+    (lights.into_iter().map(|(l, _)| l).collect(), cdf)
+}
+
+fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
+    let cam = &scene.camera;
+    let forward = (cam.target - cam.origin).normalize_or_zero();
+    // Right-handed, y up: image x grows along forward x up, image y along the camera's up.
+    let right = forward.cross(cam.up).normalize_or_zero();
+    let up = right.cross(forward);
+    let tan_half_x = (cam.fov_x_deg.to_radians() * 0.5).tan();
+    let tan_half_y = tan_half_x * height as f32 / width.max(1) as f32;
+    GpuSceneUniform {
+        camera_origin: cam.origin.to_array(),
+        tan_half_x,
+        camera_right: right.to_array(),
+        tan_half_y,
+        camera_up: up.to_array(),
+        width,
+        camera_forward: forward.to_array(),
+        height,
+        ..Zeroable::zeroed()
+    }
+}
+
+impl GpuScene {
+    /// Lays out `scene` for rendering at `width` x `height`.
+    pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
+        let boxes = bvh::scene_boxes(scene);
+        let bvh = bvh::build_sah(&boxes, 4);
+        let (lights, light_cdf) = normalise_lights(collect_lights(scene));
+        let mut light_of_prim = vec![NO_LIGHT; scene.triangles.len() + scene.spheres.len()];
+        for (i, l) in lights.iter().enumerate() {
+            let prim = match l.kind {
+                LIGHT_TRIANGLE => l.prim as usize,
+                LIGHT_SPHERE => scene.triangles.len() + l.prim as usize,
+                _ => continue,
+            };
+            if let Some(slot) = light_of_prim.get_mut(prim) {
+                *slot = i as u32;
+            }
+        }
+        let triangles = scene
+            .triangles
+            .iter()
+            .zip(&light_of_prim)
+            .map(|(t, &light)| GpuTriangle {
+                vertex: t.v[0].to_array(),
+                material: t.material,
+                edge_a: (t.v[1] - t.v[0]).to_array(),
+                light,
+                edge_b: (t.v[2] - t.v[0]).to_array(),
+                _pad: 0,
+            })
+            .collect::<Vec<_>>();
+        let spheres = scene
+            .spheres
+            .iter()
+            .zip(&light_of_prim[scene.triangles.len()..])
+            .map(|(s, &light)| GpuSphere {
+                center: s.center.to_array(),
+                radius: s.radius,
+                material: s.material,
+                light,
+                flip_normals: s.flip_normals as u32,
+                _pad: 0,
+            })
+            .collect::<Vec<_>>();
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| gpu_material(&m.bsdf, m.emission))
+            .collect::<Vec<_>>();
+
+        let (lo, hi) = scene.bounds();
+        let scene_radius = 0.5 * (hi - lo).length();
+        let extent = scene_radius
+            .max(lo.abs().max_element())
+            .max(hi.abs().max_element());
+        let mut uniform = camera_uniform(scene, width, height);
+        uniform.bounds_min = lo.to_array();
+        uniform.bounds_max = hi.to_array();
+        uniform.scene_radius = scene_radius;
+        uniform.epsilon = RELATIVE_EPSILON * extent.max(f32::MIN_POSITIVE);
+        uniform.num_triangles = triangles.len() as u32;
+        uniform.num_spheres = spheres.len() as u32;
+        uniform.num_lights = lights.len() as u32;
+        uniform.max_depth = scene.integrator.max_depth.unwrap_or(UNBOUNDED);
+        uniform.rr_depth = scene.integrator.rr_depth.unwrap_or(UNBOUNDED);
+
+        Self {
+            uniform,
+            bvh_nodes: bvh.nodes,
+            prim_indices: non_empty(bvh.indices),
+            triangles: non_empty(triangles),
+            spheres: non_empty(spheres),
+            materials: non_empty(materials),
+            lights: non_empty(lights),
+            light_cdf: non_empty(light_cdf),
+        }
+    }
+}
+
+fn non_empty<T: Zeroable>(mut v: Vec<T>) -> Vec<T> {
+    if v.is_empty() {
+        v.push(T::zeroed());
+    }
+    v
+}

@@ -1,3 +1,5 @@
 //! TODO
 use super::*;
-pub fn load(_p: &Path) -> Result<Scene, SceneError> { todo!() }
+pub fn load(_p: &Path) -> Result<Scene, SceneError> {
+    todo!()
+}

@@ -1,3 +1,5 @@
 //! TODO
 use super::*;
-pub fn load_scene(_p: &Path) -> Result<Scene, SceneError> { todo!() }
+pub fn load_scene(_p: &Path) -> Result<Scene, SceneError> {
+    todo!()
+}

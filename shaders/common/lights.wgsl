@@ -1,0 +1,104 @@
+#define_import_path common::lights
+
+#import common::scene::{scene_info, lights, light_cdf, triangles, spheres, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT}
+#import common::sampling::{sample_triangle_barycentrics, sample_uniform_sphere}
+
+struct LightSample {
+    // Unit direction from the shading point to the light.
+    dir: vec3<f32>,
+    distance: f32,
+    // Radiance arriving along `dir` (area lights), or intensity / distance^2 (point lights).
+    radiance: vec3<f32>,
+    // Solid-angle density of this sample including the light choice; for point lights, the
+    // probability of choosing the light.
+    pdf: f32,
+    is_delta: bool,
+    valid: bool,
+}
+
+// Index of the light whose CDF interval contains u (binary search over inclusive prefix sums).
+fn pick_light(u: f32) -> u32 {
+    var lo = 0u;
+    var hi = scene_info.num_lights - 1u;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if u < light_cdf[mid] {
+            hi = mid;
+        } else {
+            lo = mid + 1u;
+        }
+    }
+    return lo;
+}
+
+// A point on an area light with its front-facing normal.
+struct LightPoint {
+    position: vec3<f32>,
+    normal: vec3<f32>,
+}
+
+fn sample_area_light_point(light: Light, u: vec2<f32>) -> LightPoint {
+    if light.kind == LIGHT_TRIANGLE {
+        let tri = triangles[light.prim];
+        let b = sample_triangle_barycentrics(u);
+        let position = tri.vertex + b.x * tri.edge_a + b.y * tri.edge_b;
+        return LightPoint(position, normalize(cross(tri.edge_a, tri.edge_b)));
+    }
+    let sphere = spheres[light.prim];
+    let d = sample_uniform_sphere(u);
+    let normal = select(d, -d, sphere.flip_normals != 0u);
+    return LightPoint(sphere.center + sphere.radius * d, normal);
+}
+
+// Solid-angle density of reaching area light `index` at distance `dist`, where the direction
+// makes cosine `cos_light` with the light's normal.
+fn area_light_pdf(index: u32, dist: f32, cos_light: f32) -> f32 {
+    let light = lights[index];
+    if cos_light <= 0.0 || light.area <= 0.0 {
+        return 0.0;
+    }
+    return light.select_prob * dist * dist / (light.area * cos_light);
+}
+
+fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample {
+    var result: LightSample;
+    result.valid = false;
+    if scene_info.num_lights == 0u {
+        return result;
+    }
+    let index = pick_light(u_pick);
+    let light = lights[index];
+    if light.select_prob <= 0.0 {
+        return result;
+    }
+    if light.kind == LIGHT_POINT {
+        let to_light = light.position - from_point;
+        let dist2 = dot(to_light, to_light);
+        if dist2 <= 0.0 {
+            return result;
+        }
+        let dist = sqrt(dist2);
+        result.dir = to_light / dist;
+        result.distance = dist;
+        result.radiance = light.radiance / dist2;
+        result.pdf = light.select_prob;
+        result.is_delta = true;
+        result.valid = true;
+        return result;
+    }
+    let point = sample_area_light_point(light, u);
+    let to_light = point.position - from_point;
+    let dist = length(to_light);
+    if dist <= 0.0 {
+        return result;
+    }
+    result.dir = to_light / dist;
+    result.distance = dist;
+    // One-sided emitters: nothing leaves the back.
+    let cos_light = -dot(result.dir, point.normal);
+    result.pdf = area_light_pdf(index, dist, cos_light);
+    result.radiance = light.radiance;
+    result.is_delta = false;
+    result.valid = result.pdf > 0.0;
+    return result;
+}

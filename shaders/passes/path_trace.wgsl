@@ -1,0 +1,168 @@
+// Path tracing with next-event estimation, MIS (power heuristic) for area lights, Mitsuba's depth
+// rule (max_depth counts segments) and optional Russian roulette. Each invocation adds
+// `samples_per_iteration` samples to one pixel's running sum (xyz) and count (w).
+
+#import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
+#import common::sampling::{INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
+#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, occluded, surface_at, offset_origin}
+#import common::camera::camera_direction
+#import common::lights::{sample_light, area_light_pdf}
+#import common::bsdf::{sample_dielectric, reflect_about}
+
+struct PathTraceParams {
+    sample_base: u32,
+    samples_per_iteration: u32,
+    seed: u32,
+    max_depth: u32,
+    rr_depth: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
+}
+
+@group(1) @binding(0) var<uniform> params: PathTraceParams;
+@group(1) @binding(1) var<storage, read_write> radiance: array<vec4<f32>>;
+// [rays low, rays high, discarded low, discarded high]: 64-bit totals from 32-bit atomics.
+@group(1) @binding(2) var<storage, read_write> counters: array<atomic<u32>, 4>;
+
+const COUNTER_RAYS: u32 = 0u;
+const COUNTER_DISCARDED: u32 = 2u;
+// Hard stop for unbounded depth with Russian roulette off; a closed lossless scene would
+// otherwise never end a path.
+const SAFETY_MAX_DEPTH: u32 = 1024u;
+
+fn add_u64(index: u32, value: u32) {
+    if value == 0u {
+        return;
+    }
+    let old = atomicAdd(&counters[index], value);
+    if old > 0xffffffffu - value {
+        atomicAdd(&counters[index + 1u], 1u);
+    }
+}
+
+struct PathState {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    throughput: vec3<f32>,
+    // Solid-angle density of the last BSDF sample, for MIS when it reaches a light.
+    bsdf_pdf: f32,
+    // The last vertex was delta (or the camera): emission reached through it takes full weight.
+    after_delta: bool,
+}
+
+// Next-event estimation at a diffuse vertex: one light sample with a shadow ray.
+fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+    let u_pick = rng_next_f32(rng);
+    let u = rng_next_vec2(rng);
+    let origin = surface.position + scene_info.epsilon * surface.normal;
+    let ls = sample_light(origin, u_pick, u);
+    if !ls.valid {
+        return vec3<f32>(0.0);
+    }
+    let cos_i = dot(surface.normal, ls.dir);
+    if cos_i <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    *rays += 1u;
+    if occluded(origin, ls.dir, ls.distance - 2.0 * scene_info.epsilon) {
+        return vec3<f32>(0.0);
+    }
+    var weight = 1.0;
+    if !ls.is_delta {
+        weight = power_heuristic(ls.pdf, cos_i * INV_PI);
+    }
+    return albedo * INV_PI * cos_i * ls.radiance * weight / ls.pdf;
+}
+
+fn trace_path(pixel: vec2<u32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+    var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true);
+    var result = vec3<f32>(0.0);
+    let max_depth = min(params.max_depth, SAFETY_MAX_DEPTH);
+    // `depth` counts segments traced so far (Mitsuba's rule).
+    for (var depth = 1u; depth <= max_depth; depth++) {
+        *rays += 1u;
+        let hit = intersect_scene(path.origin, path.dir);
+        if hit.prim == NO_HIT {
+            break;
+        }
+        let surface = surface_at(hit, path.origin, path.dir);
+        let material = materials[surface.material];
+        let wo = -path.dir;
+        let cos_o = dot(wo, surface.normal);
+
+        if surface.light != NO_LIGHT && cos_o > 0.0 {
+            var weight = 1.0;
+            if !path.after_delta {
+                weight = power_heuristic(path.bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
+            }
+            result += path.throughput * material.emission * weight;
+        }
+        if depth == max_depth {
+            break;
+        }
+        if depth >= params.rr_depth {
+            let survive = min(max_component(path.throughput), 0.95);
+            if rng_next_f32(rng) >= survive {
+                break;
+            }
+            path.throughput /= survive;
+        }
+
+        if material.kind == MATERIAL_DIFFUSE {
+            // One-sided, as Mitsuba's diffuse: black from behind.
+            if cos_o <= 0.0 {
+                break;
+            }
+            result += path.throughput * direct_light(surface, material.albedo, rng, rays);
+            let dir = sample_cosine_hemisphere(surface.normal, rng_next_vec2(rng));
+            let cos_i = dot(dir, surface.normal);
+            if cos_i <= 0.0 {
+                break;
+            }
+            path.throughput *= material.albedo;
+            path.bsdf_pdf = cos_i * INV_PI;
+            path.after_delta = false;
+            path.dir = dir;
+        } else if material.kind == MATERIAL_MIRROR {
+            if cos_o <= 0.0 {
+                break;
+            }
+            path.dir = reflect_about(wo, surface.normal);
+            path.after_delta = true;
+        } else {
+            let s = sample_dielectric(wo, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
+            path.throughput *= s.weight;
+            path.dir = s.dir;
+            path.after_delta = true;
+        }
+        path.origin = offset_origin(surface.position, surface.normal, path.dir);
+        if max_component(path.throughput) <= 0.0 {
+            break;
+        }
+    }
+    return result;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= scene_info.width || id.y >= scene_info.height {
+        return;
+    }
+    let pixel_index = id.y * scene_info.width + id.x;
+    var sum = vec3<f32>(0.0);
+    var accepted = 0u;
+    var rays = 0u;
+    for (var s = 0u; s < params.samples_per_iteration; s++) {
+        var rng = rng_seed(pixel_index, params.sample_base + s, params.seed);
+        let sample = trace_path(id.xy, &rng, &rays);
+        // One NaN or Inf sample must not poison the pixel: drop it and count it.
+        if !any_not_finite(sample) {
+            sum += sample;
+            accepted += 1u;
+        }
+    }
+    radiance[pixel_index] += vec4<f32>(sum, f32(accepted));
+    add_u64(COUNTER_RAYS, rays);
+    add_u64(COUNTER_DISCARDED, params.samples_per_iteration - accepted);
+}

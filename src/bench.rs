@@ -1,0 +1,106 @@
+//! `hppm bench`: rays/s and samples/s of the path-tracing graph on the bundled Cornell scenes,
+//! after a warm-up iteration (lavapipe compiles a pipeline at its first dispatch).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use crate::gpu::GpuContext;
+use crate::render::{Budget, Renderer};
+use crate::{Error, graph, passes, scene};
+
+const SCENES: &[&str] = &["scenes/cornell_diffuse.ron", "scenes/cornell_box.ron"];
+const SIZE: u32 = 256;
+
+pub struct BenchRow {
+    pub scene: String,
+    pub spp: u64,
+    pub seconds: f64,
+    pub rays: u64,
+}
+
+impl BenchRow {
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays as f64 / self.seconds / 1e6
+    }
+    pub fn msamples_per_second(&self) -> f64 {
+        (self.spp * SIZE as u64 * SIZE as u64) as f64 / self.seconds / 1e6
+    }
+}
+
+fn measure(
+    gpu: &GpuContext,
+    scene_path: &Path,
+    graph_path: &Path,
+    spp: u64,
+) -> Result<BenchRow, Error> {
+    let scene = scene::load(scene_path)?;
+    let graph = graph::load_graph(graph_path, passes::registry())?;
+    let mut renderer = Renderer::new(gpu, &scene, graph, SIZE, SIZE, 1)?;
+    let never = AtomicBool::new(false);
+    renderer.run(
+        Budget {
+            spp: Some(1),
+            seconds: None,
+        },
+        &never,
+        |_, _| {},
+    )?;
+    let rays_before = renderer.stats()?.rays;
+    let spp_before = renderer.samples_per_pixel();
+    let summary = renderer.run(
+        Budget {
+            spp: Some(spp_before + spp),
+            seconds: None,
+        },
+        &never,
+        |_, _| {},
+    )?;
+    Ok(BenchRow {
+        scene: scene_path.display().to_string(),
+        spp: renderer.samples_per_pixel() - spp_before,
+        seconds: summary.seconds,
+        rays: renderer.stats()?.rays - rays_before,
+    })
+}
+
+/// Runs the benchmark, prints a Markdown table and optionally appends it to `write`.
+pub fn run(
+    adapter: Option<&str>,
+    spp: u64,
+    write: Option<&Path>,
+    locate: fn(&str) -> PathBuf,
+) -> Result<(), Error> {
+    let gpu = GpuContext::new(adapter)?;
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let mut table = format!(
+        "\n### path_trace, {SIZE}x{SIZE}, {spp} spp, adapter: {} (host: {cores} CPU cores)\n\n\
+         | scene | spp | seconds | Mrays/s | Msamples/s |\n|---|---|---|---|---|\n",
+        gpu.adapter_label()
+    );
+    for scene_path in SCENES {
+        let row = measure(&gpu, &locate(scene_path), &locate("graphs/pt.ron"), spp)?;
+        table.push_str(&format!(
+            "| {} | {} | {:.2} | {:.2} | {:.3} |\n",
+            scene_path,
+            row.spp,
+            row.seconds,
+            row.mrays_per_second(),
+            row.msamples_per_second()
+        ));
+    }
+    print!("{table}");
+    if let Some(path) = write {
+        let io = |source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(io)?;
+        file.write_all(table.as_bytes()).map_err(io)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,58 @@
+//! Bind group layout and bind group built from one ordered list, so the two cannot drift apart:
+//! binding i of the layout is entry i of the list.
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Access {
+    Uniform,
+    Read,
+    ReadWrite,
+}
+
+fn layout_entry(binding: u32, access: Access) -> wgpu::BindGroupLayoutEntry {
+    let ty = match access {
+        Access::Uniform => wgpu::BufferBindingType::Uniform,
+        Access::Read => wgpu::BufferBindingType::Storage { read_only: true },
+        Access::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+    };
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Layout and bind group for `entries`, labelled `label`.
+pub fn bind_buffers(
+    device: &wgpu::Device,
+    label: &str,
+    entries: &[(Access, &wgpu::Buffer)],
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let layout_entries: Vec<_> = entries
+        .iter()
+        .enumerate()
+        .map(|(i, (access, _))| layout_entry(i as u32, *access))
+        .collect();
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &layout_entries,
+    });
+    let group_entries: Vec<_> = entries
+        .iter()
+        .enumerate()
+        .map(|(i, (_, buffer))| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout: &layout,
+        entries: &group_entries,
+    });
+    (layout, group)
+}

@@ -1,0 +1,204 @@
+//! Images: EXR (linear f32 RGB) and PNG (sRGB) output, EXR input, error metrics.
+
+use std::path::{Path, PathBuf};
+
+use crate::Error;
+
+/// A linear RGB image, row 0 at the top.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+/// Text recorded in every written file (EXR attributes, PNG text chunks): which adapter made it.
+#[derive(Debug, Clone, Default)]
+pub struct Provenance {
+    pub entries: Vec<(String, String)>,
+}
+
+impl Provenance {
+    pub fn with(mut self, key: &str, value: impl ToString) -> Self {
+        self.entries.push((key.to_string(), value.to_string()));
+        self
+    }
+}
+
+fn io_error(path: &Path, message: impl ToString) -> Error {
+    Error::Io {
+        path: path.to_path_buf(),
+        source: std::io::Error::other(message.to_string()),
+    }
+}
+
+impl Image {
+    /// Averages per-pixel (sum, count) accumulators; pixels with no sample are black.
+    pub fn from_sums(width: u32, height: u32, sums: &[[f32; 4]]) -> Self {
+        let pixels = sums
+            .iter()
+            .map(|&[r, g, b, n]| {
+                if n > 0.0 {
+                    [r / n, g / n, b / n]
+                } else {
+                    [0.0; 3]
+                }
+            })
+            .collect();
+        Self {
+            width,
+            height,
+            pixels,
+        }
+    }
+
+    pub fn mean(&self) -> [f64; 3] {
+        let mut sum = [0.0f64; 3];
+        for p in &self.pixels {
+            for c in 0..3 {
+                sum[c] += p[c] as f64;
+            }
+        }
+        let n = self.pixels.len().max(1) as f64;
+        sum.map(|s| s / n)
+    }
+
+    /// Relative MSE against `reference`: mean over pixels and RGB of (x-r)^2/(r^2+0.01), the
+    /// metric of the reference set (tests/refs/README.md).
+    pub fn relmse(&self, reference: &Image) -> Result<f64, Error> {
+        self.check_same_size(reference)?;
+        let mut sum = 0.0f64;
+        for (x, r) in self.pixels.iter().zip(&reference.pixels) {
+            for c in 0..3 {
+                let (x, r) = (x[c] as f64, r[c] as f64);
+                sum += (x - r) * (x - r) / (r * r + 0.01);
+            }
+        }
+        Ok(sum / (3 * self.pixels.len().max(1)) as f64)
+    }
+
+    fn check_same_size(&self, other: &Image) -> Result<(), Error> {
+        if (self.width, self.height) != (other.width, other.height) {
+            return Err(Error::Other(format!(
+                "image sizes differ: {}x{} vs {}x{}",
+                self.width, self.height, other.width, other.height
+            )));
+        }
+        Ok(())
+    }
+
+    /// Reads the first RGB(A) layer of an EXR file.
+    pub fn read_exr(path: &Path) -> Result<Image, Error> {
+        use exr::prelude::*;
+        let image = read_first_rgba_layer_from_file(
+            path,
+            |resolution, _| {
+                (
+                    resolution.width(),
+                    vec![[0.0f32; 3]; resolution.width() * resolution.height()],
+                )
+            },
+            |(width, pixels), position, (r, g, b, _a): (f32, f32, f32, f32)| {
+                pixels[position.y() * *width + position.x()] = [r, g, b];
+            },
+        )
+        .map_err(|e| io_error(path, e))?;
+        let size = image.layer_data.size;
+        Ok(Self {
+            width: size.width() as u32,
+            height: size.height() as u32,
+            pixels: image.layer_data.channel_data.pixels.1,
+        })
+    }
+
+    /// Writes EXR or PNG by the extension of `path`, through a temporary file renamed into
+    /// place, so an interrupted run never leaves a truncated image.
+    pub fn write(&self, path: &Path, provenance: &Provenance) -> Result<(), Error> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        let temp = temp_path(path);
+        let written = match ext.as_deref() {
+            Some("exr") => self.write_exr(&temp, provenance),
+            Some("png") => self.write_png(&temp, provenance),
+            _ => {
+                return Err(io_error(
+                    path,
+                    "unknown image format: use a .exr (linear float) or .png (sRGB) file name",
+                ));
+            }
+        };
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&temp);
+            return Err(e);
+        }
+        std::fs::rename(&temp, path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    fn write_exr(&self, path: &Path, provenance: &Provenance) -> Result<(), Error> {
+        use exr::prelude::*;
+        let width = self.width as usize;
+        let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+            let [r, g, b] = self.pixels[y * width + x];
+            (r, g, b)
+        });
+        let mut image = exr::image::Image::from_channels((width, self.height as usize), channels);
+        image.layer_data.attributes.software_name = Text::new_or_none("hppm");
+        for (key, value) in &provenance.entries {
+            if let (Some(k), Some(v)) = (Text::new_or_none(key), Text::new_or_none(value)) {
+                image
+                    .attributes
+                    .other
+                    .insert(k, exr::meta::attribute::AttributeValue::Text(v));
+            }
+        }
+        image.write().to_file(path).map_err(|e| io_error(path, e))
+    }
+
+    fn write_png(&self, path: &Path, provenance: &Provenance) -> Result<(), Error> {
+        let bytes: Vec<u8> = self
+            .pixels
+            .iter()
+            .flat_map(|p| p.map(linear_to_srgb8))
+            .collect();
+        let file = std::fs::File::create(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), self.width, self.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        for (key, value) in &provenance.entries {
+            encoder
+                .add_text_chunk(key.clone(), value.clone())
+                .map_err(|e| io_error(path, e))?;
+        }
+        let mut writer = encoder.write_header().map_err(|e| io_error(path, e))?;
+        writer
+            .write_image_data(&bytes)
+            .map_err(|e| io_error(path, e))?;
+        writer.finish().map_err(|e| io_error(path, e))
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(format!(".{}.tmp", std::process::id()));
+    path.with_file_name(name)
+}
+
+/// The sRGB transfer curve, clamped to [0, 1], rounded to 8 bits. NaN maps to 0.
+fn linear_to_srgb8(x: f32) -> u8 {
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    let s = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}
