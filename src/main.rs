@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Args, Parser, Subcommand};
 use hppm::gpu::{GpuContext, GpuError};
-use hppm::image::Provenance;
+use hppm::image::{OutputFormat, Provenance};
 use hppm::render::{Budget, Renderer};
 use hppm::{Error, bench, graph, passes, scene};
 
@@ -126,6 +126,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         .scene
         .unwrap_or_else(|| bundled("scenes/cornell_box.ron"));
     let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/pt.ron"));
+    OutputFormat::of(&args.out)?;
     let scene = scene::load(&scene_path)?;
     let graph = graph::load_graph(&graph_path, passes::registry())?;
     for warning in &graph.warnings {

@@ -192,6 +192,10 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Hit
     var stack: array<u32, BVH_STACK_SIZE>;
     var top = 0u;
     var node_index = 0u;
+    // An empty scene's root has an inverted box and no children (see src/scene/bvh.rs).
+    if scene_info.num_triangles + scene_info.num_spheres == 0u {
+        return Hit(T_INFINITE, NO_HIT);
+    }
     if intersect_box(bvh_nodes[0].min, bvh_nodes[0].max, origin, inv_dir, t_max) == T_INFINITE {
         return Hit(T_INFINITE, NO_HIT);
     }

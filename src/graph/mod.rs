@@ -1,54 +1,161 @@
-//! The render graph: RON schema, validation, scheduling.
+//! The render graph: a RON file of nodes (pass kinds with params) and edges between named slots,
+//! validated as a whole (every problem reported at once, each with `file:line:col`) and
+//! scheduled in topological order with petgraph.
 
 pub mod pass;
+mod source_map;
+mod validate;
 
-/// Placeholder until graph validation lands.
-#[derive(Debug, thiserror::Error)]
-#[error("graph errors")]
-pub struct GraphErrors;
+use std::fmt;
+use std::path::{Path, PathBuf};
 
-// TEMPORARY stub until graph-work merges.
+use crate::error::Location;
+use pass::{Pass, PassKind, SlotDir};
+
+pub use validate::parse_graph;
+
+/// One problem in a graph file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphError {
+    pub location: Location,
+    pub message: String,
+}
+
+impl fmt::Display for GraphError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.location, self.message)
+    }
+}
+
+/// Every problem found in a graph file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GraphErrors(pub Vec<GraphError>);
+
+impl fmt::Display for GraphErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for e in &self.0 {
+            writeln!(f, "{e}")?;
+        }
+        let n = self.0.len();
+        write!(f, "{n} error{} in graph", if n == 1 { "" } else { "s" })
+    }
+}
+
+impl std::error::Error for GraphErrors {}
+
+pub struct ValidNode {
+    pub name: String,
+    pub kind: &'static PassKind,
+    pub pass: Box<dyn Pass>,
+    pub location: Location,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Edge {
     pub from_node: usize,
     pub from_slot: &'static str,
     pub to_node: usize,
     pub to_slot: &'static str,
 }
-pub struct ValidNode {
-    pub name: String,
-    pub pass: Box<dyn pass::Pass>,
-}
+
+/// A graph whose every node, edge and slot checked out, with its schedule.
 pub struct ValidGraph {
+    pub file: PathBuf,
     pub nodes: Vec<ValidNode>,
     pub edges: Vec<Edge>,
+    /// Node indices in execution order.
     pub order: Vec<usize>,
+    /// The node and slot whose resource is the rendered image.
     pub output: (usize, &'static str),
-    pub warnings: Vec<String>,
+    /// Problems that do not stop a render (e.g. a node that feeds nothing).
+    pub warnings: Vec<GraphError>,
 }
+
 impl ValidGraph {
     pub fn inputs_of(&self, node: usize) -> impl Iterator<Item = &Edge> {
         self.edges.iter().filter(move |e| e.to_node == node)
     }
-    pub fn schedule_text(&self) -> String {
-        todo!()
+
+    fn slot_name(&self, node: usize, slot: &str) -> String {
+        format!("{}.{slot}", self.nodes[node].name)
     }
+
+    /// The schedule as numbered lines, with each node's connections.
+    pub fn schedule_text(&self) -> String {
+        let mut out = format!(
+            "schedule of {} ({} node{}):\n",
+            self.file.display(),
+            self.nodes.len(),
+            if self.nodes.len() == 1 { "" } else { "s" }
+        );
+        for (step, &i) in self.order.iter().enumerate() {
+            let node = &self.nodes[i];
+            out.push_str(&format!(
+                "{:>3}. {} ({})\n",
+                step + 1,
+                node.name,
+                node.kind.name
+            ));
+            for slot in node.kind.slots {
+                let persistent = if slot.persistent { ", persistent" } else { "" };
+                let line = match slot.dir {
+                    SlotDir::In => {
+                        let from = self
+                            .inputs_of(i)
+                            .find(|e| e.to_slot == slot.name)
+                            .map_or("(unconnected)".to_string(), |e| {
+                                self.slot_name(e.from_node, e.from_slot)
+                            });
+                        format!("in  {} <- {from}", slot.name)
+                    }
+                    SlotDir::Out => format!("out {}", slot.name),
+                };
+                out.push_str(&format!(
+                    "       {line} [{}{persistent}]\n",
+                    slot.kind.name()
+                ));
+            }
+        }
+        out.push_str(&format!(
+            "output: {}\n",
+            self.slot_name(self.output.0, self.output.1)
+        ));
+        out
+    }
+
+    /// Graphviz: one box per node labelled with its kind, one arrow per edge labelled with its
+    /// slots; the output slot is drawn as an extra node.
     pub fn to_dot(&self) -> String {
-        todo!()
+        let quote = |s: &str| s.replace('\\', "\\\\").replace('"', "\\\"");
+        let mut out = String::from("digraph hppm {\n    rankdir=LR;\n    node [shape=box];\n");
+        for (i, node) in self.nodes.iter().enumerate() {
+            out.push_str(&format!(
+                "    n{i} [label=\"{}\\n({})\"];\n",
+                quote(&node.name),
+                node.kind.name
+            ));
+        }
+        for e in &self.edges {
+            out.push_str(&format!(
+                "    n{} -> n{} [label=\"{} -> {}\"];\n",
+                e.from_node, e.to_node, e.from_slot, e.to_slot
+            ));
+        }
+        out.push_str(&format!(
+            "    output [shape=ellipse];\n    n{} -> output [label=\"{}\"];\n}}\n",
+            self.output.0, self.output.1
+        ));
+        out
     }
 }
-pub fn load_graph(
-    _p: &std::path::Path,
-    _r: &'static [pass::PassKind],
-) -> Result<ValidGraph, GraphErrors> {
-    let node = ValidNode {
-        name: "camera".into(),
-        pass: (crate::passes::registry()[0].construct)("()").map_err(|_| GraphErrors)?,
-    };
-    Ok(ValidGraph {
-        nodes: vec![node],
-        edges: vec![],
-        order: vec![0],
-        output: (0, "radiance"),
-        warnings: vec![],
-    })
+
+/// Reads and validates a graph file against `registry`.
+pub fn load_graph(path: &Path, registry: &'static [PassKind]) -> Result<ValidGraph, GraphErrors> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        GraphErrors(vec![GraphError {
+            location: Location::new(path, 1, 1),
+            message: format!("cannot read graph file: {e}"),
+        }])
+    })?;
+    parse_graph(path, &text, registry)
 }

@@ -114,20 +114,10 @@ impl Image {
     /// Writes EXR or PNG by the extension of `path`, through a temporary file renamed into
     /// place, so an interrupted run never leaves a truncated image.
     pub fn write(&self, path: &Path, provenance: &Provenance) -> Result<(), Error> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(|e| e.to_ascii_lowercase());
         let temp = temp_path(path);
-        let written = match ext.as_deref() {
-            Some("exr") => self.write_exr(&temp, provenance),
-            Some("png") => self.write_png(&temp, provenance),
-            _ => {
-                return Err(io_error(
-                    path,
-                    "unknown image format: use a .exr (linear float) or .png (sRGB) file name",
-                ));
-            }
+        let written = match OutputFormat::of(path)? {
+            OutputFormat::Exr => self.write_exr(&temp, provenance),
+            OutputFormat::Png => self.write_png(&temp, provenance),
         };
         if let Err(e) = written {
             let _ = std::fs::remove_file(&temp);
@@ -183,6 +173,30 @@ impl Image {
             .write_image_data(&bytes)
             .map_err(|e| io_error(path, e))?;
         writer.finish().map_err(|e| io_error(path, e))
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputFormat {
+    Exr,
+    Png,
+}
+
+impl OutputFormat {
+    /// The format named by a file's extension; checked before rendering so a typo costs nothing.
+    pub fn of(path: &Path) -> Result<Self, Error> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("exr") => Ok(Self::Exr),
+            Some("png") => Ok(Self::Png),
+            _ => Err(io_error(
+                path,
+                "unknown image format: use a .exr (linear float) or .png (sRGB) file name",
+            )),
+        }
     }
 }
 

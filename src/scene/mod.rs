@@ -5,6 +5,7 @@
 
 pub mod bvh;
 pub mod gpu_layout;
+pub mod mesh;
 pub mod mitsuba;
 pub mod obj;
 pub mod ron_format;
@@ -103,6 +104,151 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub spheres: Vec<Sphere>,
     pub point_lights: Vec<PointLight>,
+}
+
+impl Scene {
+    /// Axis-aligned bounds of all geometry and point lights. An empty scene has the bounds of
+    /// its camera origin.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::MAX);
+        let mut hi = Vec3::splat(f32::MIN);
+        for t in &self.triangles {
+            for v in t.v {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+        for s in &self.spheres {
+            lo = lo.min(s.center - s.radius);
+            hi = hi.max(s.center + s.radius);
+        }
+        for p in &self.point_lights {
+            lo = lo.min(p.position);
+            hi = hi.max(p.position);
+        }
+        if lo.x > hi.x {
+            return (self.camera.origin, self.camera.origin);
+        }
+        (lo, hi)
+    }
+
+    /// The scene uniformly scaled by `s` about the origin. Point-light intensities scale by s^2
+    /// so irradiance, and hence the image, stays the same.
+    pub fn scaled(&self, s: f32) -> Scene {
+        let mut out = self.clone();
+        for t in &mut out.triangles {
+            t.v = t.v.map(|v| v * s);
+        }
+        for sphere in &mut out.spheres {
+            sphere.center *= s;
+            sphere.radius *= s;
+        }
+        for p in &mut out.point_lights {
+            p.position *= s;
+            p.intensity *= s * s;
+        }
+        out.camera.origin *= s;
+        out.camera.target *= s;
+        out
+    }
+
+    /// Adds object-space triangles placed by `to_world`. A mirroring transform reverses the
+    /// winding, so it is swapped back to keep the front where the transformed normal points;
+    /// `flip_normals` swaps it on purpose.
+    pub fn push_mesh(
+        &mut self,
+        triangles: Vec<[Vec3; 3]>,
+        to_world: glam::Mat4,
+        material: u32,
+        flip_normals: bool,
+    ) {
+        let swap = (to_world.determinant() < 0.0) != flip_normals;
+        for [a, b, c] in triangles {
+            let [a, b, c] = [a, b, c].map(|p| to_world.transform_point3(p));
+            let v = if swap { [a, c, b] } else { [a, b, c] };
+            self.triangles.push(Triangle { v, material });
+        }
+    }
+
+    pub fn has_lights(&self) -> bool {
+        !self.point_lights.is_empty()
+            || self
+                .materials
+                .iter()
+                .any(|m| m.emission.max_element() > 0.0)
+    }
+
+    /// Checks what every loader must guarantee: finite numbers, valid material indices, a
+    /// camera that looks somewhere.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let fail = |message: String| {
+            Err(SceneError::File {
+                file: self.source.clone(),
+                message,
+            })
+        };
+        let finite = |v: Vec3| v.is_finite();
+        let cam = &self.camera;
+        if !(finite(cam.origin)
+            && finite(cam.target)
+            && finite(cam.up)
+            && cam.fov_x_deg.is_finite())
+        {
+            return fail("the camera has a non-finite number".into());
+        }
+        if (cam.target - cam.origin).length_squared() == 0.0 {
+            return fail("the camera's origin equals its target".into());
+        }
+        if !(cam.fov_x_deg > 0.0 && cam.fov_x_deg < 180.0) {
+            return fail(format!(
+                "camera fov {} is not between 0 and 180 degrees",
+                cam.fov_x_deg
+            ));
+        }
+        if cam.width == 0 || cam.height == 0 {
+            return fail("the film has zero size".into());
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            let ok = finite(m.emission)
+                && match m.bsdf {
+                    Bsdf::Diffuse { reflectance } => finite(reflectance),
+                    Bsdf::Dielectric { int_ior, ext_ior } => {
+                        int_ior.is_finite() && ext_ior.is_finite() && int_ior > 0.0 && ext_ior > 0.0
+                    }
+                    Bsdf::Mirror => true,
+                };
+            if !ok {
+                return fail(format!(
+                    "material {i} has a non-finite or non-positive value"
+                ));
+            }
+        }
+        let material_ok = |m: u32| (m as usize) < self.materials.len();
+        for (i, t) in self.triangles.iter().enumerate() {
+            if !t.v.iter().all(|&v| finite(v)) || !material_ok(t.material) {
+                return fail(format!(
+                    "triangle {i} has a non-finite vertex or a bad material"
+                ));
+            }
+        }
+        for (i, s) in self.spheres.iter().enumerate() {
+            if !finite(s.center)
+                || !s.radius.is_finite()
+                || s.radius <= 0.0
+                || !material_ok(s.material)
+            {
+                return fail(format!(
+                    "sphere {i} has a non-finite centre, a bad radius or a bad material"
+                ));
+            }
+        }
+        for (i, p) in self.point_lights.iter().enumerate() {
+            if !finite(p.position) || !finite(p.intensity) {
+                return fail(format!("point light {i} has a non-finite number"));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A scene that could not be loaded. Every variant names the file; parse errors carry a line and

@@ -1,0 +1,61 @@
+//! Built-in shapes as object-space triangles, counter-clockwise seen from the front (normal)
+//! side: Mitsuba's `rectangle` ([-1,1]^2 at z=0, normal +z) and `cube` ([-1,1]^3, outward).
+
+use glam::Vec3;
+
+/// Two triangles spanning the parallelogram centre +- u +- v, facing u x v.
+fn quad(center: Vec3, u: Vec3, v: Vec3) -> [[Vec3; 3]; 2] {
+    let (a, b, c, d) = (
+        center - u - v,
+        center + u - v,
+        center + u + v,
+        center - u + v,
+    );
+    [[a, b, c], [a, c, d]]
+}
+
+pub fn rectangle() -> Vec<[Vec3; 3]> {
+    quad(Vec3::ZERO, Vec3::X, Vec3::Y).to_vec()
+}
+
+pub fn cube() -> Vec<[Vec3; 3]> {
+    // Each face's (u, v) is ordered so that u x v points out of the cube.
+    let faces = [
+        (Vec3::X, Vec3::Y, Vec3::Z),
+        (Vec3::NEG_X, Vec3::Z, Vec3::Y),
+        (Vec3::Y, Vec3::Z, Vec3::X),
+        (Vec3::NEG_Y, Vec3::X, Vec3::Z),
+        (Vec3::Z, Vec3::X, Vec3::Y),
+        (Vec3::NEG_Z, Vec3::Y, Vec3::X),
+    ];
+    faces.iter().flat_map(|&(n, u, v)| quad(n, u, v)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn normal(t: &[Vec3; 3]) -> Vec3 {
+        (t[1] - t[0]).cross(t[2] - t[0]).normalize()
+    }
+
+    #[test]
+    fn rectangle_faces_plus_z() {
+        for t in rectangle() {
+            assert!((normal(&t) - Vec3::Z).length() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn cube_faces_point_outwards_and_cover_area_24() {
+        let tris = cube();
+        assert_eq!(tris.len(), 12);
+        let mut area = 0.0;
+        for t in &tris {
+            let centroid = (t[0] + t[1] + t[2]) / 3.0;
+            assert!(normal(t).dot(centroid) > 0.0, "inward face {t:?}");
+            area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
+        }
+        assert!((area - 24.0).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,105 @@
+//! The `hppm` binary as a user runs it.
+
+use std::process::{Command, Output};
+
+fn hppm(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hppm"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run hppm")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn no_adapter_is_a_clear_error_with_exit_code_2() {
+    // wgpu finds no Metal adapter on Linux or Windows: the same as a machine without drivers.
+    if cfg!(target_os = "macos") {
+        return;
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_hppm"))
+        .arg("info")
+        .env("WGPU_BACKEND", "metal")
+        .output()
+        .expect("run hppm");
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("apt-get install -y mesa-vulkan-drivers"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!stderr(&out).contains("panicked"), "{}", stderr(&out));
+}
+
+#[test]
+fn render_writes_png_and_exr_with_the_adapter_recorded() {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let scene = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
+    for ext in ["png", "exr"] {
+        let path = dir.join(format!("out.{ext}"));
+        let path_text = path.to_string_lossy().into_owned();
+        let out = hppm(&[
+            "render", scene, "--spp", "4", "--size", "40x24", "--seed", "3", "--out", &path_text,
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(stdout.contains("40x24, 4 spp"), "{stdout}");
+        let bytes = std::fs::read(&path).expect("output written");
+        // The adapter's name is stored in the file (PNG tEXt chunk / EXR text attribute).
+        let needle = b"hppm_adapter";
+        assert!(
+            bytes.windows(needle.len()).any(|w| w == needle),
+            "{ext}: no adapter recorded"
+        );
+        if ext == "exr" {
+            let image = hppm::image::Image::read_exr(&path).expect("readable EXR");
+            assert_eq!((image.width, image.height), (40, 24));
+            assert!(image.mean()[0] > 0.0, "a lit Cornell box is not black");
+        }
+    }
+    // No temporary files are left behind.
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .expect("list")
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn unknown_output_format_and_bad_size_are_errors() {
+    let out = hppm(&["render", "--spp", "1", "--out", "render.bmp"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("render.bmp"), "{}", stderr(&out));
+    let out = hppm(&["render", "--size", "12by5"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("WxH"), "{}", stderr(&out));
+}
+
+#[test]
+fn graph_command_prints_the_schedule_and_dot() {
+    let out = hppm(&["graph", "graphs/pt.ron"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("path_trace"));
+    let out = hppm(&["graph", "graphs/pt.ron", "--dot"]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("digraph"));
+}
+
+#[test]
+fn a_broken_scene_names_file_and_line_without_panicking() {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("broken.xml");
+    std::fs::write(&path, "<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n    <float name=\"radius\" value=\"abc\"/>\n  </shape>\n</scene>\n").expect("write");
+    let out = hppm(&["render", &path.to_string_lossy(), "--spp", "1"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("broken.xml:3:"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
