@@ -158,5 +158,8 @@ impl PassKind {
 pub fn parse_params<P: serde::de::DeserializeOwned>(
     params: &str,
 ) -> Result<P, ron::error::SpannedError> {
-    ron::Options::default().from_str(params)
+    // `max_depth: 5` and `max_depth: Some(5)` both set an optional param.
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str(params)
 }

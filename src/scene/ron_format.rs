@@ -3,8 +3,9 @@
 //! ```ron
 //! (
 //!     camera: (origin: (0, 0, 3.9), target: (0, 0, 0), up: (0, 1, 0), fov_x: 39.3, width: 128, height: 128),
-//!     integrator: (max_depth: Some(12), rr_depth: None),   // optional; None = unbounded / no roulette
-//!     spp: Some(64),                                       // optional default sample count
+//!     integrator: (max_depth: 12, rr_depth: None),   // optional; None = unbounded / no roulette
+//!     spp: 64,                                       // optional default sample count
+//!     // (optional values may be written `x` or `Some(x)`)
 //!     materials: {
 //!         "white": Diffuse(reflectance: (0.8, 0.8, 0.8)),
 //!         "glass": Dielectric(int_ior: 1.5, ext_ior: 1.0),
@@ -37,7 +38,7 @@ use crate::error::Location;
 struct SceneFile {
     camera: CameraFile,
     #[serde(default)]
-    integrator: Option<IntegratorFile>,
+    integrator: IntegratorFile,
     #[serde(default)]
     spp: Option<u32>,
     materials: BTreeMap<String, MaterialFile>,
@@ -63,12 +64,23 @@ fn default_up() -> [f32; 3] {
 }
 
 #[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 struct IntegratorFile {
-    #[serde(default)]
     max_depth: Option<u32>,
-    #[serde(default)]
     rr_depth: Option<u32>,
+}
+
+impl Default for IntegratorFile {
+    fn default() -> Self {
+        let Integrator {
+            max_depth,
+            rr_depth,
+        } = Integrator::default();
+        Self {
+            max_depth,
+            rr_depth,
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -143,7 +155,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             "numbers must be finite (NaN and infinity are not allowed)",
         ));
     }
-    let file: SceneFile = ron::Options::default().from_str(text).map_err(|e| {
+    let options =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let file: SceneFile = options.from_str(text).map_err(|e| {
         SceneError::at(
             Location::new(path, e.span.start.line, e.span.start.col),
             e.code.to_string(),
@@ -231,12 +245,10 @@ fn build(path: &Path, text: &str, file: SceneFile) -> Result<Scene, SceneError> 
             width: file.camera.width,
             height: file.camera.height,
         },
-        integrator: file
-            .integrator
-            .map_or(Integrator::default(), |i| Integrator {
-                max_depth: i.max_depth,
-                rr_depth: i.rr_depth,
-            }),
+        integrator: Integrator {
+            max_depth: file.integrator.max_depth,
+            rr_depth: file.integrator.rr_depth,
+        },
         spp_hint: file.spp,
         materials: Vec::new(),
         triangles: Vec::new(),
