@@ -498,8 +498,7 @@ fn check_cycles(
         // Walk the component from its first node until a node repeats: that is a cycle.
         let mut path = vec![start];
         let mut first_edge = None;
-        loop {
-            let Some(&here) = path.last() else { break };
+        while let Some(&here) = path.last() {
             let Some(step) = graph
                 .edges(NodeIndex::new(here))
                 .filter(|e| members.contains(&e.target().index()))

@@ -414,7 +414,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             let depth = self.integer(n)?;
             self.scene.integrator.max_depth = match depth {
                 -1 => None,
-                d if d >= 1 && d <= u32::MAX as i64 - 1 => Some(d as u32),
+                d if d >= 1 && d < u32::MAX as i64 => Some(d as u32),
                 _ => {
                     return Err(self.error(
                         n,

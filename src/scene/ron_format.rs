@@ -304,7 +304,7 @@ fn build(path: &Path, text: &str, file: SceneFile) -> Result<Scene, SceneError> 
                 })?
             }
             ShapeKind::Sphere { center, radius } => {
-                if !(*radius > 0.0) {
+                if radius.is_nan() || *radius <= 0.0 {
                     return Err(SceneError::at(
                         locate(path, text, "radius"),
                         format!("sphere radius {radius}: must be positive"),
