@@ -133,14 +133,7 @@ impl ShaderLibrary {
             label: Some(path),
             source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
         };
-        let shader = if std::env::var_os("HPPM_UNCHECKED").is_some() {
-            unsafe {
-                gpu.device
-                    .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-            }
-        } else {
-            gpu.device.create_shader_module(desc)
-        };
+        let shader = gpu.device.create_shader_module(desc);
         let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> =
             layouts.iter().map(|l| Some(*l)).collect();
         let layout = gpu
