@@ -473,7 +473,7 @@ pub fn intersect_sphere(center: Vec3, radius: f32, origin: Vec3, dir: Vec3) -> O
     let half_b = oc.dot(dir);
     let c = oc.length_squared() - radius * radius;
     let discriminant = half_b * half_b - a * c;
-    if !(discriminant >= 0.0) || a == 0.0 {
+    if discriminant.is_nan() || discriminant < 0.0 || a == 0.0 {
         return None;
     }
     // The cancellation-free form of the quadratic's roots (Numerical Recipes 5.6).

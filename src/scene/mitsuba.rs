@@ -600,7 +600,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn depth(&self, node: Node, depth: i64, name: &str) -> Result<u32, SceneError> {
         u32::try_from(depth)
             .ok()
-            .filter(|&d| d >= 1 && d < u32::MAX)
+            .filter(|d| (1..u32::MAX).contains(d))
             .ok_or_else(|| {
                 self.attr_error(
                     node,
@@ -990,7 +990,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             None => 1.0,
         };
         let m = common.to_world;
-        let Some(scale) = similarity_scale(m) else {
+        let Some(scale) = super::similarity_scale(m) else {
             return Err(self.error(
                 to_world.unwrap_or(shape),
                 "a sphere's to_world may only scale uniformly, rotate and translate",
@@ -1128,22 +1128,6 @@ fn describe_object(node: Node) -> String {
         Some(kind) => format!("<{} type=\"{kind}\">", node.tag_name().name()),
         None => format!("<{}>", node.tag_name().name()),
     }
-}
-
-/// The uniform scale of an affine transform made only of uniform scaling, rotation, mirroring
-/// and translation (which maps spheres to spheres), or `None` for any other transform.
-fn similarity_scale(m: Mat4) -> Option<f32> {
-    let linear = Mat3::from_mat4(m);
-    let columns = [linear.x_axis, linear.y_axis, linear.z_axis];
-    let scale = columns[0].length();
-    let tolerance = 1e-4 * scale * scale;
-    let uniform = columns
-        .iter()
-        .all(|c| (c.length_squared() - scale * scale).abs() <= tolerance);
-    let orthogonal = columns[0].dot(columns[1]).abs() <= tolerance
-        && columns[1].dot(columns[2]).abs() <= tolerance
-        && columns[2].dot(columns[0]).abs() <= tolerance;
-    (scale > 0.0 && scale.is_finite() && uniform && orthogonal).then_some(scale)
 }
 
 /// Mitsuba's `lookat`: camera space looks down +z with +y up, mapped to world space.

@@ -265,6 +265,22 @@ pub fn place_triangles(
     })
 }
 
+/// The uniform scale of an affine transform made only of uniform scaling, rotation, mirroring
+/// and translation (which maps spheres to spheres), or `None` for any other transform.
+pub fn similarity_scale(m: glam::Mat4) -> Option<f32> {
+    let linear = glam::Mat3::from_mat4(m);
+    let columns = [linear.x_axis, linear.y_axis, linear.z_axis];
+    let scale = columns[0].length();
+    let tolerance = 1e-4 * scale * scale;
+    let uniform = columns
+        .iter()
+        .all(|c| (c.length_squared() - scale * scale).abs() <= tolerance);
+    let orthogonal = columns[0].dot(columns[1]).abs() <= tolerance
+        && columns[1].dot(columns[2]).abs() <= tolerance
+        && columns[2].dot(columns[0]).abs() <= tolerance;
+    (scale > 0.0 && scale.is_finite() && uniform && orthogonal).then_some(scale)
+}
+
 /// A scene that could not be loaded. Every variant names the file; parse errors carry a line and
 /// column.
 #[derive(Debug, thiserror::Error)]
