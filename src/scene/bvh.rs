@@ -148,11 +148,51 @@ fn node_from(bounds: Aabb, left_or_first: u32, count: u32) -> BvhNode {
     }
 }
 
+/// The boxes on one side of a split: their bounds, their centroids' bounds and how many.
+#[derive(Clone, Copy)]
+struct Side {
+    bounds: Aabb,
+    centroids: Aabb,
+    count: u32,
+}
+
+impl Side {
+    const EMPTY: Side = Side {
+        bounds: Aabb::EMPTY,
+        centroids: Aabb::EMPTY,
+        count: 0,
+    };
+
+    fn add(self, other: &Side) -> Side {
+        Side {
+            bounds: self.bounds.union(other.bounds),
+            centroids: self.centroids.union(other.centroids),
+            count: self.count + other.count,
+        }
+    }
+
+    fn of(range: &[u32], boxes: &[Aabb], centroids: &[Vec3]) -> Side {
+        range.iter().fold(Side::EMPTY, |side, &i| Side {
+            bounds: side.bounds.union(boxes[i as usize]),
+            centroids: side.centroids.grow(centroids[i as usize]),
+            count: side.count + 1,
+        })
+    }
+
+    /// The SAH cost of intersecting everything on this side once its box is entered.
+    fn cost(&self) -> f32 {
+        self.bounds.surface_area() * self.count as f32
+    }
+}
+
 struct Split {
     axis: usize,
     /// Boxes whose centroid falls in bins below this one go left.
     bin: usize,
     cost: f32,
+    /// What goes left and right, known from the bins: children need no extra pass for bounds.
+    left: Side,
+    right: Side,
 }
 
 /// Maps a centroid coordinate to its bin along one axis. Computed the same way when binning and
@@ -186,70 +226,72 @@ fn best_split(
     centroids: &[Vec3],
     range: &[u32],
     centroid_bounds: &Aabb,
-) -> Option<Split> {
+) -> Option<(Split, Binning)> {
     let binnings = [0, 1, 2].map(|axis| Binning::along(centroid_bounds, axis));
     if binnings.iter().all(Option::is_none) {
         return None;
     }
-    let mut bin_bounds = [[Aabb::EMPTY; BINS]; 3];
-    let mut bin_counts = [[0u32; BINS]; 3];
+    let mut bins = [[Side::EMPTY; BINS]; 3];
     for &i in range {
         let (b, c) = (boxes[i as usize], centroids[i as usize]);
         for (axis, binning) in binnings.iter().enumerate() {
             if let Some(binning) = binning {
-                let k = binning.bin(c[axis]);
-                bin_bounds[axis][k] = bin_bounds[axis][k].union(b);
-                bin_counts[axis][k] += 1;
+                let bin = &mut bins[axis][binning.bin(c[axis])];
+                bin.bounds = bin.bounds.union(b);
+                bin.centroids = bin.centroids.grow(c);
+                bin.count += 1;
             }
         }
     }
-    let mut best: Option<Split> = None;
-    for axis in 0..3 {
-        if binnings[axis].is_none() {
+    let mut best: Option<(Split, Binning)> = None;
+    for (axis, binning) in binnings.iter().enumerate() {
+        let Some(binning) = binning else {
             continue;
-        }
-        if let Some(split) = sweep(axis, &bin_bounds[axis], &bin_counts[axis])
-            && best.as_ref().is_none_or(|b| split.cost < b.cost)
+        };
+        if let Some(split) = sweep(axis, &bins[axis])
+            && best.as_ref().is_none_or(|(b, _)| split.cost < b.cost)
         {
-            best = Some(split);
+            best = Some((split, *binning));
         }
     }
     best
 }
 
 /// The cheapest split between bins along one axis (area-weighted counts of both sides).
-fn sweep(axis: usize, bounds: &[Aabb; BINS], counts: &[u32; BINS]) -> Option<Split> {
-    // From the right first, to know each suffix's area and count.
-    let mut right_area = [0.0f32; BINS];
-    let mut right_count = [0u32; BINS];
-    let (mut acc, mut n) = (Aabb::EMPTY, 0);
+fn sweep(axis: usize, bins: &[Side; BINS]) -> Option<Split> {
+    // From the right first, to know each suffix.
+    let mut right = [Side::EMPTY; BINS];
+    let mut acc = Side::EMPTY;
     for k in (1..BINS).rev() {
-        acc = acc.union(bounds[k]);
-        n += counts[k];
-        right_area[k] = acc.surface_area();
-        right_count[k] = n;
+        acc = acc.add(&bins[k]);
+        right[k] = acc;
     }
     let mut best: Option<Split> = None;
-    let (mut acc, mut n) = (Aabb::EMPTY, 0);
+    let mut left = Side::EMPTY;
     for k in 1..BINS {
-        acc = acc.union(bounds[k - 1]);
-        n += counts[k - 1];
-        if n == 0 || right_count[k] == 0 {
+        left = left.add(&bins[k - 1]);
+        if left.count == 0 || right[k].count == 0 {
             continue;
         }
-        let cost = acc.surface_area() * n as f32 + right_area[k] * right_count[k] as f32;
+        let cost = left.cost() + right[k].cost();
         if best.as_ref().is_none_or(|b| cost < b.cost) {
-            best = Some(Split { axis, bin: k, cost });
+            best = Some(Split {
+                axis,
+                bin: k,
+                cost,
+                left,
+                right: right[k],
+            });
         }
     }
     best
 }
 
-/// A node still to be built: `nodes[node]` covers `indices[start..end]`.
+/// A node still to be built: `nodes[node]` covers `indices[start..end]`, described by `side`.
 struct Task {
     node: usize,
     start: usize,
-    end: usize,
+    side: Side,
     depth: u32,
 }
 
@@ -271,38 +313,46 @@ pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
     let mut stack = vec![Task {
         node: 0,
         start: 0,
-        end: boxes.len(),
+        side: Side::of(&indices, boxes, &centroids),
         depth: 0,
     }];
     while let Some(task) = stack.pop() {
-        let range = &mut indices[task.start..task.end];
-        let (bounds, centroid_bounds) =
-            range.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), &i| {
-                (b.union(boxes[i as usize]), c.grow(centroids[i as usize]))
-            });
-        let count = range.len();
+        let Side {
+            bounds,
+            centroids: centroid_bounds,
+            count,
+        } = task.side;
+        let end = task.start + count as usize;
+        let range = &mut indices[task.start..end];
         let split = if task.depth < MAX_SAH_DEPTH {
             best_split(boxes, &centroids, range, &centroid_bounds)
         } else {
             None
         };
-        let leaf_cost = bounds.surface_area() * count as f32;
-        let split_pays = split
-            .as_ref()
-            .is_some_and(|s| s.cost + TRAVERSAL_COST * bounds.surface_area() < leaf_cost);
-        if count <= max_leaf_size && !split_pays {
-            nodes[task.node] = node_from(bounds, task.start as u32, count as u32);
+        let split_pays = split.as_ref().is_some_and(|(s, _)| {
+            s.cost + TRAVERSAL_COST * bounds.surface_area() < task.side.cost()
+        });
+        if count as usize <= max_leaf_size && !split_pays {
+            nodes[task.node] = node_from(bounds, task.start as u32, count);
             continue;
         }
-        let left_count = match split
-            .and_then(|s| Binning::along(&centroid_bounds, s.axis).map(|binning| (s, binning)))
-        {
-            Some((s, binning)) => partition(range, |i| {
-                binning.bin(centroids[i as usize][s.axis]) < s.bin
-            }),
-            None => median_split(range, &centroids, &centroid_bounds),
+        let (left_side, right_side) = match split {
+            Some((s, binning)) => {
+                let moved = partition(range, |i| {
+                    binning.bin(centroids[i as usize][s.axis]) < s.bin
+                });
+                debug_assert_eq!(moved, s.left.count as usize);
+                (s.left, s.right)
+            }
+            None => {
+                let half = median_split(range, &centroids, &centroid_bounds);
+                let (l, r) = range.split_at(half);
+                (
+                    Side::of(l, boxes, &centroids),
+                    Side::of(r, boxes, &centroids),
+                )
+            }
         };
-        let mid = task.start + left_count;
         let left = nodes.len();
         nodes.push(node_from(Aabb::EMPTY, 0, 0));
         nodes.push(node_from(Aabb::EMPTY, 0, 0));
@@ -310,14 +360,14 @@ pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
         let depth = task.depth + 1;
         stack.push(Task {
             node: left + 1,
-            start: mid,
-            end: task.end,
+            start: task.start + left_side.count as usize,
+            side: right_side,
             depth,
         });
         stack.push(Task {
             node: left,
             start: task.start,
-            end: mid,
+            side: left_side,
             depth,
         });
     }
