@@ -4,9 +4,13 @@
 //! Layout: `nodes[0]` is the root. A node with `count > 0` is a leaf holding
 //! `indices[left_or_first .. left_or_first + count]`; with `count == 0` it is interior and its
 //! children are `left_or_first` and `left_or_first + 1`. An empty hierarchy is one interior-looking
-//! node with an inverted box (min > max) and no children: traversals must check for emptiness
-//! (the GPU checks its primitive count) before descending, since a slab test does not reject an
-//! inverted box.
+//! node with an inverted box (min = +f32::MAX > max = -f32::MAX) and no children. A point test
+//! rejects that box, but a slab test that orders its planes does not, so ray traversals must
+//! check for emptiness (the GPU checks its primitive count) before descending.
+//!
+//! The module also holds the CPU reference intersection of a [`Scene`] (`closest_hit`), used by
+//! tests and by passes that need ground truth: primitive `i < triangles.len()` is triangle `i`,
+//! the rest are spheres `i - triangles.len()` (the GPU uses the same numbering).
 
 use glam::Vec3;
 
@@ -28,15 +32,28 @@ pub struct Aabb {
 }
 
 impl Aabb {
+    /// The identity of `union`: contains nothing, and grows to exactly what is added to it.
     pub const EMPTY: Aabb = Aabb {
         min: Vec3::splat(f32::MAX),
         max: Vec3::splat(-f32::MAX),
     };
 
+    pub fn empty() -> Aabb {
+        Self::EMPTY
+    }
+
     pub fn union(self, other: Aabb) -> Aabb {
         Aabb {
             min: self.min.min(other.min),
             max: self.max.max(other.max),
+        }
+    }
+
+    /// The box extended to contain `p`.
+    pub fn grow(self, p: Vec3) -> Aabb {
+        Aabb {
+            min: self.min.min(p),
+            max: self.max.max(p),
         }
     }
 
@@ -56,6 +73,7 @@ impl Aabb {
         0.5 * (self.min + self.max)
     }
 
+    /// Closed test: points on the boundary are inside, so flat boxes still contain their points.
     pub fn contains_point(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
@@ -77,7 +95,26 @@ impl Aabb {
             max: center + radius,
         }
     }
+
+    /// The parametric interval `[enter, exit]` in which the ray is inside the box, clipped to
+    /// `[0, t_max]`, or `None` when it misses. `inv_dir` is `1 / dir` per component.
+    ///
+    /// `exit` is enlarged by a few ulps (PBRT's `1 + 2 gamma(3)`) so rounding in the slab
+    /// arithmetic never culls a box the ray grazes: the test may visit a little too much, never
+    /// too little, which keeps BVH queries equal to brute force.
+    pub fn ray_interval(&self, origin: Vec3, inv_dir: Vec3, t_max: f32) -> Option<(f32, f32)> {
+        let t0 = (self.min - origin) * inv_dir;
+        let t1 = (self.max - origin) * inv_dir;
+        // f32::min / max ignore a NaN operand, so an axis where 0 * inf occurs (the origin on a
+        // slab plane of a ray parallel to it) simply does not constrain the interval.
+        let enter = t0.min(t1).max_element().max(0.0);
+        let exit = (t0.max(t1).min_element() * ROUNDING_SLACK).min(t_max);
+        (enter <= exit).then_some((enter, exit))
+    }
 }
+
+/// `1 + 2 gamma(3)` with gamma(n) = n eps / (1 - n eps), eps = 2^-24 (PBRT 3, section 3.9).
+const ROUNDING_SLACK: f32 = 1.0 + 2.0 * (3.0 * 5.960_464_5e-8) / (1.0 - 3.0 * 5.960_464_5e-8);
 
 pub struct Bvh {
     pub nodes: Vec<BvhNode>,
@@ -111,62 +148,159 @@ fn node_from(bounds: Aabb, left_or_first: u32, count: u32) -> BvhNode {
     }
 }
 
+/// The boxes on one side of a split: their bounds, their centroids' bounds and how many.
+#[derive(Clone, Copy)]
+struct Side {
+    bounds: Aabb,
+    centroids: Aabb,
+    count: u32,
+}
+
+impl Side {
+    const EMPTY: Side = Side {
+        bounds: Aabb::EMPTY,
+        centroids: Aabb::EMPTY,
+        count: 0,
+    };
+
+    fn add(self, other: &Side) -> Side {
+        Side {
+            bounds: self.bounds.union(other.bounds),
+            centroids: self.centroids.union(other.centroids),
+            count: self.count + other.count,
+        }
+    }
+
+    fn of(range: &[u32], boxes: &[Aabb], centroids: &[Vec3]) -> Side {
+        range.iter().fold(Side::EMPTY, |side, &i| Side {
+            bounds: side.bounds.union(boxes[i as usize]),
+            centroids: side.centroids.grow(centroids[i as usize]),
+            count: side.count + 1,
+        })
+    }
+
+    /// The SAH cost of intersecting everything on this side once its box is entered.
+    fn cost(&self) -> f32 {
+        self.bounds.surface_area() * self.count as f32
+    }
+}
+
 struct Split {
     axis: usize,
     /// Boxes whose centroid falls in bins below this one go left.
     bin: usize,
     cost: f32,
+    /// What goes left and right, known from the bins: children need no extra pass for bounds.
+    left: Side,
+    right: Side,
 }
 
-/// The cheapest binned SAH split of `range`, if any axis has extent.
-fn best_split(boxes: &[Aabb], range: &[u32], centroid_bounds: Aabb) -> Option<Split> {
-    let extent = centroid_bounds.max - centroid_bounds.min;
-    let mut best: Option<Split> = None;
-    for axis in 0..3 {
-        if extent[axis] <= 0.0 {
+/// Maps a centroid coordinate to its bin along one axis. Computed the same way when binning and
+/// when partitioning, so both always agree on which side a box is on.
+#[derive(Clone, Copy)]
+struct Binning {
+    min: f32,
+    scale: f32,
+}
+
+impl Binning {
+    fn along(centroid_bounds: &Aabb, axis: usize) -> Option<Binning> {
+        let extent = centroid_bounds.max[axis] - centroid_bounds.min[axis];
+        // An extent so small that its reciprocal overflows cannot be split by position anyway.
+        let scale = BINS as f32 / extent;
+        (extent > 0.0 && scale.is_finite()).then_some(Binning {
+            min: centroid_bounds.min[axis],
+            scale,
+        })
+    }
+
+    fn bin(&self, value: f32) -> usize {
+        // `as usize` saturates (and maps NaN to 0), so this never leaves 0..BINS.
+        (((value - self.min) * self.scale) as usize).min(BINS - 1)
+    }
+}
+
+/// The cheapest binned SAH split of `range` over all three axes, if any axis has extent.
+fn best_split(
+    boxes: &[Aabb],
+    centroids: &[Vec3],
+    range: &[u32],
+    centroid_bounds: &Aabb,
+) -> Option<(Split, Binning)> {
+    let binnings = [0, 1, 2].map(|axis| Binning::along(centroid_bounds, axis));
+    if binnings.iter().all(Option::is_none) {
+        return None;
+    }
+    let mut bins = [[Side::EMPTY; BINS]; 3];
+    for &i in range {
+        let (b, c) = (boxes[i as usize], centroids[i as usize]);
+        for (axis, binning) in binnings.iter().enumerate() {
+            if let Some(binning) = binning {
+                let bin = &mut bins[axis][binning.bin(c[axis])];
+                bin.bounds = bin.bounds.union(b);
+                bin.centroids = bin.centroids.grow(c);
+                bin.count += 1;
+            }
+        }
+    }
+    let mut best: Option<(Split, Binning)> = None;
+    for (axis, binning) in binnings.iter().enumerate() {
+        let Some(binning) = binning else {
             continue;
-        }
-        let scale = BINS as f32 / extent[axis];
-        let mut bin_bounds = [Aabb::EMPTY; BINS];
-        let mut bin_counts = [0u32; BINS];
-        for &i in range {
-            let b = &boxes[i as usize];
-            let k = bin_of(b.centroid()[axis], centroid_bounds.min[axis], scale);
-            bin_bounds[k] = bin_bounds[k].union(*b);
-            bin_counts[k] += 1;
-        }
-        // Sweep from the right to know each suffix's area and count.
-        let mut right_area = [0.0f32; BINS];
-        let mut right_count = [0u32; BINS];
-        let (mut acc, mut n) = (Aabb::EMPTY, 0);
-        for k in (1..BINS).rev() {
-            acc = acc.union(bin_bounds[k]);
-            n += bin_counts[k];
-            right_area[k] = acc.surface_area();
-            right_count[k] = n;
-        }
-        let (mut acc, mut n) = (Aabb::EMPTY, 0);
-        for k in 1..BINS {
-            acc = acc.union(bin_bounds[k - 1]);
-            n += bin_counts[k - 1];
-            if n == 0 || right_count[k] == 0 {
-                continue;
-            }
-            let cost = acc.surface_area() * n as f32 + right_area[k] * right_count[k] as f32;
-            if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Split { axis, bin: k, cost });
-            }
+        };
+        if let Some(split) = sweep(axis, &bins[axis])
+            && best.as_ref().is_none_or(|(b, _)| split.cost < b.cost)
+        {
+            best = Some((split, *binning));
         }
     }
     best
 }
 
-fn bin_of(value: f32, min: f32, scale: f32) -> usize {
-    (((value - min) * scale) as usize).min(BINS - 1)
+/// The cheapest split between bins along one axis (area-weighted counts of both sides).
+fn sweep(axis: usize, bins: &[Side; BINS]) -> Option<Split> {
+    // From the right first, to know each suffix.
+    let mut right = [Side::EMPTY; BINS];
+    let mut acc = Side::EMPTY;
+    for k in (1..BINS).rev() {
+        acc = acc.add(&bins[k]);
+        right[k] = acc;
+    }
+    let mut best: Option<Split> = None;
+    let mut left = Side::EMPTY;
+    for k in 1..BINS {
+        left = left.add(&bins[k - 1]);
+        if left.count == 0 || right[k].count == 0 {
+            continue;
+        }
+        let cost = left.cost() + right[k].cost();
+        if best.as_ref().is_none_or(|b| cost < b.cost) {
+            best = Some(Split {
+                axis,
+                bin: k,
+                cost,
+                left,
+                right: right[k],
+            });
+        }
+    }
+    best
 }
 
-/// Builds a BVH over `boxes` with at most `max_leaf_size` boxes per leaf (more only when boxes
-/// cannot be told apart, which cannot happen: coincident boxes are split by count).
+/// A node still to be built: `nodes[node]` covers `indices[start..end]`, described by `side`.
+struct Task {
+    node: usize,
+    start: usize,
+    side: Side,
+    depth: u32,
+}
+
+/// Builds a BVH over `boxes` with at most `max_leaf_size` boxes per leaf (0 is taken as 1).
+/// Smaller leaves are made where the surface area heuristic says splitting pays.
+///
+/// Boxes whose centroids coincide are split in half by count, and past `MAX_SAH_DEPTH` every
+/// split is by count, so the depth stays below `MAX_SAH_DEPTH + log2(len)` for any input. The
+/// build is iterative (no recursion) and O(n log n).
 pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
     let max_leaf_size = max_leaf_size.max(1);
     let mut indices: Vec<u32> = (0..boxes.len() as u32).collect();
@@ -174,64 +308,84 @@ pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
     if boxes.is_empty() {
         return Bvh { nodes, indices };
     }
-    // (node, start, end, depth)
-    let mut stack = vec![(0usize, 0usize, boxes.len(), 0u32)];
-    while let Some((node, start, end, depth)) = stack.pop() {
-        let range = &mut indices[start..end];
-        let (bounds, centroid_bounds) =
-            range.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), &i| {
-                let bx = boxes[i as usize];
-                let p = bx.centroid();
-                (b.union(bx), c.union(Aabb { min: p, max: p }))
-            });
-        let count = end - start;
-        let split = if depth < MAX_SAH_DEPTH {
-            best_split(boxes, range, centroid_bounds)
+    let centroids: Vec<Vec3> = boxes.iter().map(Aabb::centroid).collect();
+    nodes.reserve(2 * boxes.len().div_ceil(max_leaf_size));
+    let mut stack = vec![Task {
+        node: 0,
+        start: 0,
+        side: Side::of(&indices, boxes, &centroids),
+        depth: 0,
+    }];
+    while let Some(task) = stack.pop() {
+        let Side {
+            bounds,
+            centroids: centroid_bounds,
+            count,
+        } = task.side;
+        let end = task.start + count as usize;
+        let range = &mut indices[task.start..end];
+        let split = if task.depth < MAX_SAH_DEPTH {
+            best_split(boxes, &centroids, range, &centroid_bounds)
         } else {
             None
         };
-        let leaf_cost = bounds.surface_area() * count as f32;
-        let split_pays = split
-            .as_ref()
-            .is_some_and(|s| s.cost + TRAVERSAL_COST * bounds.surface_area() < leaf_cost);
-        if count <= max_leaf_size && !split_pays {
-            nodes[node] = node_from(bounds, start as u32, count as u32);
+        let split_pays = split.as_ref().is_some_and(|(s, _)| {
+            s.cost + TRAVERSAL_COST * bounds.surface_area() < task.side.cost()
+        });
+        if count as usize <= max_leaf_size && !split_pays {
+            nodes[task.node] = node_from(bounds, task.start as u32, count);
             continue;
         }
-        let mid = match split {
-            Some(s) => {
-                let scale =
-                    BINS as f32 / (centroid_bounds.max[s.axis] - centroid_bounds.min[s.axis]);
-                let min = centroid_bounds.min[s.axis];
-                let left = partition(range, |i| {
-                    bin_of(boxes[i as usize].centroid()[s.axis], min, scale) < s.bin
+        let (left_side, right_side) = match split {
+            Some((s, binning)) => {
+                let moved = partition(range, |i| {
+                    binning.bin(centroids[i as usize][s.axis]) < s.bin
                 });
-                start + left
+                debug_assert_eq!(moved, s.left.count as usize);
+                (s.left, s.right)
             }
             None => {
-                // No usable SAH split (coincident centroids, or too deep): halve by count along
-                // the widest centroid axis.
-                let axis = widest_axis(centroid_bounds);
-                let half = count / 2;
-                range.select_nth_unstable_by(half, |&a, &b| {
-                    let ca = boxes[a as usize].centroid()[axis];
-                    let cb = boxes[b as usize].centroid()[axis];
-                    ca.total_cmp(&cb)
-                });
-                start + half
+                let half = median_split(range, &centroids, &centroid_bounds);
+                let (l, r) = range.split_at(half);
+                (
+                    Side::of(l, boxes, &centroids),
+                    Side::of(r, boxes, &centroids),
+                )
             }
         };
         let left = nodes.len();
         nodes.push(node_from(Aabb::EMPTY, 0, 0));
         nodes.push(node_from(Aabb::EMPTY, 0, 0));
-        nodes[node] = node_from(bounds, left as u32, 0);
-        stack.push((left + 1, mid, end, depth + 1));
-        stack.push((left, start, mid, depth + 1));
+        nodes[task.node] = node_from(bounds, left as u32, 0);
+        let depth = task.depth + 1;
+        stack.push(Task {
+            node: left + 1,
+            start: task.start + left_side.count as usize,
+            side: right_side,
+            depth,
+        });
+        stack.push(Task {
+            node: left,
+            start: task.start,
+            side: left_side,
+            depth,
+        });
     }
     Bvh { nodes, indices }
 }
 
-fn widest_axis(b: Aabb) -> usize {
+/// Halves `range` by count along the widest centroid axis; for coincident centroids (or a
+/// node past the SAH depth limit). Returns the size of the left half, always in 1..len.
+fn median_split(range: &mut [u32], centroids: &[Vec3], centroid_bounds: &Aabb) -> usize {
+    let axis = widest_axis(centroid_bounds);
+    let half = range.len() / 2;
+    range.select_nth_unstable_by(half, |&a, &b| {
+        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
+    });
+    half
+}
+
+fn widest_axis(b: &Aabb) -> usize {
     let d = b.max - b.min;
     if d.x >= d.y && d.x >= d.z {
         0
@@ -255,7 +409,7 @@ fn partition(items: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
 }
 
 impl Bvh {
-    fn node_box(&self, i: usize) -> Aabb {
+    pub fn node_box(&self, i: usize) -> Aabb {
         let n = &self.nodes[i];
         Aabb {
             min: Vec3::from(n.min),
@@ -263,7 +417,15 @@ impl Bvh {
         }
     }
 
-    /// Calls `visit` with every primitive in a leaf whose box contains `p`.
+    fn leaf_primitives(&self, node: &BvhNode) -> &[u32] {
+        let first = node.left_or_first as usize;
+        self.indices
+            .get(first..first + node.count as usize)
+            .unwrap_or(&[])
+    }
+
+    /// Calls `visit` with every primitive in a leaf whose box contains `p` (a superset of the
+    /// primitives whose own box contains `p`: callers filter).
     pub fn point_query(&self, p: Vec3, mut visit: impl FnMut(u32)) {
         let mut stack = vec![0usize];
         while let Some(i) = stack.pop() {
@@ -272,10 +434,9 @@ impl Bvh {
             }
             let n = self.nodes[i];
             if n.count > 0 {
-                let first = n.left_or_first as usize;
-                for &prim in &self.indices[first..first + n.count as usize] {
-                    visit(prim);
-                }
+                self.leaf_primitives(&n)
+                    .iter()
+                    .for_each(|&prim| visit(prim));
             } else {
                 stack.push(n.left_or_first as usize);
                 stack.push(n.left_or_first as usize + 1);
@@ -283,8 +444,9 @@ impl Bvh {
         }
     }
 
-    /// Visits the primitives of every leaf the ray (origin, dir) enters before `t_max`;
-    /// `hit(prim, &mut t_max)` may shorten the ray (closest-hit queries).
+    /// Visits the primitives of every leaf the ray (origin, dir) enters in `[0, t_max]`;
+    /// `hit(prim, &mut t_max)` may shorten the ray (closest-hit queries). Near children are not
+    /// ordered first: this is a reference, not the fast path.
     pub fn ray_query(
         &self,
         origin: Vec3,
@@ -292,22 +454,17 @@ impl Bvh {
         t_max: f32,
         mut hit: impl FnMut(u32, &mut f32),
     ) {
-        let inv = dir.recip();
+        let inv_dir = dir.recip();
         let mut t_max = t_max;
         let mut stack = vec![0usize];
         while let Some(i) = stack.pop() {
             let b = self.node_box(i);
-            let t0 = (b.min - origin) * inv;
-            let t1 = (b.max - origin) * inv;
-            let enter = t0.min(t1).max_element().max(0.0);
-            let exit = t0.max(t1).min_element().min(t_max);
-            if enter > exit || b.is_empty() {
+            if b.is_empty() || b.ray_interval(origin, inv_dir, t_max).is_none() {
                 continue;
             }
             let n = self.nodes[i];
             if n.count > 0 {
-                let first = n.left_or_first as usize;
-                for &prim in &self.indices[first..first + n.count as usize] {
+                for &prim in self.leaf_primitives(&n) {
                     hit(prim, &mut t_max);
                 }
             } else {
@@ -331,4 +488,77 @@ impl Bvh {
         }
         deepest
     }
+}
+
+/// Möller–Trumbore: the distance along `dir` (in units of `dir`) at which the ray meets the
+/// triangle, if it does at t > 0. Both sides count (culling is the shader's business), and a
+/// degenerate triangle or a ray in its plane never hits.
+pub fn intersect_triangle(v: &[Vec3; 3], origin: Vec3, dir: Vec3) -> Option<f32> {
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let s = origin - v[0];
+    let u = s.dot(p) * inv_det;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let w = dir.dot(q) * inv_det;
+    if w < 0.0 || u + w > 1.0 {
+        return None;
+    }
+    let t = e2.dot(q) * inv_det;
+    (t > 0.0 && t.is_finite()).then_some(t)
+}
+
+/// The nearest t > 0 at which the ray meets the sphere (from outside or inside).
+pub fn intersect_sphere(center: Vec3, radius: f32, origin: Vec3, dir: Vec3) -> Option<f32> {
+    let oc = origin - center;
+    let a = dir.length_squared();
+    let half_b = oc.dot(dir);
+    let c = oc.length_squared() - radius * radius;
+    let discriminant = half_b * half_b - a * c;
+    if discriminant.is_nan() || discriminant < 0.0 || a == 0.0 {
+        return None;
+    }
+    // The cancellation-free form of the quadratic's roots (Numerical Recipes 5.6).
+    let q = -(half_b + discriminant.sqrt().copysign(half_b));
+    if q == 0.0 {
+        return None;
+    }
+    let (r0, r1) = (q / a, c / q);
+    let (near, far) = (r0.min(r1), r0.max(r1));
+    [near, far].into_iter().find(|&t| t > 0.0 && t.is_finite())
+}
+
+/// The hit distance of the ray with primitive `prim` of `scene` (triangles first, then spheres).
+pub fn intersect_primitive(scene: &Scene, prim: u32, origin: Vec3, dir: Vec3) -> Option<f32> {
+    let i = prim as usize;
+    match scene.triangles.get(i) {
+        Some(t) => intersect_triangle(&t.v, origin, dir),
+        None => {
+            let s = scene.spheres.get(i - scene.triangles.len())?;
+            intersect_sphere(s.center, s.radius, origin, dir)
+        }
+    }
+}
+
+/// CPU reference closest hit: `(t, primitive)` of the nearest intersection at t > 0, with `bvh`
+/// built over [`scene_boxes`]. `t` is in units of `dir` (which need not be normalised).
+pub fn closest_hit(scene: &Scene, bvh: &Bvh, origin: Vec3, dir: Vec3) -> Option<(f32, u32)> {
+    let mut best = None;
+    bvh.ray_query(origin, dir, f32::INFINITY, |prim, t_max| {
+        if let Some(t) = intersect_primitive(scene, prim, origin, dir)
+            && t < *t_max
+        {
+            *t_max = t;
+            best = Some((t, prim));
+        }
+    });
+    best
 }

@@ -1,11 +1,19 @@
 //! The subset of Mitsuba 3 XML used by the reference scenes (see `tests/refs/README.md`).
-//! Like Mitsuba, an unknown tag or an unused property is an error with its line and column, so
-//! a typo never silently renders a different scene.
+//! Like Mitsuba, an unknown tag, attribute or property is an error with its line and column, so
+//! a typo never silently renders a different scene; so is anything this renderer would have to
+//! ignore to load the file (a texture, a twosided BSDF, a mirroring camera).
+//!
+//! Supported: `<default>` with `$name` substitution in attribute values; integrator `path`
+//! (`max_depth`, `rr_depth`); sensor `perspective` (`fov`, `fov_axis`, clip planes, `to_world`)
+//! with sampler `independent` and film `hdrfilm` (box filter); shapes `rectangle`, `cube`,
+//! `sphere`, `obj` with `to_world` and `flip_normals`; BSDFs `diffuse`, `dielectric`,
+//! `conductor` with `material="none"` (a mirror), inline or declared at top level with an `id`
+//! and used through `<ref id>`; `area` emitters inside shapes and top-level `point` emitters.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
 use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh};
@@ -15,6 +23,12 @@ use crate::error::Location;
 const DEFAULT_BSDF: Bsdf = Bsdf::Diffuse {
     reflectance: Vec3::splat(0.5),
 };
+
+/// Mitsuba's default `rr_depth`.
+const DEFAULT_RR_DEPTH: u32 = 5;
+
+/// Largest film side accepted, a sanity bound against typos such as `width="12800"`.
+const MAX_FILM_SIDE: i64 = 16384;
 
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
@@ -38,28 +52,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
         doc: &doc,
         defaults: HashMap::new(),
         named_bsdfs: HashMap::new(),
-        scene: Scene {
-            source: path.to_path_buf(),
-            camera: Camera {
-                origin: Vec3::ZERO,
-                target: Vec3::NEG_Z,
-                up: Vec3::Y,
-                fov_x_deg: 39.3077,
-                width: 768,
-                height: 576,
-            },
-            integrator: Integrator {
-                max_depth: None,
-                rr_depth: Some(5),
-            },
-            spp_hint: None,
-            materials: Vec::new(),
-            triangles: Vec::new(),
-            spheres: Vec::new(),
-            point_lights: Vec::new(),
-        },
+        scene: empty_scene(path),
+        has_integrator: false,
         has_sensor: false,
     };
+    reader.check_attributes()?;
     reader.read_scene(doc.root_element())?;
     if !reader.has_sensor {
         return Err(reader.error(doc.root_element(), "the scene has no <sensor>"));
@@ -68,12 +65,70 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     Ok(reader.scene)
 }
 
+/// What a scene is before its elements are read: Mitsuba's defaults where it has them.
+fn empty_scene(path: &Path) -> Scene {
+    Scene {
+        source: path.to_path_buf(),
+        camera: Camera {
+            origin: Vec3::ZERO,
+            target: Vec3::Z,
+            up: Vec3::Y,
+            fov_x_deg: 39.3077,
+            width: 768,
+            height: 576,
+        },
+        integrator: Integrator {
+            max_depth: None,
+            rr_depth: Some(DEFAULT_RR_DEPTH),
+        },
+        spp_hint: None,
+        materials: Vec::new(),
+        triangles: Vec::new(),
+        spheres: Vec::new(),
+        point_lights: Vec::new(),
+    }
+}
+
+/// The attributes each known tag may carry; `None` for tags this loader does not know (those
+/// are reported where they appear, as unknown tags).
+fn allowed_attributes(tag: &str) -> Option<&'static [&'static str]> {
+    Some(match tag {
+        "scene" => &["version"],
+        "default" => &["name", "value"],
+        "integrator" | "sensor" | "sampler" | "film" | "rfilter" | "shape" | "bsdf" | "emitter" => {
+            &["type", "id", "name"]
+        }
+        "integer" | "float" | "boolean" | "string" | "rgb" | "spectrum" => &["name", "value"],
+        "point" | "vector" => &["name", "value", "x", "y", "z"],
+        "transform" => &["name"],
+        "matrix" => &["value"],
+        "translate" | "scale" => &["value", "x", "y", "z"],
+        "rotate" => &["value", "x", "y", "z", "angle"],
+        "lookat" => &["origin", "target", "up"],
+        "ref" => &["id", "name"],
+        _ => return None,
+    })
+}
+
+const PROPERTY_TAGS: &[&str] = &[
+    "integer",
+    "float",
+    "boolean",
+    "string",
+    "rgb",
+    "spectrum",
+    "point",
+    "vector",
+    "transform",
+];
+
 struct Reader<'a, 'input> {
     path: &'a Path,
     doc: &'a Document<'input>,
     defaults: HashMap<String, String>,
     named_bsdfs: HashMap<String, Bsdf>,
     scene: Scene,
+    has_integrator: bool,
     has_sensor: bool,
 }
 
@@ -83,14 +138,65 @@ struct Props<'a, 'input> {
     entries: Vec<(String, Node<'a, 'input>)>,
 }
 
+impl<'a, 'input> Props<'a, 'input> {
+    fn take(&mut self, name: &str) -> Option<Node<'a, 'input>> {
+        let i = self.entries.iter().position(|(n, _)| n == name)?;
+        Some(self.entries.remove(i).1)
+    }
+}
+
+/// The parts of a shape that do not depend on its type.
+struct ShapeCommon {
+    to_world: Mat4,
+    material: u32,
+    flip_normals: bool,
+}
+
 impl<'a, 'input> Reader<'a, 'input> {
-    fn location(&self, node: Node) -> Location {
-        let pos = self.doc.text_pos_at(node.range().start);
+    fn location_of(&self, offset: usize) -> Location {
+        let pos = self.doc.text_pos_at(offset);
         Location::new(self.path, pos.row as usize, pos.col as usize)
+    }
+
+    fn location(&self, node: Node) -> Location {
+        self.location_of(node.range().start)
     }
 
     fn error(&self, node: Node, message: impl Into<String>) -> SceneError {
         SceneError::at(self.location(node), message)
+    }
+
+    /// An error placed at attribute `attr` of `node` (at the node if it has no such attribute).
+    fn attr_error(&self, node: Node, attr: &str, message: impl Into<String>) -> SceneError {
+        let offset = node
+            .attribute_node(attr)
+            .map_or(node.range().start, |a| a.range().start);
+        SceneError::at(self.location_of(offset), message)
+    }
+
+    /// Every attribute of every known tag must be one it takes.
+    fn check_attributes(&self) -> Result<(), SceneError> {
+        for node in self.doc.descendants().filter(Node::is_element) {
+            let tag = node.tag_name().name();
+            let Some(allowed) = allowed_attributes(tag) else {
+                continue;
+            };
+            for a in node.attributes() {
+                if a.namespace().is_none() && !allowed.contains(&a.name()) {
+                    return Err(self.attr_error(
+                        node,
+                        a.name(),
+                        format!(
+                            "{}: unknown attribute \"{}\" (expected one of: {})",
+                            describe(node),
+                            a.name(),
+                            allowed.join(", ")
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// An attribute with `$name` defaults substituted.
@@ -111,9 +217,13 @@ impl<'a, 'input> Reader<'a, 'input> {
                 .unwrap_or(tail.len());
             let key = &tail[..end];
             let value = self.defaults.get(key).ok_or_else(|| {
-                self.error(
+                self.attr_error(
                     node,
-                    format!("attribute {name}=\"{raw}\": no <default name=\"{key}\">"),
+                    name,
+                    format!(
+                        "{}: {name}=\"{raw}\" uses ${key}, but there is no <default name=\"{key}\">",
+                        describe(node)
+                    ),
                 )
             })?;
             out.push_str(value);
@@ -127,10 +237,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.attr(node, name)?.ok_or_else(|| {
             self.error(
                 node,
-                format!(
-                    "<{}> needs a {name}=\"...\" attribute",
-                    node.tag_name().name()
-                ),
+                format!("{} needs a {name}=\"...\" attribute", describe(node)),
             )
         })
     }
@@ -150,17 +257,15 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "sensor" => self.read_sensor(child)?,
                 "shape" => self.read_shape(child)?,
                 "emitter" => self.read_point_light(child)?,
-                "bsdf" => {
-                    let id = self.required_attr(child, "id")?;
-                    let bsdf = self.read_bsdf(child)?;
-                    self.named_bsdfs.insert(id, bsdf);
-                }
+                "bsdf" => self.read_named_bsdf(child)?,
                 other => return Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
             }
         }
         Ok(())
     }
 
+    /// The property children of `node`, by name; children whose tag is in `nested` are objects
+    /// the caller reads itself. Anything else is an unknown tag.
     fn props(
         &self,
         node: Node<'a, 'input>,
@@ -172,29 +277,21 @@ impl<'a, 'input> Reader<'a, 'input> {
             if nested.contains(&tag) {
                 continue;
             }
-            const PROPERTY_TAGS: &[&str] = &[
-                "integer",
-                "float",
-                "boolean",
-                "string",
-                "rgb",
-                "spectrum",
-                "point",
-                "vector",
-                "transform",
-            ];
             if !PROPERTY_TAGS.contains(&tag) {
                 return Err(self.error(
                     child,
-                    format!("unknown tag <{tag}> in <{}>", node.tag_name().name()),
+                    format!("unknown tag <{tag}> in {}", describe_object(node)),
                 ));
             }
             let name = self.required_attr(child, "name")?;
             if let Some((_, first)) = entries.iter().find(|(n, _)| *n == name) {
-                return Err(self.error(
+                return Err(self.attr_error(
                     child,
+                    "name",
                     format!(
-                        "property \"{name}\" given twice (first at line {})",
+                        "{}: property \"{name}\" given twice in {} (first at line {})",
+                        describe(child),
+                        describe_object(node),
                         self.location(*first).line
                     ),
                 ));
@@ -204,56 +301,89 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(Props { entries })
     }
 
+    /// Fails on the first property nobody took.
     fn finish(&self, props: Props, owner: Node) -> Result<(), SceneError> {
         if let Some((name, node)) = props.entries.first() {
-            let kind = owner.attribute("type").unwrap_or("");
-            return Err(self.error(
+            return Err(self.attr_error(
                 *node,
+                "name",
                 format!(
-                    "unknown property \"{name}\" for <{} type=\"{kind}\">",
-                    owner.tag_name().name()
+                    "{}: unknown property \"{name}\" for {}",
+                    describe(*node),
+                    describe_object(owner)
                 ),
             ));
         }
         Ok(())
     }
 
-    fn number(&self, node: Node, text: &str) -> Result<f32, SceneError> {
+    /// Properties whose value is read but does not affect our rendering (clip planes, pixel
+    /// formats): checked for type, then dropped.
+    fn ignore(
+        &self,
+        props: &mut Props,
+        names: &[&str],
+        read: impl Fn(&Self, Node) -> Result<(), SceneError>,
+    ) -> Result<(), SceneError> {
+        for name in names {
+            if let Some(n) = props.take(name) {
+                read(self, n)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn expect_tag(&self, node: Node, allowed: &[&str]) -> Result<(), SceneError> {
+        if allowed.contains(&node.tag_name().name()) {
+            return Ok(());
+        }
+        let expected: Vec<String> = allowed.iter().map(|t| format!("<{t}>")).collect();
+        Err(self.error(
+            node,
+            format!("{}: expected {}", describe(node), expected.join(" or ")),
+        ))
+    }
+
+    /// One number from attribute `attr` (whose value, after substitution, is `text`).
+    fn number(&self, node: Node, attr: &str, text: &str) -> Result<f32, SceneError> {
         let value: f32 = text.trim().parse().map_err(|_| {
-            self.error(
+            self.attr_error(
                 node,
+                attr,
                 format!("{}: expected a number, got \"{text}\"", describe(node)),
             )
         })?;
         if !value.is_finite() {
-            return Err(self.error(
+            return Err(self.attr_error(
                 node,
-                format!("{}: {text} is not a finite number", describe(node)),
+                attr,
+                format!("{}: \"{text}\" is not a finite number", describe(node)),
             ));
         }
         Ok(value)
     }
 
-    fn numbers(&self, node: Node, text: &str) -> Result<Vec<f32>, SceneError> {
+    /// Numbers separated by commas and/or white space.
+    fn numbers(&self, node: Node, attr: &str, text: &str) -> Result<Vec<f32>, SceneError> {
         text.split(|c: char| c == ',' || c.is_whitespace())
             .filter(|s| !s.is_empty())
-            .map(|s| self.number(node, s))
+            .map(|s| self.number(node, attr, s))
             .collect()
     }
 
     fn float(&self, node: Node) -> Result<f32, SceneError> {
-        if node.tag_name().name() != "float" && node.tag_name().name() != "integer" {
-            return Err(self.error(node, format!("{}: expected <float>", describe(node))));
-        }
+        self.expect_tag(node, &["float", "integer"])?;
         let value = self.required_attr(node, "value")?;
-        self.number(node, &value)
+        self.number(node, "value", &value)
     }
 
     fn integer(&self, node: Node) -> Result<i64, SceneError> {
+        self.expect_tag(node, &["integer"])?;
         let value = self.required_attr(node, "value")?;
         value.trim().parse().map_err(|_| {
-            self.error(
+            self.attr_error(
                 node,
+                "value",
                 format!(
                     "{}: expected a whole number, got \"{value}\"",
                     describe(node)
@@ -263,15 +393,18 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     fn string(&self, node: Node) -> Result<String, SceneError> {
+        self.expect_tag(node, &["string"])?;
         self.required_attr(node, "value")
     }
 
     fn boolean(&self, node: Node) -> Result<bool, SceneError> {
+        self.expect_tag(node, &["boolean"])?;
         match self.required_attr(node, "value")?.as_str() {
             "true" => Ok(true),
             "false" => Ok(false),
-            other => Err(self.error(
+            other => Err(self.attr_error(
                 node,
+                "value",
                 format!(
                     "{}: expected true or false, got \"{other}\"",
                     describe(node)
@@ -280,15 +413,17 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
     }
 
-    /// An RGB colour: `<rgb value="r, g, b">`, or one number for grey (`<float>`, `<spectrum>`).
+    /// An RGB colour: `<rgb value="r, g, b">`, or one number for grey (`<rgb>`, `<float>`,
+    /// `<spectrum>`).
     fn color(&self, node: Node) -> Result<Vec3, SceneError> {
+        self.expect_tag(node, &["rgb", "float", "spectrum"])?;
         let value = self.required_attr(node, "value")?;
-        let v = self.numbers(node, &value)?;
-        match v.as_slice() {
+        match self.numbers(node, "value", &value)?.as_slice() {
             [x] => Ok(Vec3::splat(*x)),
             [r, g, b] => Ok(Vec3::new(*r, *g, *b)),
-            _ => Err(self.error(
+            _ => Err(self.attr_error(
                 node,
+                "value",
                 format!(
                     "{}: expected 1 or 3 numbers, got \"{value}\"",
                     describe(node)
@@ -297,68 +432,78 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
     }
 
+    /// A colour that must not be negative (reflectance, radiance, intensity).
+    fn non_negative_color(&self, node: Node) -> Result<Vec3, SceneError> {
+        let c = self.color(node)?;
+        if c.min_element() < 0.0 {
+            return Err(self.attr_error(
+                node,
+                "value",
+                format!("{}: must not be negative", describe(node)),
+            ));
+        }
+        Ok(c)
+    }
+
     /// `<point x= y= z=>` or `<point value="x, y, z">`.
     fn point(&self, node: Node) -> Result<Vec3, SceneError> {
-        if let Some(value) = self.attr(node, "value")? {
-            let v = self.numbers(node, &value)?;
-            return match v.as_slice() {
-                [x, y, z] => Ok(Vec3::new(*x, *y, *z)),
-                _ => Err(self.error(node, format!("{}: expected 3 numbers", describe(node)))),
-            };
-        }
-        let coord = |axis: &str| -> Result<f32, SceneError> {
-            match self.attr(node, axis)? {
-                Some(v) => self.number(node, &v),
-                None => Ok(0.0),
-            }
-        };
-        Ok(Vec3::new(coord("x")?, coord("y")?, coord("z")?))
+        self.expect_tag(node, &["point", "vector"])?;
+        self.xyz_or_value(node, 0.0, false)
     }
 
     fn vec3_attr(&self, node: Node, name: &str) -> Result<Vec3, SceneError> {
         let value = self.required_attr(node, name)?;
-        let v = self.numbers(node, &value)?;
-        match v.as_slice() {
+        match self.numbers(node, name, &value)?.as_slice() {
             [x, y, z] => Ok(Vec3::new(*x, *y, *z)),
-            _ => Err(self.error(
+            _ => Err(self.attr_error(
                 node,
+                name,
                 format!(
-                    "<{}> {name}: expected 3 numbers, got \"{value}\"",
-                    node.tag_name().name()
+                    "{}: {name}: expected 3 numbers, got \"{value}\"",
+                    describe(node)
                 ),
             )),
         }
     }
 
+    /// `x= y= z=` attributes (missing ones take `default`), or a single `value=` with 3
+    /// numbers (or 1, repeated, when `splat`).
+    fn xyz_or_value(&self, node: Node, default: f32, splat: bool) -> Result<Vec3, SceneError> {
+        if let Some(value) = self.attr(node, "value")? {
+            return match self.numbers(node, "value", &value)?.as_slice() {
+                [s] if splat => Ok(Vec3::splat(*s)),
+                [x, y, z] => Ok(Vec3::new(*x, *y, *z)),
+                _ => Err(self.attr_error(
+                    node,
+                    "value",
+                    format!(
+                        "{}: expected {}3 numbers, got \"{value}\"",
+                        describe(node),
+                        if splat { "1 or " } else { "" }
+                    ),
+                )),
+            };
+        }
+        let coord = |axis: &str| -> Result<f32, SceneError> {
+            match self.attr(node, axis)? {
+                Some(v) => self.number(node, axis, &v),
+                None => Ok(default),
+            }
+        };
+        Ok(Vec3::new(coord("x")?, coord("y")?, coord("z")?))
+    }
+
     /// A `<transform>`: its children compose left to right, each applied after the previous.
+    /// Only affine transforms are accepted (the bottom row of a `<matrix>` must be 0 0 0 1).
     fn transform(&self, node: Node) -> Result<Mat4, SceneError> {
+        self.expect_tag(node, &["transform"])?;
         let mut m = Mat4::IDENTITY;
         for child in node.children().filter(Node::is_element) {
             let step = match child.tag_name().name() {
-                "matrix" => {
-                    let value = self.required_attr(child, "value")?;
-                    let v = self.numbers(child, &value)?;
-                    if v.len() != 16 {
-                        return Err(self.error(
-                            child,
-                            format!("<matrix>: expected 16 numbers, got {}", v.len()),
-                        ));
-                    }
-                    Mat4::from_cols_slice(&v).transpose()
-                }
-                "translate" => Mat4::from_translation(self.xyz_or_value(child, 0.0)?),
-                "scale" => Mat4::from_scale(self.xyz_or_value(child, 1.0)?),
-                "rotate" => {
-                    let axis = self.xyz_or_value(child, 0.0)?;
-                    let angle = match self.attr(child, "angle")? {
-                        Some(a) => self.number(child, &a)?,
-                        None => return Err(self.error(child, "<rotate> needs angle=\"degrees\"")),
-                    };
-                    if axis.length_squared() == 0.0 {
-                        return Err(self.error(child, "<rotate>: the axis is zero"));
-                    }
-                    Mat4::from_axis_angle(axis.normalize(), angle.to_radians())
-                }
+                "matrix" => self.matrix(child)?,
+                "translate" => Mat4::from_translation(self.xyz_or_value(child, 0.0, false)?),
+                "scale" => Mat4::from_scale(self.xyz_or_value(child, 1.0, true)?),
+                "rotate" => self.rotation(child)?,
                 "lookat" => {
                     let origin = self.vec3_attr(child, "origin")?;
                     let target = self.vec3_attr(child, "target")?;
@@ -379,56 +524,61 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(m)
     }
 
-    /// `x= y= z=` attributes (missing ones take `default`), or a single `value=` (1 or 3 numbers).
-    fn xyz_or_value(&self, node: Node, default: f32) -> Result<Vec3, SceneError> {
-        if let Some(value) = self.attr(node, "value")? {
-            let v = self.numbers(node, &value)?;
-            return match v.as_slice() {
-                [s] => Ok(Vec3::splat(*s)),
-                [x, y, z] => Ok(Vec3::new(*x, *y, *z)),
-                _ => Err(self.error(
-                    node,
-                    format!("<{}>: expected 1 or 3 numbers", node.tag_name().name()),
-                )),
-            };
-        }
-        let coord = |axis: &str| -> Result<f32, SceneError> {
-            match self.attr(node, axis)? {
-                Some(v) => self.number(node, &v),
-                None => Ok(default),
-            }
+    fn matrix(&self, node: Node) -> Result<Mat4, SceneError> {
+        let value = self.required_attr(node, "value")?;
+        let v = self.numbers(node, "value", &value)?;
+        let Ok(rows) = <[f32; 16]>::try_from(v.as_slice()) else {
+            return Err(self.attr_error(
+                node,
+                "value",
+                format!("<matrix>: expected 16 numbers (row-major), got {}", v.len()),
+            ));
         };
-        Ok(Vec3::new(coord("x")?, coord("y")?, coord("z")?))
+        let m = Mat4::from_cols_array(&rows).transpose();
+        if m.row(3) != Vec4::W {
+            return Err(self.attr_error(
+                node,
+                "value",
+                "<matrix>: the last row must be 0 0 0 1 (projective transforms are not supported)",
+            ));
+        }
+        Ok(m)
+    }
+
+    fn rotation(&self, node: Node) -> Result<Mat4, SceneError> {
+        let axis = self.xyz_or_value(node, 0.0, false)?;
+        let angle = match self.attr(node, "angle")? {
+            Some(a) => self.number(node, "angle", &a)?,
+            None => return Err(self.error(node, "<rotate> needs angle=\"degrees\"")),
+        };
+        let axis = axis
+            .try_normalize()
+            .ok_or_else(|| self.error(node, "<rotate>: the axis is zero"))?;
+        Ok(Mat4::from_axis_angle(axis, angle.to_radians()))
     }
 
     fn read_integrator(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        if std::mem::replace(&mut self.has_integrator, true) {
+            return Err(self.error(node, "a second <integrator>: only one is allowed"));
+        }
         let kind = self.required_attr(node, "type")?;
         if kind != "path" {
-            return Err(self.error(
+            return Err(self.attr_error(
                 node,
+                "type",
                 format!("integrator type \"{kind}\" is not supported (only \"path\")"),
             ));
         }
         let mut props = self.props(node, &[])?;
         if let Some(n) = props.take("max_depth") {
-            let depth = self.integer(n)?;
-            self.scene.integrator.max_depth = match depth {
+            self.scene.integrator.max_depth = match self.integer(n)? {
                 -1 => None,
-                d if d >= 1 && d < u32::MAX as i64 => Some(d as u32),
-                _ => {
-                    return Err(self.error(
-                        n,
-                        format!("max_depth {depth}: expected -1 (unbounded) or at least 1"),
-                    ));
-                }
+                d => Some(self.depth(n, d, "max_depth")?),
             };
         }
         if let Some(n) = props.take("rr_depth") {
-            let depth = self.integer(n)?;
-            if depth < 1 || depth > u32::MAX as i64 - 1 {
-                return Err(self.error(n, format!("rr_depth {depth}: expected at least 1")));
-            }
-            self.scene.integrator.rr_depth = Some(depth as u32);
+            let d = self.integer(n)?;
+            self.scene.integrator.rr_depth = Some(self.depth(n, d, "rr_depth")?);
         }
         // Russian roulette that can never start is no roulette.
         if let (Some(max), Some(rr)) = (
@@ -438,27 +588,48 @@ impl<'a, 'input> Reader<'a, 'input> {
         {
             self.scene.integrator.rr_depth = None;
         }
-        props
-            .take("hide_emitters")
-            .map(|n| self.boolean(n))
-            .transpose()?;
+        if let Some(n) = props.take("hide_emitters")
+            && self.boolean(n)?
+        {
+            return Err(self.attr_error(n, "value", "hide_emitters=true is not supported"));
+        }
         self.finish(props, node)
     }
 
+    /// A path depth: at least 1 (-1 for "unbounded" is handled by the caller).
+    fn depth(&self, node: Node, depth: i64, name: &str) -> Result<u32, SceneError> {
+        u32::try_from(depth)
+            .ok()
+            .filter(|d| (1..u32::MAX).contains(d))
+            .ok_or_else(|| {
+                self.attr_error(
+                    node,
+                    "value",
+                    format!("{name} {depth}: expected -1 (unbounded) or at least 1"),
+                )
+            })
+    }
+
     fn read_sensor(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        if std::mem::replace(&mut self.has_sensor, true) {
+            return Err(self.error(node, "a second <sensor>: only one is supported"));
+        }
         let kind = self.required_attr(node, "type")?;
         if kind != "perspective" {
-            return Err(self.error(
+            return Err(self.attr_error(
                 node,
+                "type",
                 format!("sensor type \"{kind}\" is not supported (only \"perspective\")"),
             ));
         }
-        for child in node.children().filter(Node::is_element) {
-            match child.tag_name().name() {
-                "sampler" => self.read_sampler(child)?,
-                "film" => self.read_film(child)?,
-                _ => {}
-            }
+        // The film first: the fov conversion needs its aspect ratio.
+        let sampler = self.single_child(node, "sampler")?;
+        let film = self.single_child(node, "film")?;
+        if let Some(s) = sampler {
+            self.read_sampler(s)?;
+        }
+        if let Some(f) = film {
+            self.read_film(f)?;
         }
         let mut props = self.props(node, &["sampler", "film"])?;
         let fov = props
@@ -469,254 +640,416 @@ impl<'a, 'input> Reader<'a, 'input> {
             .take("fov_axis")
             .map(|n| self.string(n).map(|v| (n, v)))
             .transpose()?;
-        for clip in ["near_clip", "far_clip", "focus_distance"] {
-            props.take(clip).map(|n| self.float(n)).transpose()?;
-        }
+        self.ignore(&mut props, &["near_clip", "far_clip"], |r, n| {
+            r.float(n).map(drop)
+        })?;
         if let Some(n) = props.take("to_world") {
-            let m = self.transform(n)?;
-            self.scene.camera.origin = m.transform_point3(Vec3::ZERO);
-            self.scene.camera.target = m.transform_point3(Vec3::Z);
-            self.scene.camera.up = m.transform_vector3(Vec3::Y);
+            self.read_camera_transform(n)?;
         }
         self.finish(props, node)?;
         if let Some((n, fov)) = fov {
-            if !(fov > 0.0 && fov < 180.0) {
-                return Err(self.error(n, format!("fov {fov}: expected degrees between 0 and 180")));
-            }
-            let (w, h) = (
-                self.scene.camera.width as f32,
-                self.scene.camera.height as f32,
-            );
-            let axis = fov_axis.as_ref().map_or("x", |(_, a)| a.as_str());
-            let to_x = |fov_y: f32| {
-                2.0 * ((fov_y.to_radians() * 0.5).tan() * w / h)
-                    .atan()
-                    .to_degrees()
-            };
-            self.scene.camera.fov_x_deg = match axis {
-                "x" => fov,
-                "y" => to_x(fov),
-                "smaller" if w <= h => fov,
-                "smaller" => to_x(fov),
-                "larger" if w >= h => fov,
-                "larger" => to_x(fov),
-                other => {
-                    let n = fov_axis.as_ref().map_or(node, |(n, _)| *n);
-                    return Err(self.error(
-                        n,
-                        format!("fov_axis \"{other}\": expected x, y, smaller or larger"),
-                    ));
-                }
-            };
+            self.scene.camera.fov_x_deg = self.horizontal_fov(n, fov, fov_axis)?;
         }
-        self.has_sensor = true;
         Ok(())
     }
 
+    /// The child of `node` with tag `tag`, if any; two are an error.
+    fn single_child(
+        &self,
+        node: Node<'a, 'input>,
+        tag: &str,
+    ) -> Result<Option<Node<'a, 'input>>, SceneError> {
+        let mut found = node.children().filter(|c| c.has_tag_name(tag));
+        let first = found.next();
+        if let Some(second) = found.next() {
+            return Err(self.error(
+                second,
+                format!("a second <{tag}> in {}", describe_object(node)),
+            ));
+        }
+        Ok(first)
+    }
+
+    fn read_camera_transform(&mut self, node: Node) -> Result<(), SceneError> {
+        let m = self.transform(node)?;
+        // The camera is stored as origin/target/up, which cannot express a mirror image.
+        if Mat3::from_mat4(m).determinant() < 0.0 {
+            return Err(self.error(
+                node,
+                "a mirroring sensor to_world (negative determinant) is not supported",
+            ));
+        }
+        self.scene.camera.origin = m.transform_point3(Vec3::ZERO);
+        self.scene.camera.target = m.transform_point3(Vec3::Z);
+        self.scene.camera.up = m.transform_vector3(Vec3::Y);
+        Ok(())
+    }
+
+    /// The horizontal fov for a `fov` given along `fov_axis`: tan(fx/2) = tan(fy/2) * w/h.
+    fn horizontal_fov(
+        &self,
+        fov_node: Node,
+        fov: f32,
+        fov_axis: Option<(Node, String)>,
+    ) -> Result<f32, SceneError> {
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(self.attr_error(
+                fov_node,
+                "value",
+                format!("fov {fov}: expected degrees between 0 and 180"),
+            ));
+        }
+        let (w, h) = (
+            self.scene.camera.width as f32,
+            self.scene.camera.height as f32,
+        );
+        let from_y = || 2.0 * ((fov.to_radians() * 0.5).tan() * w / h).atan().to_degrees();
+        let Some((axis_node, axis)) = fov_axis else {
+            return Ok(fov);
+        };
+        match axis.as_str() {
+            "x" => Ok(fov),
+            "y" => Ok(from_y()),
+            "smaller" if w <= h => Ok(fov),
+            "smaller" => Ok(from_y()),
+            "larger" if w >= h => Ok(fov),
+            "larger" => Ok(from_y()),
+            other => Err(self.attr_error(
+                axis_node,
+                "value",
+                format!("fov_axis \"{other}\": expected x, y, smaller or larger"),
+            )),
+        }
+    }
+
     fn read_sampler(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let kind = self.required_attr(node, "type")?;
+        if kind != "independent" {
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!("sampler type \"{kind}\" is not supported (only \"independent\")"),
+            ));
+        }
         let mut props = self.props(node, &[])?;
         if let Some(n) = props.take("sample_count") {
             let spp = self.integer(n)?;
-            if spp < 1 || spp > u32::MAX as i64 {
-                return Err(self.error(n, format!("sample_count {spp}: expected at least 1")));
-            }
-            self.scene.spp_hint = Some(spp as u32);
+            let spp = u32::try_from(spp).ok().filter(|&s| s >= 1).ok_or_else(|| {
+                self.attr_error(
+                    n,
+                    "value",
+                    format!("sample_count {spp}: expected at least 1"),
+                )
+            })?;
+            self.scene.spp_hint = Some(spp);
         }
-        props.take("seed").map(|n| self.integer(n)).transpose()?;
+        self.ignore(&mut props, &["seed"], |r, n| r.integer(n).map(drop))?;
         self.finish(props, node)
     }
 
     fn read_film(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
         if kind != "hdrfilm" {
-            return Err(self.error(
+            return Err(self.attr_error(
                 node,
+                "type",
                 format!("film type \"{kind}\" is not supported (only \"hdrfilm\")"),
             ));
         }
-        for child in node.children().filter(|c| c.has_tag_name("rfilter")) {
-            let filter = self.required_attr(child, "type")?;
-            if filter != "box" {
-                return Err(self.error(
-                    child,
-                    format!("rfilter \"{filter}\" is not supported (only \"box\")"),
-                ));
-            }
+        if let Some(filter) = self.single_child(node, "rfilter")? {
+            self.read_rfilter(filter)?;
         }
         let mut props = self.props(node, &["rfilter"])?;
-        for (name, slot) in [("width", 0), ("height", 1)] {
-            if let Some(n) = props.take(name) {
-                let v = self.integer(n)?;
-                if !(1..=16384).contains(&v) {
-                    return Err(self.error(n, format!("{name} {v}: expected 1 to 16384 pixels")));
-                }
-                if slot == 0 {
-                    self.scene.camera.width = v as u32;
-                } else {
-                    self.scene.camera.height = v as u32;
-                }
-            }
+        if let Some(n) = props.take("width") {
+            self.scene.camera.width = self.film_side(n, "width")?;
         }
-        for name in ["pixel_format", "component_format", "file_format"] {
-            props.take(name).map(|n| self.string(n)).transpose()?;
+        if let Some(n) = props.take("height") {
+            self.scene.camera.height = self.film_side(n, "height")?;
         }
-        props.take("banner").map(|n| self.boolean(n)).transpose()?;
+        self.ignore(
+            &mut props,
+            &["pixel_format", "component_format", "file_format"],
+            |r, n| r.string(n).map(drop),
+        )?;
         self.finish(props, node)
+    }
+
+    fn film_side(&self, node: Node, name: &str) -> Result<u32, SceneError> {
+        let v = self.integer(node)?;
+        if !(1..=MAX_FILM_SIDE).contains(&v) {
+            return Err(self.attr_error(
+                node,
+                "value",
+                format!("film {name} {v}: expected 1 to {MAX_FILM_SIDE} pixels"),
+            ));
+        }
+        Ok(v as u32)
+    }
+
+    fn read_rfilter(&self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let filter = self.required_attr(node, "type")?;
+        if filter != "box" {
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!("rfilter \"{filter}\" is not supported (only \"box\")"),
+            ));
+        }
+        let props = self.props(node, &[])?;
+        self.finish(props, node)
+    }
+
+    fn read_named_bsdf(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let id = self.required_attr(node, "id")?;
+        if self.named_bsdfs.contains_key(&id) {
+            return Err(self.attr_error(
+                node,
+                "id",
+                format!("a second <bsdf id=\"{id}\">: ids must be unique"),
+            ));
+        }
+        let bsdf = self.read_bsdf(node)?;
+        self.named_bsdfs.insert(id, bsdf);
+        Ok(())
     }
 
     fn read_bsdf(&self, node: Node<'a, 'input>) -> Result<Bsdf, SceneError> {
         let kind = self.required_attr(node, "type")?;
+        if kind == "twosided" {
+            return Err(self.attr_error(
+                node,
+                "type",
+                "bsdf type \"twosided\" is not supported: surfaces are one-sided (use \
+                 flip_normals to choose the side)",
+            ));
+        }
         let mut props = self.props(node, &[])?;
         let bsdf = match kind.as_str() {
             "diffuse" => {
                 let reflectance = match props.take("reflectance") {
-                    Some(n) => self.color(n)?,
+                    Some(n) => self.non_negative_color(n)?,
                     None => Vec3::splat(0.5),
                 };
                 Bsdf::Diffuse { reflectance }
             }
-            "dielectric" => {
-                let mut ior = |name: &str, default: f32| -> Result<f32, SceneError> {
-                    match props.take(name) {
-                        Some(n) => {
-                            let v = self.float(n)?;
-                            if v <= 0.0 {
-                                return Err(self.error(n, format!("{name} {v}: must be positive")));
-                            }
-                            Ok(v)
-                        }
-                        None => Ok(default),
-                    }
-                };
-                // Mitsuba's defaults: BK7 glass inside, air outside.
-                let int_ior = ior("int_ior", 1.5046)?;
-                let ext_ior = ior("ext_ior", 1.000277)?;
-                Bsdf::Dielectric { int_ior, ext_ior }
-            }
+            // Mitsuba's defaults: BK7 glass inside, air outside.
+            "dielectric" => Bsdf::Dielectric {
+                int_ior: self.ior(&mut props, "int_ior", 1.5046)?,
+                ext_ior: self.ior(&mut props, "ext_ior", 1.000277)?,
+            },
             "conductor" => {
-                match props.take("material") {
-                    Some(n) => {
-                        let m = self.string(n)?;
-                        if m != "none" {
-                            return Err(self.error(n, format!("conductor material \"{m}\" is not supported (only \"none\", a perfect mirror)")));
-                        }
-                    }
-                    None => return Err(self.error(node, "conductor: only material=\"none\" (a perfect mirror) is supported; add <string name=\"material\" value=\"none\"/>")),
-                }
+                self.read_conductor_material(&mut props, node)?;
                 Bsdf::Mirror
             }
-            other => return Err(self.error(node, format!("bsdf type \"{other}\" is not supported (diffuse, dielectric, conductor with material none)"))),
+            other => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    format!(
+                        "bsdf type \"{other}\" is not supported (diffuse, dielectric, conductor \
+                         with material \"none\")"
+                    ),
+                ));
+            }
         };
         self.finish(props, node)?;
         Ok(bsdf)
     }
 
-    fn read_shape(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
-        let kind = self.required_attr(node, "type")?;
+    fn ior(&self, props: &mut Props, name: &str, default: f32) -> Result<f32, SceneError> {
+        let Some(n) = props.take(name) else {
+            return Ok(default);
+        };
+        let v = self.float(n)?;
+        if v <= 0.0 {
+            return Err(self.attr_error(n, "value", format!("{name} {v}: must be positive")));
+        }
+        Ok(v)
+    }
+
+    /// Only the perfect mirror (`material="none"`) is supported; Mitsuba's default conductor is
+    /// aluminium, so the material must be given.
+    fn read_conductor_material(&self, props: &mut Props, node: Node) -> Result<(), SceneError> {
+        let Some(n) = props.take("material") else {
+            return Err(self.error(
+                node,
+                "conductor: only material=\"none\" (a perfect mirror) is supported; add \
+                 <string name=\"material\" value=\"none\"/>",
+            ));
+        };
+        let material = self.string(n)?;
+        if material != "none" {
+            return Err(self.attr_error(
+                n,
+                "value",
+                format!(
+                    "conductor material \"{material}\" is not supported (only \"none\", a \
+                     perfect mirror)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The shape's BSDF (inline or `<ref>`) and area emission, at most one of each.
+    fn read_shape_material(&self, node: Node<'a, 'input>) -> Result<Material, SceneError> {
         let mut bsdf = None;
-        let mut emission = Vec3::ZERO;
+        let mut emission = None;
         for child in node.children().filter(Node::is_element) {
-            match child.tag_name().name() {
+            let tag = child.tag_name().name();
+            let is_bsdf = matches!(tag, "bsdf" | "ref");
+            if (is_bsdf && bsdf.is_some()) || (tag == "emitter" && emission.is_some()) {
+                return Err(self.error(
+                    child,
+                    format!("{}: a shape has at most one {tag}", describe_object(child)),
+                ));
+            }
+            match tag {
                 "bsdf" => bsdf = Some(self.read_bsdf(child)?),
-                "ref" => {
-                    let id = self.required_attr(child, "id")?;
-                    let found = self.named_bsdfs.get(&id).copied().ok_or_else(|| {
-                        self.error(
-                            child,
-                            format!("<ref id=\"{id}\">: no <bsdf id=\"{id}\"> defined above"),
-                        )
-                    })?;
-                    bsdf = Some(found);
-                }
-                "emitter" => emission = self.read_area_emitter(child)?,
+                "ref" => bsdf = Some(self.bsdf_ref(child)?),
+                "emitter" => emission = Some(self.read_area_emitter(child)?),
                 _ => {}
             }
         }
-        let material = self.scene.materials.len() as u32;
-        self.scene.materials.push(Material {
+        Ok(Material {
             bsdf: bsdf.unwrap_or(DEFAULT_BSDF),
-            emission,
-        });
+            emission: emission.unwrap_or(Vec3::ZERO),
+        })
+    }
+
+    fn bsdf_ref(&self, node: Node) -> Result<Bsdf, SceneError> {
+        let id = self.required_attr(node, "id")?;
+        self.named_bsdfs.get(&id).copied().ok_or_else(|| {
+            self.attr_error(
+                node,
+                "id",
+                format!("<ref id=\"{id}\">: no <bsdf id=\"{id}\"> is declared before this"),
+            )
+        })
+    }
+
+    fn read_shape(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let kind = self.required_attr(node, "type")?;
+        if !matches!(kind.as_str(), "rectangle" | "cube" | "sphere" | "obj") {
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!("shape type \"{kind}\" is not supported (rectangle, cube, sphere, obj)"),
+            ));
+        }
+        let material = self.read_shape_material(node)?;
         let mut props = self.props(node, &["bsdf", "ref", "emitter"])?;
-        let to_world = props
-            .take("to_world")
-            .map(|n| self.transform(n))
-            .transpose()?;
-        let flip = props
-            .take("flip_normals")
-            .map(|n| self.boolean(n))
-            .transpose()?
-            .unwrap_or(false);
-        let m = to_world.unwrap_or(Mat4::IDENTITY);
+        let to_world = props.take("to_world");
+        let common = ShapeCommon {
+            to_world: to_world
+                .map(|n| self.transform(n))
+                .transpose()?
+                .unwrap_or(Mat4::IDENTITY),
+            material: self.scene.materials.len() as u32,
+            flip_normals: props
+                .take("flip_normals")
+                .map(|n| self.boolean(n))
+                .transpose()?
+                .unwrap_or(false),
+        };
+        self.scene.materials.push(material);
+        let (m, id, flip) = (common.to_world, common.material, common.flip_normals);
         match kind.as_str() {
-            "rectangle" => self.scene.push_mesh(mesh::rectangle(), m, material, flip),
-            "cube" => self.scene.push_mesh(mesh::cube(), m, material, flip),
-            "sphere" => {
-                let center = props
-                    .take("center")
-                    .map(|n| self.point(n))
-                    .transpose()?
-                    .unwrap_or(Vec3::ZERO);
-                let radius = match props.take("radius") {
-                    Some(n) => {
-                        let r = self.float(n)?;
-                        if r <= 0.0 {
-                            return Err(
-                                self.error(n, format!("sphere radius {r}: must be positive"))
-                            );
-                        }
-                        r
-                    }
-                    None => 1.0,
-                };
-                let scale = m.transform_vector3(Vec3::X).length();
-                self.scene.spheres.push(Sphere {
-                    center: m.transform_point3(center),
-                    radius: radius * scale,
-                    material,
-                    flip_normals: flip,
-                });
-            }
-            "obj" => {
-                let file = match props.take("filename") {
-                    Some(n) => self.string(n)?,
-                    None => {
-                        return Err(self.error(
-                            node,
-                            "<shape type=\"obj\"> needs <string name=\"filename\">",
-                        ));
-                    }
-                };
-                let face_normals = props
-                    .take("face_normals")
-                    .map(|n| self.boolean(n))
-                    .transpose()?;
-                if face_normals == Some(false) {
-                    eprintln!(
-                        "warning: {}: smooth vertex normals are not supported yet; using flat face normals",
-                        self.location(node)
-                    );
-                }
-                let obj_path = self.relative(&file);
-                let triangles = super::obj::load_triangles(&obj_path).map_err(|e| match e {
-                    SceneError::Io { file, source } => self.error(
-                        node,
-                        format!("cannot read OBJ file {}: {source}", file.display()),
-                    ),
-                    other => other,
-                })?;
-                self.scene.push_mesh(triangles, m, material, flip);
-            }
-            other => {
-                return Err(self.error(
-                    node,
-                    format!(
-                        "shape type \"{other}\" is not supported (rectangle, cube, sphere, obj)"
-                    ),
-                ));
-            }
+            "rectangle" => self.scene.push_mesh(mesh::rectangle(), m, id, flip),
+            "cube" => self.scene.push_mesh(mesh::cube(), m, id, flip),
+            "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
+            _ => self.read_obj(&mut props, &common, node)?,
         }
         self.finish(props, node)
+    }
+
+    fn read_sphere(
+        &mut self,
+        props: &mut Props,
+        common: &ShapeCommon,
+        to_world: Option<Node>,
+        shape: Node,
+    ) -> Result<(), SceneError> {
+        let center = props
+            .take("center")
+            .map(|n| self.point(n))
+            .transpose()?
+            .unwrap_or(Vec3::ZERO);
+        let radius = match props.take("radius") {
+            Some(n) => {
+                let r = self.float(n)?;
+                if r <= 0.0 {
+                    return Err(self.attr_error(
+                        n,
+                        "value",
+                        format!("sphere radius {r}: must be positive"),
+                    ));
+                }
+                r
+            }
+            None => 1.0,
+        };
+        let m = common.to_world;
+        let Some(scale) = super::similarity_scale(m) else {
+            return Err(self.error(
+                to_world.unwrap_or(shape),
+                "a sphere's to_world may only scale uniformly, rotate and translate",
+            ));
+        };
+        self.scene.spheres.push(Sphere {
+            center: m.transform_point3(center),
+            radius: radius * scale,
+            material: common.material,
+            flip_normals: common.flip_normals,
+        });
+        Ok(())
+    }
+
+    fn read_obj(
+        &mut self,
+        props: &mut Props,
+        common: &ShapeCommon,
+        node: Node,
+    ) -> Result<(), SceneError> {
+        let Some(file_node) = props.take("filename") else {
+            return Err(self.error(
+                node,
+                "<shape type=\"obj\"> needs <string name=\"filename\" value=\"...\"/>",
+            ));
+        };
+        let file = self.string(file_node)?;
+        if let Some(n) = props.take("face_normals")
+            && !self.boolean(n)?
+        {
+            eprintln!(
+                "warning: {}: smooth vertex normals are not supported; using flat face normals",
+                self.location(n)
+            );
+        }
+        // Texture coordinates are not used, so their orientation does not matter.
+        self.ignore(props, &["flip_tex_coords"], |r, n| r.boolean(n).map(drop))?;
+        let obj_path = self.relative(&file);
+        let triangles = super::obj::load_triangles(&obj_path).map_err(|e| match e {
+            SceneError::Io { file, source } => self.error(
+                node,
+                format!("cannot read OBJ file {}: {source}", file.display()),
+            ),
+            SceneError::At { location, message } => SceneError::At {
+                location,
+                message: format!("{message} (OBJ used at {})", self.location(node)),
+            },
+            SceneError::File { file, message } => SceneError::File {
+                file,
+                message: format!("{message} (OBJ used at {})", self.location(node)),
+            },
+        })?;
+        self.scene.push_mesh(
+            triangles,
+            common.to_world,
+            common.material,
+            common.flip_normals,
+        );
+        Ok(())
     }
 
     fn relative(&self, file: &str) -> PathBuf {
@@ -727,19 +1060,22 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn read_area_emitter(&self, node: Node<'a, 'input>) -> Result<Vec3, SceneError> {
         let kind = self.required_attr(node, "type")?;
         if kind != "area" {
-            return Err(self.error(
+            return Err(self.attr_error(
                 node,
+                "type",
                 format!("emitter type \"{kind}\" inside a shape: only \"area\" is supported"),
             ));
         }
         let mut props = self.props(node, &[])?;
         let radiance = match props.take("radiance") {
-            Some(n) => self.color(n)?,
-            None => return Err(self.error(node, "area emitter needs a radiance")),
+            Some(n) => self.non_negative_color(n)?,
+            None => {
+                return Err(self.error(
+                    node,
+                    "<emitter type=\"area\"> needs <rgb name=\"radiance\" value=\"...\"/>",
+                ));
+            }
         };
-        if radiance.min_element() < 0.0 {
-            return Err(self.error(node, "area emitter radiance must not be negative"));
-        }
         self.finish(props, node)?;
         Ok(radiance)
     }
@@ -747,42 +1083,49 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn read_point_light(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
         if kind != "point" {
-            return Err(self.error(node, format!("emitter type \"{kind}\" at scene level is not supported (only \"point\"; area emitters go inside a shape)")));
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!(
+                    "emitter type \"{kind}\" at scene level is not supported (only \"point\"; \
+                     area emitters go inside a shape)"
+                ),
+            ));
         }
         let mut props = self.props(node, &[])?;
-        let mut position = props.take("position").map(|n| self.point(n)).transpose()?;
+        let mut position = props
+            .take("position")
+            .map(|n| self.point(n))
+            .transpose()?
+            .unwrap_or(Vec3::ZERO);
         if let Some(n) = props.take("to_world") {
-            position = Some(
-                self.transform(n)?
-                    .transform_point3(position.unwrap_or(Vec3::ZERO)),
-            );
+            position = self.transform(n)?.transform_point3(position);
         }
         let intensity = match props.take("intensity") {
-            Some(n) => self.color(n)?,
+            Some(n) => self.non_negative_color(n)?,
             None => Vec3::ONE,
         };
-        if intensity.min_element() < 0.0 {
-            return Err(self.error(node, "point light intensity must not be negative"));
-        }
         self.finish(props, node)?;
         self.scene.point_lights.push(PointLight {
-            position: position.unwrap_or(Vec3::ZERO),
+            position,
             intensity,
         });
         Ok(())
     }
 }
 
-impl<'a, 'input> Props<'a, 'input> {
-    fn take(&mut self, name: &str) -> Option<Node<'a, 'input>> {
-        let i = self.entries.iter().position(|(n, _)| n == name)?;
-        Some(self.entries.remove(i).1)
-    }
-}
-
+/// `<tag name="...">`, or `<tag>` for an element without a name.
 fn describe(node: Node) -> String {
     match node.attribute("name") {
         Some(name) => format!("<{} name=\"{name}\">", node.tag_name().name()),
+        None => format!("<{}>", node.tag_name().name()),
+    }
+}
+
+/// `<tag type="...">`, or `<tag>` for an element without a type.
+fn describe_object(node: Node) -> String {
+    match node.attribute("type") {
+        Some(kind) => format!("<{} type=\"{kind}\">", node.tag_name().name()),
         None => format!("<{}>", node.tag_name().name()),
     }
 }
@@ -796,6 +1139,6 @@ fn look_at(origin: Vec3, target: Vec3, up: Vec3) -> Option<Mat4> {
         left.extend(0.0),
         new_up.extend(0.0),
         dir.extend(0.0),
-        Vec4::new(origin.x, origin.y, origin.z, 1.0),
+        origin.extend(1.0),
     ))
 }

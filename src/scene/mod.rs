@@ -152,9 +152,7 @@ impl Scene {
         out
     }
 
-    /// Adds object-space triangles placed by `to_world`. A mirroring transform reverses the
-    /// winding, so it is swapped back to keep the front where the transformed normal points;
-    /// `flip_normals` swaps it on purpose.
+    /// Adds object-space triangles placed by `to_world` (see [`place_triangles`]).
     pub fn push_mesh(
         &mut self,
         triangles: Vec<[Vec3; 3]>,
@@ -162,12 +160,8 @@ impl Scene {
         material: u32,
         flip_normals: bool,
     ) {
-        let swap = (to_world.determinant() < 0.0) != flip_normals;
-        for [a, b, c] in triangles {
-            let [a, b, c] = [a, b, c].map(|p| to_world.transform_point3(p));
-            let v = if swap { [a, c, b] } else { [a, b, c] };
-            self.triangles.push(Triangle { v, material });
-        }
+        self.triangles
+            .extend(place_triangles(triangles, to_world, material, flip_normals));
     }
 
     pub fn has_lights(&self) -> bool {
@@ -198,6 +192,9 @@ impl Scene {
         }
         if (cam.target - cam.origin).length_squared() == 0.0 {
             return fail("the camera's origin equals its target".into());
+        }
+        if (cam.target - cam.origin).cross(cam.up).length_squared() == 0.0 {
+            return fail("the camera's up vector is zero or parallel to its view direction".into());
         }
         if !(cam.fov_x_deg > 0.0 && cam.fov_x_deg < 180.0) {
             return fail(format!(
@@ -249,6 +246,39 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// Object-space triangles placed in the world by `to_world`. A mirroring transform (negative
+/// determinant) reverses the winding, so it is swapped back to keep the front where the
+/// transformed normal points; `flip_normals` swaps it on purpose.
+pub fn place_triangles(
+    triangles: Vec<[Vec3; 3]>,
+    to_world: glam::Mat4,
+    material: u32,
+    flip_normals: bool,
+) -> impl Iterator<Item = Triangle> {
+    let swap = (to_world.determinant() < 0.0) != flip_normals;
+    triangles.into_iter().map(move |corners| {
+        let [a, b, c] = corners.map(|p| to_world.transform_point3(p));
+        let v = if swap { [a, c, b] } else { [a, b, c] };
+        Triangle { v, material }
+    })
+}
+
+/// The uniform scale of an affine transform made only of uniform scaling, rotation, mirroring
+/// and translation (which maps spheres to spheres), or `None` for any other transform.
+pub fn similarity_scale(m: glam::Mat4) -> Option<f32> {
+    let linear = glam::Mat3::from_mat4(m);
+    let columns = [linear.x_axis, linear.y_axis, linear.z_axis];
+    let scale = columns[0].length();
+    let tolerance = 1e-4 * scale * scale;
+    let uniform = columns
+        .iter()
+        .all(|c| (c.length_squared() - scale * scale).abs() <= tolerance);
+    let orthogonal = columns[0].dot(columns[1]).abs() <= tolerance
+        && columns[1].dot(columns[2]).abs() <= tolerance
+        && columns[2].dot(columns[0]).abs() <= tolerance;
+    (scale > 0.0 && scale.is_finite() && uniform && orthogonal).then_some(scale)
 }
 
 /// A scene that could not be loaded. Every variant names the file; parse errors carry a line and

@@ -1,12 +1,27 @@
 //! Wavefront OBJ meshes through tobj: triangles only (polygons are fan-triangulated), positions
-//! only (flat normals from the winding, counter-clockwise seen from outside).
+//! only (flat normals from the winding, counter-clockwise seen from the front). Materials
+//! (`mtllib`, `usemtl`) are ignored: the scene file assigns the BSDF.
 
 use std::path::Path;
 
-use glam::{Vec3, Vec4};
+use glam::{Mat4, Vec3};
 
-use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Triangle};
+use super::{
+    Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Triangle, place_triangles,
+};
 use crate::error::Location;
+
+/// The triangles of `path` placed by `transform` (a mirroring transform keeps the front side,
+/// `flip` reverses it), all with material index `material`.
+pub fn load_mesh(
+    path: &Path,
+    transform: Mat4,
+    material: u32,
+    flip: bool,
+) -> Result<Vec<Triangle>, SceneError> {
+    let triangles = load_triangles(path)?;
+    Ok(place_triangles(triangles, transform, material, flip).collect())
+}
 
 /// The triangles of `path` in the file's coordinates.
 pub fn load_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, SceneError> {
@@ -14,7 +29,12 @@ pub fn load_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, SceneError> {
         file: path.to_path_buf(),
         source,
     })?;
-    check_lines(path, &text)?;
+    parse_triangles(path, &text)
+}
+
+/// The triangles of OBJ `text`; `path` names the file in errors.
+pub fn parse_triangles(path: &Path, text: &str) -> Result<Vec<[Vec3; 3]>, SceneError> {
+    check_lines(path, text)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
@@ -32,11 +52,8 @@ pub fn load_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, SceneError> {
         let mesh = &model.mesh;
         let vertex = |i: u32| -> Option<Vec3> {
             let i = i as usize * 3;
-            Some(Vec3::new(
-                *mesh.positions.get(i)?,
-                *mesh.positions.get(i + 1)?,
-                *mesh.positions.get(i + 2)?,
-            ))
+            let xyz = mesh.positions.get(i..i + 3)?;
+            Some(Vec3::new(xyz[0], xyz[1], xyz[2]))
         };
         for face in mesh.indices.chunks_exact(3) {
             let corners = [vertex(face[0]), vertex(face[1]), vertex(face[2])];
@@ -58,59 +75,115 @@ pub fn load_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, SceneError> {
     Ok(triangles)
 }
 
+/// How many `v`, `vt` and `vn` records precede the current line: what face indices may refer to.
+#[derive(Default)]
+struct Counts {
+    positions: i64,
+    texcoords: i64,
+    normals: i64,
+}
+
 /// tobj reports no line numbers, so malformed `v` and `f` lines are found here first, with their
-/// line: numbers that do not parse or are not finite, and face indices out of range.
+/// line: numbers that do not parse or are not finite, and face indices out of range (which also
+/// keeps tobj away from indices it would have to reject without a line).
 fn check_lines(path: &Path, text: &str) -> Result<(), SceneError> {
-    let mut vertices = 0i64;
+    let mut counts = Counts::default();
     for (n, line) in text.lines().enumerate() {
         let at = |message: String| SceneError::at(Location::new(path, n + 1, 1), message);
         let mut words = line.split_whitespace();
         match words.next() {
             Some("v") => {
-                let coords: Vec<&str> = words.collect();
-                if coords.len() < 3 {
-                    return Err(at(format!("vertex needs 3 coordinates: \"{line}\"")));
-                }
-                for c in &coords[..3] {
-                    match c.parse::<f32>() {
-                        Ok(v) if v.is_finite() => {}
-                        _ => {
-                            return Err(at(format!(
-                                "vertex coordinate \"{c}\" is not a finite number"
-                            )));
-                        }
-                    }
-                }
-                vertices += 1;
+                check_coordinates(words, 3, "vertex").map_err(at)?;
+                counts.positions += 1;
             }
-            Some("f") => {
-                let corners: Vec<&str> = words.collect();
-                if corners.len() < 3 {
-                    return Err(at(format!("face needs at least 3 vertices: \"{line}\"")));
-                }
-                for corner in corners {
-                    let index = corner.split('/').next().unwrap_or("");
-                    let i: i64 = index
-                        .parse()
-                        .map_err(|_| at(format!("face index \"{corner}\" is not a number")))?;
-                    // Negative indices count back from the latest vertex.
-                    let resolved = if i < 0 { vertices + i + 1 } else { i };
-                    if resolved < 1 || resolved > vertices {
-                        return Err(at(format!(
-                            "face index {i} is out of range ({vertices} vertices so far)"
-                        )));
-                    }
-                }
+            Some("vt") => {
+                check_coordinates(words, 1, "texture coordinate").map_err(at)?;
+                counts.texcoords += 1;
             }
+            Some("vn") => {
+                check_coordinates(words, 3, "normal").map_err(at)?;
+                counts.normals += 1;
+            }
+            Some("f") => check_face(words, &counts).map_err(at)?,
             _ => {}
         }
     }
     Ok(())
 }
 
-/// A bare OBJ as a scene: a grey diffuse mesh seen from +z (looking at its bounding box centre,
-/// framing it), lit by a point light above and behind the camera, so it can be looked at
-/// without writing a scene file.
+fn check_coordinates<'a>(
+    words: impl Iterator<Item = &'a str>,
+    needed: usize,
+    what: &str,
+) -> Result<(), String> {
+    let mut found = 0;
+    for word in words {
+        match word.parse::<f32>() {
+            Ok(v) if v.is_finite() => found += 1,
+            _ => return Err(format!("{what}: \"{word}\" is not a finite number")),
+        }
+    }
+    if found < needed {
+        return Err(format!(
+            "{what} needs at least {needed} numbers, found {found}"
+        ));
+    }
+    Ok(())
+}
+
+/// A face's corners are `v`, `v/vt`, `v//vn` or `v/vt/vn`, each index 1-based or negative
+/// (counting back from the latest record).
+fn check_face<'a>(corners: impl Iterator<Item = &'a str>, counts: &Counts) -> Result<(), String> {
+    let mut n = 0;
+    for corner in corners {
+        n += 1;
+        let mut parts = corner.split('/');
+        let limits = [
+            ("vertex", counts.positions, true),
+            ("texture coordinate", counts.texcoords, false),
+            ("normal", counts.normals, false),
+        ];
+        for (what, available, required) in limits {
+            match parts.next() {
+                Some("") | None if !required => {}
+                Some(index) => check_index(index, what, available)?,
+                None => return Err(format!("face corner \"{corner}\" has no vertex index")),
+            }
+        }
+        if parts.next().is_some() {
+            return Err(format!("face corner \"{corner}\" has more than 3 indices"));
+        }
+    }
+    if n < 3 {
+        return Err(format!("a face needs at least 3 corners, found {n}"));
+    }
+    Ok(())
+}
+
+fn check_index(index: &str, what: &str, available: i64) -> Result<(), String> {
+    let i: i64 = index
+        .parse()
+        .map_err(|_| format!("face {what} index \"{index}\" is not a whole number"))?;
+    let resolved = if i < 0 { available + i + 1 } else { i };
+    if resolved < 1 || resolved > available {
+        return Err(format!(
+            "face {what} index {i} is out of range ({available} defined so far)"
+        ));
+    }
+    Ok(())
+}
+
+/// Field of view of the default camera of a bare OBJ.
+const OBJ_FOV_X_DEG: f32 = 40.0;
+
+/// A bare OBJ as a scene, so a mesh can be looked at without writing a scene file:
+///
+/// - one material, diffuse with reflectance 0.8, no emission;
+/// - a 512x512 camera on the +z side of the mesh's bounding sphere, looking at its centre with
+///   +y up, far enough back that the whole bounding sphere fits in the 40 degree field of view;
+/// - a point light one bounding radius above and one behind the camera, whose intensity
+///   (distance to the centre squared) makes the irradiance at the centre about 1;
+/// - the default integrator (max depth 12, no Russian roulette).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     let triangles = load_triangles(path)?;
     let (lo, hi) = triangles.iter().flatten().fold(
@@ -118,18 +191,19 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
     );
     let center = 0.5 * (lo + hi);
-    let radius = (0.5 * (hi - lo).length()).max(f32::MIN_POSITIVE);
-    let fov_x_deg: f32 = 40.0;
-    let distance = radius / (fov_x_deg.to_radians() * 0.5).sin();
+    // A lower bound on the radius keeps the camera off the target for a mesh that is a point.
+    let min_radius = 1e-3 * center.abs().max_element().max(1.0);
+    let radius = (0.5 * (hi - lo).length()).max(min_radius);
+    let distance = radius / (OBJ_FOV_X_DEG.to_radians() * 0.5).sin();
     let origin = center + Vec3::Z * distance;
-    let light = origin + Vec4::new(0.0, radius, radius, 0.0).truncate();
+    let light = origin + Vec3::new(0.0, radius, radius);
     let scene = Scene {
         source: path.to_path_buf(),
         camera: Camera {
             origin,
             target: center,
             up: Vec3::Y,
-            fov_x_deg,
+            fov_x_deg: OBJ_FOV_X_DEG,
             width: 512,
             height: 512,
         },
@@ -141,10 +215,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             },
             emission: Vec3::ZERO,
         }],
-        triangles: triangles
-            .into_iter()
-            .map(|v| Triangle { v, material: 0 })
-            .collect(),
+        triangles: place_triangles(triangles, Mat4::IDENTITY, 0, false).collect(),
         spheres: Vec::new(),
         point_lights: vec![PointLight {
             position: light,

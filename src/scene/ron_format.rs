@@ -1,33 +1,45 @@
-//! hppm's own scene format, for `scenes/*.ron`. Every struct denies unknown fields.
+//! hppm's own scene format, for `scenes/*.ron`. Every struct denies unknown fields, and every
+//! error (syntax or meaning) is reported as `file:line:col`.
 //!
 //! ```ron
 //! (
+//!     // Required. `up` defaults to (0, 1, 0); fov_x is the full horizontal field of view in
+//!     // degrees (0 to 180); width and height are the film size in pixels.
 //!     camera: (origin: (0, 0, 3.9), target: (0, 0, 0), up: (0, 1, 0), fov_x: 39.3, width: 128, height: 128),
-//!     integrator: (max_depth: 12, rr_depth: None),   // optional; None = unbounded / no roulette
-//!     spp: 64,                                       // optional default sample count
+//!     // Optional, default (max_depth: 12, rr_depth: None). Depths count path segments as in
+//!     // Mitsuba (1 = emitters seen directly); None = unbounded / no Russian roulette.
+//!     integrator: (max_depth: 12, rr_depth: None),
+//!     spp: 64,                                       // optional suggested sample count
 //!     // (optional values may be written `x` or `Some(x)`)
-//!     materials: {
+//!     materials: {                                   // required, names are unique
 //!         "white": Diffuse(reflectance: (0.8, 0.8, 0.8)),
-//!         "glass": Dielectric(int_ior: 1.5, ext_ior: 1.0),
+//!         "glass": Dielectric(int_ior: 1.5, ext_ior: 1.0),   // ext_ior defaults to 1
 //!         "mirror": Mirror,
 //!     },
-//!     shapes: [
-//!         // Rectangle: [-1,1]^2 at z=0 facing +z. Cube: [-1,1]^3 facing out. Obj: a mesh file
-//!         // relative to this file. Placed by `to_world`, a list applied in order.
+//!     shapes: [                                      // required (may be empty)
+//!         // Rectangle: [-1,1]^2 at z=0 facing +z. Cube: [-1,1]^3 facing out. Sphere: centre
+//!         // and radius. Obj: a mesh file relative to this file, counter-clockwise = front.
+//!         // `to_world` is a list of steps applied in order: Translate((x, y, z)),
+//!         // Scale((x, y, z)), Rotate(axis: (x, y, z), degrees: d), Matrix((16 numbers,
+//!         // row-major, last row 0 0 0 1)). A sphere only takes uniform scales.
+//!         // `emission` is the radiance emitted on the front side; `flip_normals` swaps sides.
 //!         (shape: Rectangle, material: "white", to_world: [Scale((2, 2, 1)), Translate((0, -1, 0))]),
 //!         (shape: Sphere(center: (0, 0, 0), radius: 0.5), material: "glass"),
 //!         (shape: Cube, material: "white", emission: Some((1, 1, 1)), flip_normals: true),
 //!         (shape: Obj(path: "mesh.obj"), material: "white",
-//!          to_world: [Matrix((1, 0, 0, 0,  0, 1, 0, 0,  0, 0, 1, 0,  0, 0, 0, 1))]),  // row-major
+//!          to_world: [Matrix((1, 0, 0, 0,  0, 1, 0, 0,  0, 0, 1, 0,  0, 0, 0, 1))]),
 //!     ],
-//!     point_lights: [(position: (0, 2, 0), intensity: (10, 10, 10))],   // W/sr
+//!     point_lights: [(position: (0, 2, 0), intensity: (10, 10, 10))],   // optional, W/sr
 //! )
 //! ```
+//!
+//! Each shape gets its own [`Material`] entry (its named BSDF plus its own emission). Numbers
+//! must be finite: `NaN` and `inf`, which RON itself accepts, are rejected.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec3, Vec4};
 use serde::Deserialize;
 
 use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh};
@@ -139,6 +151,9 @@ struct PointLightFile {
     intensity: [f32; 3],
 }
 
+/// Largest film side accepted, a sanity bound against typos.
+const MAX_FILM_SIDE: u32 = 16384;
+
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
         file: path.to_path_buf(),
@@ -149,10 +164,14 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// Parses scene `text`; `path` names the file in errors and anchors relative OBJ paths.
 pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
-    if let Some(offset) = non_finite_literal(text) {
+    let outline = Outline::new(text);
+    if let Some(token) = outline.first_non_finite_number() {
         return Err(SceneError::at(
-            Location::from_offset(path, text, offset),
-            "numbers must be finite (NaN and infinity are not allowed)",
+            Location::from_offset(path, text, token.start),
+            format!(
+                "\"{}\": numbers must be finite (NaN and infinity are not allowed)",
+                &text[token.start..token.end]
+            ),
         ));
     }
     let options =
@@ -163,55 +182,275 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
             e.code.to_string(),
         )
     })?;
-    build(path, text, file)
-}
-
-/// Byte offset of the first `nan` / `inf` / `NaN` / `infinity` word outside strings and
-/// comments: ron accepts them as floats, a scene must not.
-fn non_finite_literal(text: &str) -> Option<usize> {
-    let bytes = text.as_bytes();
-    let mut i = 0;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'"' => {
-                i += 1;
-                while i < bytes.len() && bytes[i] != b'"' {
-                    i += if bytes[i] == b'\\' { 2 } else { 1 };
-                }
-                i += 1;
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
-                    i += 1;
-                }
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                i += 2;
-                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
-                    i += 1;
-                }
-                i += 2;
-            }
-            c if c.is_ascii_alphabetic() || c == b'_' => {
-                let start = i;
-                while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
-                    i += 1;
-                }
-                let word = text[start..i].to_ascii_lowercase();
-                if matches!(word.as_str(), "nan" | "inf" | "infinity") {
-                    return Some(start);
-                }
-            }
-            _ => i += 1,
-        }
+    Builder {
+        path,
+        text,
+        outline: &outline,
     }
-    None
+    .build(file)
 }
 
-/// Location of the first occurrence of `needle` in `text` (for semantic errors serde cannot
-/// place), or the start of the file.
-fn locate(path: &Path, text: &str, needle: &str) -> Location {
-    Location::from_offset(path, text, text.find(needle).unwrap_or(0))
+/// Turns the deserialised file into a [`Scene`], checking what serde cannot and placing each
+/// error at the entry it concerns.
+struct Builder<'a> {
+    path: &'a Path,
+    text: &'a str,
+    outline: &'a Outline<'a>,
+}
+
+impl Builder<'_> {
+    fn at(&self, offset: usize, message: impl Into<String>) -> SceneError {
+        SceneError::at(Location::from_offset(self.path, self.text, offset), message)
+    }
+
+    /// Where top-level field `name` starts (the file start if it is not written).
+    fn field(&self, name: &str) -> usize {
+        self.outline.top_field(name).map_or(0, |g| g.start)
+    }
+
+    /// Where element `index` of the top-level list `list` starts.
+    fn element(&self, list: &str, index: usize) -> usize {
+        self.outline
+            .top_list_element(list, index)
+            .map_or_else(|| self.field(list), |g| g.start)
+    }
+
+    /// Where `word` first appears within element `index` of list `list` (or where the element
+    /// starts).
+    fn word_in_element(&self, list: &str, index: usize, word: &str) -> usize {
+        self.outline
+            .top_list_element(list, index)
+            .and_then(|g| self.outline.find_word(g, word))
+            .unwrap_or_else(|| self.element(list, index))
+    }
+
+    fn build(&self, file: SceneFile) -> Result<Scene, SceneError> {
+        self.check_materials(&file.materials)?;
+        let mut scene = Scene {
+            source: self.path.to_path_buf(),
+            camera: self.camera(&file.camera)?,
+            integrator: self.integrator(&file.integrator)?,
+            spp_hint: match file.spp {
+                Some(0) => return Err(self.at(self.field("spp"), "spp must be at least 1")),
+                spp => spp,
+            },
+            materials: Vec::new(),
+            triangles: Vec::new(),
+            spheres: Vec::new(),
+            point_lights: Vec::new(),
+        };
+        for (i, shape) in file.shapes.iter().enumerate() {
+            self.add_shape(&mut scene, &file.materials, i, shape)?;
+        }
+        for (i, light) in file.point_lights.iter().enumerate() {
+            let intensity = Vec3::from(light.intensity);
+            if intensity.min_element() < 0.0 {
+                return Err(self.at(
+                    self.word_in_element("point_lights", i, "intensity"),
+                    "point light intensity must not be negative",
+                ));
+            }
+            scene.point_lights.push(PointLight {
+                position: light.position.into(),
+                intensity,
+            });
+        }
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    fn camera(&self, c: &CameraFile) -> Result<Camera, SceneError> {
+        let camera = Camera {
+            origin: c.origin.into(),
+            target: c.target.into(),
+            up: c.up.into(),
+            fov_x_deg: c.fov_x,
+            width: c.width,
+            height: c.height,
+        };
+        let here = self.field("camera");
+        let view = camera.target - camera.origin;
+        if view.length_squared() == 0.0 {
+            return Err(self.at(here, "camera: origin equals target"));
+        }
+        if view.cross(camera.up).length_squared() == 0.0 {
+            return Err(self.at(here, "camera: up is zero or parallel to the view direction"));
+        }
+        if !(camera.fov_x_deg > 0.0 && camera.fov_x_deg < 180.0) {
+            return Err(self.at(
+                here,
+                format!(
+                    "camera: fov_x {}: expected degrees between 0 and 180",
+                    c.fov_x
+                ),
+            ));
+        }
+        for (name, side) in [("width", c.width), ("height", c.height)] {
+            if !(1..=MAX_FILM_SIDE).contains(&side) {
+                return Err(self.at(
+                    here,
+                    format!("camera: {name} {side}: expected 1 to {MAX_FILM_SIDE} pixels"),
+                ));
+            }
+        }
+        Ok(camera)
+    }
+
+    fn integrator(&self, i: &IntegratorFile) -> Result<Integrator, SceneError> {
+        if i.max_depth == Some(0) || i.rr_depth == Some(0) {
+            return Err(self.at(
+                self.field("integrator"),
+                "integrator: depths count path segments and start at 1 (None = unbounded)",
+            ));
+        }
+        Ok(Integrator {
+            max_depth: i.max_depth,
+            rr_depth: i.rr_depth,
+        })
+    }
+
+    /// Ranges of parameters, and names written twice (a map would silently keep the last).
+    fn check_materials(
+        &self,
+        materials: &BTreeMap<String, MaterialFile>,
+    ) -> Result<(), SceneError> {
+        if let Some(key) = self.outline.duplicate_material_key() {
+            return Err(self.at(
+                key.start,
+                format!(
+                    "material {} is defined twice",
+                    &self.text[key.start..key.end]
+                ),
+            ));
+        }
+        for (name, material) in materials {
+            let problem = match material {
+                MaterialFile::Diffuse { reflectance } if reflectance.iter().any(|&r| r < 0.0) => {
+                    "reflectance must not be negative"
+                }
+                MaterialFile::Dielectric { int_ior, ext_ior }
+                    if *int_ior <= 0.0 || *ext_ior <= 0.0 =>
+                {
+                    "indices of refraction must be positive"
+                }
+                _ => continue,
+            };
+            let here = self
+                .outline
+                .material_key(name)
+                .map_or_else(|| self.field("materials"), |k| k.start);
+            return Err(self.at(here, format!("material \"{name}\": {problem}")));
+        }
+        Ok(())
+    }
+
+    fn add_shape(
+        &self,
+        scene: &mut Scene,
+        materials: &BTreeMap<String, MaterialFile>,
+        index: usize,
+        shape: &ShapeFile,
+    ) -> Result<(), SceneError> {
+        let quoted_name = format!("\"{}\"", shape.material);
+        let bsdf = match materials.get(&shape.material) {
+            Some(m) => bsdf_of(m),
+            None => {
+                let names: Vec<&String> = materials.keys().collect();
+                return Err(self.at(
+                    self.word_in_element("shapes", index, &quoted_name),
+                    format!(
+                        "unknown material \"{}\" (defined: {names:?})",
+                        shape.material
+                    ),
+                ));
+            }
+        };
+        let emission = Vec3::from(shape.emission.unwrap_or([0.0; 3]));
+        if emission.min_element() < 0.0 {
+            return Err(self.at(
+                self.word_in_element("shapes", index, "emission"),
+                "emission must not be negative",
+            ));
+        }
+        let to_world = to_world(&shape.to_world)
+            .map_err(|e| self.at(self.word_in_element("shapes", index, "to_world"), e))?;
+        let material = scene.materials.len() as u32;
+        scene.materials.push(Material { bsdf, emission });
+        let object_triangles = match &shape.shape {
+            ShapeKind::Rectangle => mesh::rectangle(),
+            ShapeKind::Cube => mesh::cube(),
+            ShapeKind::Obj { path: obj } => self.obj_triangles(index, obj)?,
+            ShapeKind::Sphere { center, radius } => {
+                let sphere = self.sphere(index, *center, *radius, to_world)?;
+                scene.spheres.push(Sphere {
+                    material,
+                    flip_normals: shape.flip_normals,
+                    ..sphere
+                });
+                return Ok(());
+            }
+        };
+        scene.push_mesh(object_triangles, to_world, material, shape.flip_normals);
+        Ok(())
+    }
+
+    /// The sphere of shape `index`, placed by `to_world`; material and side are set by the caller.
+    fn sphere(
+        &self,
+        index: usize,
+        center: [f32; 3],
+        radius: f32,
+        to_world: Mat4,
+    ) -> Result<Sphere, SceneError> {
+        if radius.is_nan() || radius <= 0.0 {
+            return Err(self.at(
+                self.word_in_element("shapes", index, "radius"),
+                format!("sphere radius {radius}: must be positive"),
+            ));
+        }
+        let Some(scale) = super::similarity_scale(to_world) else {
+            return Err(self.at(
+                self.word_in_element("shapes", index, "to_world"),
+                "a sphere's to_world may only scale uniformly, rotate and translate",
+            ));
+        };
+        Ok(Sphere {
+            center: to_world.transform_point3(Vec3::from(center)),
+            radius: radius * scale,
+            material: 0,
+            flip_normals: false,
+        })
+    }
+
+    fn obj_triangles(&self, index: usize, obj: &str) -> Result<Vec<[Vec3; 3]>, SceneError> {
+        let here = self.word_in_element("shapes", index, "path");
+        let obj_path = self.path.parent().unwrap_or(Path::new(".")).join(obj);
+        let used_at = || Location::from_offset(self.path, self.text, here);
+        super::obj::load_triangles(&obj_path).map_err(|e| match e {
+            SceneError::Io { file, source } => self.at(
+                here,
+                format!("cannot read OBJ file {}: {source}", file.display()),
+            ),
+            SceneError::At { location, message } => SceneError::At {
+                location,
+                message: format!("{message} (OBJ used at {})", used_at()),
+            },
+            SceneError::File { file, message } => SceneError::File {
+                file,
+                message: format!("{message} (OBJ used at {})", used_at()),
+            },
+        })
+    }
+}
+
+fn bsdf_of(m: &MaterialFile) -> Bsdf {
+    match *m {
+        MaterialFile::Diffuse { reflectance } => Bsdf::Diffuse {
+            reflectance: reflectance.into(),
+        },
+        MaterialFile::Dielectric { int_ior, ext_ior } => Bsdf::Dielectric { int_ior, ext_ior },
+        MaterialFile::Mirror => Bsdf::Mirror,
+    }
 }
 
 fn to_world(steps: &[TransformStep]) -> Result<Mat4, String> {
@@ -226,101 +465,338 @@ fn to_world(steps: &[TransformStep]) -> Result<Mat4, String> {
                     .ok_or("Rotate: the axis is zero")?;
                 Mat4::from_axis_angle(axis, degrees.to_radians())
             }
-            TransformStep::Matrix(v) => Mat4::from_cols_slice(v).transpose(),
+            TransformStep::Matrix(v) => {
+                let m = Mat4::from_cols_array(v).transpose();
+                if m.row(3) != Vec4::W {
+                    return Err(
+                        "Matrix: the last row must be 0, 0, 0, 1 (projective transforms \
+                                are not supported)"
+                            .into(),
+                    );
+                }
+                m
+            }
         };
         m = next * m;
     }
     Ok(m)
 }
 
-fn build(path: &Path, text: &str, file: SceneFile) -> Result<Scene, SceneError> {
-    let names: Vec<&String> = file.materials.keys().collect();
-    let mut scene = Scene {
-        source: path.to_path_buf(),
-        camera: Camera {
-            origin: file.camera.origin.into(),
-            target: file.camera.target.into(),
-            up: file.camera.up.into(),
-            fov_x_deg: file.camera.fov_x,
-            width: file.camera.width,
-            height: file.camera.height,
-        },
-        integrator: Integrator {
-            max_depth: file.integrator.max_depth,
-            rr_depth: file.integrator.rr_depth,
-        },
-        spp_hint: file.spp,
-        materials: Vec::new(),
-        triangles: Vec::new(),
-        spheres: Vec::new(),
-        point_lights: file
-            .point_lights
-            .iter()
-            .map(|p| PointLight {
-                position: p.position.into(),
-                intensity: p.intensity.into(),
-            })
-            .collect(),
-    };
-    for shape in &file.shapes {
-        let here = || locate(path, text, &format!("\"{}\"", shape.material));
-        let bsdf = match file.materials.get(&shape.material) {
-            Some(MaterialFile::Diffuse { reflectance }) => Bsdf::Diffuse {
-                reflectance: (*reflectance).into(),
-            },
-            Some(MaterialFile::Dielectric { int_ior, ext_ior }) => Bsdf::Dielectric {
-                int_ior: *int_ior,
-                ext_ior: *ext_ior,
-            },
-            Some(MaterialFile::Mirror) => Bsdf::Mirror,
-            None => {
-                return Err(SceneError::at(
-                    here(),
-                    format!(
-                        "unknown material \"{}\" (defined: {names:?})",
-                        shape.material
-                    ),
-                ));
-            }
+/// The structure of RON text, just enough to say where an entry starts: serde gives positions
+/// only for syntax errors, and the scene's semantic errors (an unknown material in the third
+/// shape) should point at that entry, not at the first similar text in the file.
+///
+/// Tolerates any input (it also runs before the text is known to be valid RON, to find NaNs).
+struct Outline<'a> {
+    text: &'a str,
+    tokens: Vec<Token>,
+    /// The file's value: the last bracket group at depth 0 (after any `#![enable(...)]`).
+    top: Option<Group>,
+}
+
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Kind {
+    Open,
+    Close,
+    Comma,
+    Colon,
+    Str,
+    Word,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Token {
+    kind: Kind,
+    start: usize,
+    end: usize,
+}
+
+/// Tokens `first..last` (indices into `Outline::tokens`); `start` is the byte offset of the
+/// first.
+#[derive(Clone, Copy, Debug)]
+struct Group {
+    first: usize,
+    last: usize,
+    start: usize,
+}
+
+impl<'a> Outline<'a> {
+    fn new(text: &'a str) -> Outline<'a> {
+        let tokens = tokenize(text);
+        let mut outline = Outline {
+            text,
+            tokens,
+            top: None,
         };
-        let emission = Vec3::from(shape.emission.unwrap_or([0.0; 3]));
-        if emission.min_element() < 0.0 {
-            return Err(SceneError::at(here(), "emission must not be negative"));
-        }
-        let material = scene.materials.len() as u32;
-        scene.materials.push(Material { bsdf, emission });
-        let m = to_world(&shape.to_world).map_err(|e| SceneError::at(here(), e))?;
-        let object_triangles = match &shape.shape {
-            ShapeKind::Rectangle => mesh::rectangle(),
-            ShapeKind::Cube => mesh::cube(),
-            ShapeKind::Obj { path: obj } => {
-                let obj_path = path.parent().unwrap_or(Path::new(".")).join(obj);
-                super::obj::load_triangles(&obj_path).map_err(|e| match e {
-                    SceneError::Io { file, source } => SceneError::at(
-                        locate(path, text, obj),
-                        format!("cannot read OBJ file {}: {source}", file.display()),
-                    ),
-                    other => other,
-                })?
-            }
-            ShapeKind::Sphere { center, radius } => {
-                if radius.is_nan() || *radius <= 0.0 {
-                    return Err(SceneError::at(
-                        locate(path, text, "radius"),
-                        format!("sphere radius {radius}: must be positive"),
-                    ));
+        outline.top = outline.last_top_level_group();
+        outline
+    }
+
+    fn last_top_level_group(&self) -> Option<Group> {
+        let mut depth = 0i32;
+        let mut top = None;
+        let mut open = None;
+        for (i, t) in self.tokens.iter().enumerate() {
+            match t.kind {
+                Kind::Open => {
+                    if depth == 0 {
+                        open = Some(i);
+                    }
+                    depth += 1;
                 }
-                scene.spheres.push(Sphere {
-                    center: m.transform_point3(Vec3::from(*center)),
-                    radius: radius * m.transform_vector3(Vec3::X).length(),
-                    material,
-                    flip_normals: shape.flip_normals,
+                Kind::Close => {
+                    depth -= 1;
+                    if depth == 0 {
+                        top = open.map(|first| self.group(first, i + 1));
+                    }
+                }
+                _ => {}
+            }
+        }
+        top
+    }
+
+    fn group(&self, first: usize, last: usize) -> Group {
+        Group {
+            first,
+            last,
+            start: self.tokens[first].start,
+        }
+    }
+
+    fn text_of(&self, t: &Token) -> &'a str {
+        self.text.get(t.start..t.end).unwrap_or("")
+    }
+
+    /// The comma-separated items directly inside the bracket group `g`.
+    fn items(&self, g: Group) -> Vec<Group> {
+        let mut items = Vec::new();
+        let mut depth = 0;
+        let mut item_first = g.first + 1;
+        let inner_last = g.last.saturating_sub(1);
+        for i in g.first + 1..inner_last {
+            match self.tokens[i].kind {
+                Kind::Open => depth += 1,
+                Kind::Close => depth -= 1,
+                Kind::Comma if depth == 0 => {
+                    if item_first < i {
+                        items.push(self.group(item_first, i));
+                    }
+                    item_first = i + 1;
+                }
+                _ => {}
+            }
+        }
+        if item_first < inner_last {
+            items.push(self.group(item_first, inner_last));
+        }
+        items
+    }
+
+    /// The item `key: value` of group `g` whose key is written `key` (a word or a quoted string).
+    fn keyed_item(&self, g: Group, key: &str) -> Option<Group> {
+        self.items(g).into_iter().find(|item| {
+            item.last > item.first + 1
+                && self.tokens[item.first + 1].kind == Kind::Colon
+                && self.text_of(&self.tokens[item.first]) == key
+        })
+    }
+
+    /// The first bracket group inside `item` (the value of `key: (...)`).
+    fn value_group(&self, item: Group) -> Option<Group> {
+        let first = (item.first..item.last).find(|&i| self.tokens[i].kind == Kind::Open)?;
+        let mut depth = 0;
+        for i in first..item.last {
+            match self.tokens[i].kind {
+                Kind::Open => depth += 1,
+                Kind::Close => {
+                    depth -= 1;
+                    if depth == 0 {
+                        return Some(self.group(first, i + 1));
+                    }
+                }
+                _ => {}
+            }
+        }
+        None
+    }
+
+    /// The item `name: ...` of the file's top-level struct.
+    fn top_field(&self, name: &str) -> Option<Group> {
+        self.keyed_item(self.top?, name)
+    }
+
+    /// Element `index` of the top-level list `list`.
+    fn top_list_element(&self, list: &str, index: usize) -> Option<Group> {
+        let list = self.value_group(self.top_field(list)?)?;
+        self.items(list).get(index).copied()
+    }
+
+    /// Byte offset of the first token of `g` whose text is `word`.
+    fn find_word(&self, g: Group, word: &str) -> Option<usize> {
+        self.tokens[g.first..g.last]
+            .iter()
+            .find(|t| self.text_of(t) == word)
+            .map(|t| t.start)
+    }
+
+    /// The quoted keys of the `materials` map, in file order.
+    fn material_keys(&self) -> Vec<Token> {
+        let Some(map) = self
+            .top_field("materials")
+            .and_then(|f| self.value_group(f))
+        else {
+            return Vec::new();
+        };
+        self.items(map)
+            .into_iter()
+            .map(|item| self.tokens[item.first])
+            .filter(|t| t.kind == Kind::Str)
+            .collect()
+    }
+
+    fn material_key(&self, name: &str) -> Option<Token> {
+        let quoted = format!("\"{name}\"");
+        self.material_keys()
+            .into_iter()
+            .find(|t| self.text_of(t) == quoted)
+    }
+
+    /// The second occurrence of a material name written twice.
+    fn duplicate_material_key(&self) -> Option<Token> {
+        let keys = self.material_keys();
+        keys.iter().enumerate().find_map(|(i, k)| {
+            keys[..i]
+                .iter()
+                .any(|earlier| self.text_of(earlier) == self.text_of(k))
+                .then_some(*k)
+        })
+    }
+
+    /// The first number-like word that is NaN or infinite as an `f32` (`NaN`, `-inf`, `1e39`).
+    fn first_non_finite_number(&self) -> Option<Token> {
+        self.tokens
+            .iter()
+            .copied()
+            .find(|t| t.kind == Kind::Word && is_non_finite_number(self.text_of(t)))
+    }
+}
+
+fn is_non_finite_number(word: &str) -> bool {
+    let unsigned = word.trim_start_matches(['+', '-']).to_ascii_lowercase();
+    if matches!(unsigned.as_str(), "nan" | "inf" | "infinity") {
+        return true;
+    }
+    let starts_like_number = unsigned.starts_with(|c: char| c.is_ascii_digit() || c == '.');
+    let digits = unsigned.replace('_', "");
+    starts_like_number && digits.parse::<f64>().is_ok_and(|v| !(v as f32).is_finite())
+}
+
+/// Splits RON text into brackets, separators, strings and words (numbers, identifiers),
+/// skipping white space and comments. Never fails: unterminated strings and comments run to
+/// the end of the text.
+fn tokenize(text: &str) -> Vec<Token> {
+    let bytes = text.as_bytes();
+    let mut tokens = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        let start = i;
+        let kind = match bytes[i] {
+            b'(' | b'[' | b'{' => Kind::Open,
+            b')' | b']' | b'}' => Kind::Close,
+            b',' => Kind::Comma,
+            b':' => Kind::Colon,
+            b'"' => {
+                i = string_end(bytes, i);
+                tokens.push(Token {
+                    kind: Kind::Str,
+                    start,
+                    end: i,
+                });
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                i = bytes[i..]
+                    .iter()
+                    .position(|&b| b == b'\n')
+                    .map_or(bytes.len(), |p| i + p);
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i = block_comment_end(bytes, i);
+                continue;
+            }
+            b if b.is_ascii_whitespace() => {
+                i += 1;
+                continue;
+            }
+            _ => {
+                i = word_end(bytes, i);
+                tokens.push(Token {
+                    kind: Kind::Word,
+                    start,
+                    end: i,
                 });
                 continue;
             }
         };
-        scene.push_mesh(object_triangles, m, material, shape.flip_normals);
+        i += 1;
+        tokens.push(Token {
+            kind,
+            start,
+            end: i,
+        });
     }
-    scene.validate()?;
-    Ok(scene)
+    tokens
+}
+
+/// The offset just past the string starting at the quote `bytes[start]`.
+fn string_end(bytes: &[u8], start: usize) -> usize {
+    let mut i = start + 1;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'\\' => i += 2,
+            b'"' => return i + 1,
+            _ => i += 1,
+        }
+    }
+    bytes.len()
+}
+
+/// The offset just past the (possibly nested) block comment starting at `bytes[start]`.
+fn block_comment_end(bytes: &[u8], start: usize) -> usize {
+    let mut depth = 0;
+    let mut i = start;
+    while i + 1 < bytes.len() {
+        match (bytes[i], bytes[i + 1]) {
+            (b'/', b'*') => {
+                depth += 1;
+                i += 2;
+            }
+            (b'*', b'/') => {
+                depth -= 1;
+                i += 2;
+                if depth == 0 {
+                    return i;
+                }
+            }
+            _ => i += 1,
+        }
+    }
+    bytes.len()
+}
+
+/// A word runs until white space, a bracket, a separator, a quote or a comment. All of those
+/// are ASCII, so word boundaries are always char boundaries.
+fn word_end(bytes: &[u8], start: usize) -> usize {
+    let mut i = start;
+    while i < bytes.len() {
+        let b = bytes[i];
+        let comment = b == b'/' && matches!(bytes.get(i + 1), Some(b'/' | b'*'));
+        if b.is_ascii_whitespace() || b"()[]{},:\"".contains(&b) || comment {
+            break;
+        }
+        i += 1;
+    }
+    i.max(start + 1)
 }
