@@ -128,6 +128,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/pt.ron"));
     OutputFormat::of(&args.out)?;
     let scene = scene::load(&scene_path)?;
+    if !scene.has_lights() {
+        eprintln!(
+            "warning: {} has no light (no emitting shape, no point light): the image will be black",
+            scene_path.display()
+        );
+    }
     let graph = graph::load_graph(&graph_path, passes::registry())?;
     for warning in &graph.warnings {
         eprintln!("warning: {warning}");
