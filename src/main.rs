@@ -83,8 +83,13 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
         s.trim()
             .parse::<u32>()
             .ok()
-            .filter(|&v| (1..=16384).contains(&v))
-            .ok_or_else(|| format!("size {s:?} is not a whole number from 1 to 16384"))
+            .filter(|&v| (1..=scene::MAX_FILM_SIDE).contains(&v))
+            .ok_or_else(|| {
+                format!(
+                    "size {s:?} is not a whole number from 1 to {}",
+                    scene::MAX_FILM_SIDE
+                )
+            })
     };
     Ok((parse(w)?, parse(h)?))
 }
