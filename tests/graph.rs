@@ -240,6 +240,23 @@ fn bad_output() {
 }
 
 #[test]
+fn output_must_be_an_image() {
+    let text = r#"(version: 1, nodes: [(name: "camera", pass: "path_trace")], edges: [],
+        output: "camera.hit_points")"#;
+    let errs = match parse_graph(&PathBuf::from("inline.ron"), text, REGISTRY) {
+        Ok(_) => panic!("hit points are not an image"),
+        Err(e) => e,
+    };
+    assert!(
+        errs.0[0]
+            .message
+            .contains("carries hit_points, not radiance"),
+        "{errs}"
+    );
+    assert_eq!(errs.0[0].location.line, 2);
+}
+
+#[test]
 fn cycle_names_its_nodes() {
     single_error("cycle", 10, "cycle: a -> b -> c -> a");
 }

@@ -10,7 +10,7 @@ use petgraph::graph::{DiGraph, NodeIndex};
 use petgraph::visit::EdgeRef;
 use serde::Deserialize;
 
-use super::pass::{PassKind, SlotDecl, SlotDir};
+use super::pass::{PassKind, ResourceKind, SlotDecl, SlotDir};
 use super::source_map::{self, NodeSpans, SourceMap};
 use super::{Edge, GraphError, GraphErrors, ValidGraph, ValidNode};
 use crate::error::Location;
@@ -445,6 +445,17 @@ fn check_output(
     };
     let kind = resolved.get(node)?.as_ref()?.kind;
     match kind.slot(slot) {
+        // The output becomes the image, so it must hold per-pixel radiance.
+        Some(decl) if decl.dir == SlotDir::Out && decl.kind != ResourceKind::Radiance => {
+            report.error(
+                at,
+                format!(
+                    "output \"{output}\" carries {}, not radiance: the output must be an image",
+                    decl.kind.name()
+                ),
+            );
+            None
+        }
         Some(decl) if decl.dir == SlotDir::Out => Some((node, decl.name)),
         Some(_) => {
             report.error(
