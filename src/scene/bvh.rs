@@ -134,8 +134,9 @@ pub fn scene_boxes(scene: &Scene) -> Vec<Aabb> {
 
 const BINS: usize = 16;
 /// Beyond this depth splits are by count, which bounds the depth (and so the GPU traversal
-/// stack) whatever the input.
-const MAX_SAH_DEPTH: u32 = 40;
+/// stack) whatever the input: at most `MAX_SAH_DEPTH + ceil(log2 n)` edges from the root to a
+/// leaf, which is at most 64 for any `n` that fits the u32 indices (the shader's stack size).
+pub const MAX_SAH_DEPTH: u32 = 32;
 /// Cost of one box test relative to one primitive test.
 const TRAVERSAL_COST: f32 = 1.0;
 
@@ -312,9 +313,9 @@ struct Task {
 /// Builds a BVH over `boxes` with at most `max_leaf_size` boxes per leaf (0 is taken as 1).
 /// Smaller leaves are made where the surface area heuristic says splitting pays.
 ///
-/// Boxes whose centroids coincide are split in half by count, and past `MAX_SAH_DEPTH` every
-/// split is by count, so the depth stays below `MAX_SAH_DEPTH + log2(len)` for any input. The
-/// build is iterative (no recursion) and O(n log n).
+/// Boxes whose centroids coincide are split in half by count, and past [`MAX_SAH_DEPTH`] every
+/// split is by count, so no leaf is more than `MAX_SAH_DEPTH + ceil(log2 len)` edges below the
+/// root for any input. The build is iterative (no recursion) and O(n log n).
 pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
     let max_leaf_size = max_leaf_size.max(1);
     let mut nodes = vec![node_from(Aabb::EMPTY, 0, 0)];
