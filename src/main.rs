@@ -83,8 +83,13 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
         s.trim()
             .parse::<u32>()
             .ok()
-            .filter(|&v| (1..=16384).contains(&v))
-            .ok_or_else(|| format!("size {s:?} is not a whole number from 1 to 16384"))
+            .filter(|&v| (1..=scene::MAX_FILM_SIDE).contains(&v))
+            .ok_or_else(|| {
+                format!(
+                    "size {s:?} is not a whole number from 1 to {}",
+                    scene::MAX_FILM_SIDE
+                )
+            })
     };
     Ok((parse(w)?, parse(h)?))
 }
@@ -128,6 +133,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/pt.ron"));
     OutputFormat::of(&args.out)?;
     let scene = scene::load(&scene_path)?;
+    if !scene.has_lights() {
+        eprintln!(
+            "warning: {} has no light (no emitting shape, no point light): the image will be black",
+            scene_path.display()
+        );
+    }
     let graph = graph::load_graph(&graph_path, passes::registry())?;
     for warning in &graph.warnings {
         eprintln!("warning: {warning}");

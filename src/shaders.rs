@@ -43,6 +43,23 @@ pub const PASS_SHADERS: &[(&str, &str)] = &[(
     include_str!("../shaders/passes/path_trace.wgsl"),
 )];
 
+/// The text of shader `path`: from `$HPPM_SHADER_DIR/path` when that variable is set (to edit
+/// shaders without rebuilding), else the copy compiled into the binary.
+fn source_of(
+    path: &str,
+    embedded: &'static str,
+) -> Result<std::borrow::Cow<'static, str>, crate::Error> {
+    match std::env::var_os("HPPM_SHADER_DIR") {
+        Some(dir) => {
+            let file = std::path::Path::new(&dir).join(path);
+            std::fs::read_to_string(&file)
+                .map(std::borrow::Cow::Owned)
+                .map_err(|source| crate::Error::Io { path: file, source })
+        }
+        None => Ok(std::borrow::Cow::Borrowed(embedded)),
+    }
+}
+
 /// Composes pass shaders for one device and one scene (its shader defs).
 pub struct ShaderLibrary {
     capabilities: naga::valid::Capabilities,
@@ -65,9 +82,10 @@ impl ShaderLibrary {
 
     fn composer(&self) -> Result<Composer, crate::Error> {
         let mut composer = Composer::default().with_capabilities(self.capabilities);
-        for (path, source) in COMMON_MODULES {
+        for (path, embedded) in COMMON_MODULES {
+            let source = source_of(path, embedded)?;
             let added = composer.add_composable_module(ComposableModuleDescriptor {
-                source,
+                source: &source,
                 file_path: path,
                 shader_defs: self.defs.clone(),
                 ..Default::default()
@@ -86,7 +104,7 @@ impl ShaderLibrary {
             .find(|(p, _)| *p == path)
             .map(|(_, s)| *s)
             .ok_or_else(|| crate::Error::Shader(format!("no pass shader named {path}")))?;
-        self.compose_source(path, source)
+        self.compose_source(path, &source_of(path, source)?)
     }
 
     /// Composes an entry file given as text; `path` names it in error messages.
@@ -111,12 +129,11 @@ impl ShaderLibrary {
         layouts: &[&wgpu::BindGroupLayout],
     ) -> Result<wgpu::ComputePipeline, crate::Error> {
         let module = self.compose(path)?;
-        let shader = gpu
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(path),
-                source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
-            });
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some(path),
+            source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
+        };
+        let shader = gpu.device.create_shader_module(desc);
         let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> =
             layouts.iter().map(|l| Some(*l)).collect();
         let layout = gpu

@@ -103,3 +103,72 @@ fn a_broken_scene_names_file_and_line_without_panicking() {
     assert!(!err.contains("panicked"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_buffer_larger_than_the_adapter_allows_is_named_with_its_size() {
+    let out = hppm(&[
+        "render",
+        "--size",
+        "16384x16384",
+        "--spp",
+        "1",
+        "--out",
+        "huge.exr",
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("path_trace radiance"), "{err}");
+    assert!(err.contains("4294967296 bytes"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+/// Ctrl-C (SIGINT) stops a render and still writes what it has.
+#[cfg(unix)]
+#[test]
+fn interrupt_writes_the_image_so_far() {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-int-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("partial.exr");
+    let child = Command::new(env!("CARGO_BIN_EXE_hppm"))
+        .args(["render", "--time", "120", "--size", "32x32", "--out"])
+        .arg(&path)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn hppm");
+    std::thread::sleep(std::time::Duration::from_secs(4));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    assert!(killed.is_ok_and(|s| s.success()));
+    let out = child.wait_with_output().expect("wait");
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    let image = hppm::image::Image::read_exr(&path).expect("partial image written");
+    assert_eq!((image.width, image.height), (32, 32));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn time_budget_stops_the_render() {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-time-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("timed.exr");
+    let start = std::time::Instant::now();
+    let out = hppm(&[
+        "render",
+        "--time",
+        "1.5",
+        "--size",
+        "24x24",
+        "--out",
+        &path.to_string_lossy(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // Device start-up and pipeline compilation come on top of the 1.5 s budget.
+    assert!(start.elapsed().as_secs_f64() < 30.0);
+    assert!(path.exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -167,3 +167,43 @@ fn glass_scene_is_scale_invariant() {
         );
     }
 }
+
+/// Same seed and adapter: the same image, bit for bit. Another seed: a different one.
+#[test]
+fn deterministic_for_a_seed() {
+    let gpu = gpu();
+    let mut scene = load_scene("scenes/cornell_box.ron");
+    scene.camera.width = 32;
+    scene.camera.height = 32;
+    let render = |seed| {
+        render_to(
+            &mut renderer(&gpu, &scene, load_graph("graphs/pt.ron"), seed),
+            4,
+        )
+    };
+    let a = render(1);
+    assert_eq!(a, render(1));
+    assert_ne!(a, render(2));
+}
+
+/// A light so bright that samples overflow to Inf: those samples are dropped and counted, the
+/// image stays finite.
+#[test]
+fn overflowing_samples_are_discarded_and_counted() {
+    let gpu = gpu();
+    let mut scene = load_scene("scenes/cornell_box.ron");
+    scene.camera.width = 16;
+    scene.camera.height = 16;
+    for m in &mut scene.materials {
+        if m.emission.max_element() > 0.0 {
+            m.emission = Vec3::splat(3.0e38);
+        }
+    }
+    let mut r = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 1);
+    let image = render_to(&mut r, 4);
+    let discarded = r.stats().expect("stats").discarded_samples;
+    eprintln!("discarded {discarded} of {} samples", 16 * 16 * 4);
+    assert!(discarded > 0, "expected overflowing samples");
+    assert!(discarded < 16 * 16 * 4, "not every sample overflows");
+    assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
+}

@@ -156,13 +156,20 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var s = 0u; s < params.samples_per_iteration; s++) {
         var rng = rng_seed(pixel_index, params.sample_base + s, params.seed);
         let sample = trace_path(id.xy, &rng, &rays);
-        // One NaN or Inf sample must not poison the pixel: drop it and count it.
-        if !any_not_finite(sample) {
-            sum += sample;
+        // One NaN or Inf sample (or one that would overflow the sum) must not poison the
+        // pixel: drop it and count it.
+        let next = sum + sample;
+        if !any_not_finite(next) {
+            sum = next;
             accepted += 1u;
         }
     }
-    radiance[pixel_index] += vec4<f32>(sum, f32(accepted));
+    let total = radiance[pixel_index] + vec4<f32>(sum, f32(accepted));
+    if any_not_finite(total.xyz) {
+        accepted = 0u;
+    } else {
+        radiance[pixel_index] = total;
+    }
     add_u64(COUNTER_RAYS, rays);
     add_u64(COUNTER_DISCARDED, params.samples_per_iteration - accepted);
 }

@@ -209,7 +209,7 @@ impl GpuContext {
     ) -> Result<wgpu::Buffer, GpuError> {
         let mut padded;
         let mut bytes = contents;
-        if bytes.is_empty() || bytes.len() % 4 != 0 {
+        if bytes.is_empty() || !bytes.len().is_multiple_of(4) {
             padded = contents.to_vec();
             padded.resize(contents.len().max(4).next_multiple_of(4), 0);
             bytes = &padded;

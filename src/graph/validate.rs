@@ -134,8 +134,8 @@ pub fn parse_graph(
         }));
     }
     let lookup = |name: &str| first_by_name.get(name).copied();
-    let edges = connect(&mut report, &map, &parsed, &resolved, lookup);
-    check_producers(&mut report, &parsed, &resolved, &edges, &map);
+    let (edges, attempted) = connect(&mut report, &map, &parsed, &resolved, lookup);
+    check_producers(&mut report, &parsed, &resolved, &attempted, &map);
     let output = check_output(&mut report, &map, &parsed.output, &resolved, lookup);
     let graph = petgraph_of(parsed.nodes.len(), &edges);
     check_cycles(&mut report, &graph, &parsed, &edges);
@@ -293,6 +293,9 @@ fn find_slot(
     }
 }
 
+/// Inputs some edge was meant for, valid or not: they are not also "without producer".
+type Attempted = BTreeSet<(usize, String)>;
+
 /// Resolves every edge string; returns the valid edges with their source spans.
 fn connect(
     report: &mut Report,
@@ -300,9 +303,10 @@ fn connect(
     parsed: &GraphFile,
     resolved: &[Option<Resolved>],
     lookup: impl Fn(&str) -> Option<usize>,
-) -> Vec<(Edge, Range<usize>)> {
+) -> (Vec<(Edge, Range<usize>)>, Attempted) {
     let names: Vec<String> = parsed.nodes.iter().map(|n| n.name.clone()).collect();
     let mut edges: Vec<(Edge, Range<usize>)> = Vec::new();
+    let mut attempted = Attempted::new();
     for (j, edge) in parsed.edges.iter().enumerate() {
         let span = map.edges.get(j).cloned().unwrap_or(0..0);
         let at = span.start;
@@ -316,6 +320,9 @@ fn connect(
             );
             continue;
         };
+        if let Some(n) = lookup(to.0) {
+            attempted.insert((n, to.1.to_string()));
+        }
         let mut ends = Vec::new();
         for (node_name, slot) in [from, to] {
             match lookup(node_name) {
@@ -386,14 +393,14 @@ fn connect(
         };
         edges.push((edge, span));
     }
-    edges
+    (edges, attempted)
 }
 
 fn check_producers(
     report: &mut Report,
     parsed: &GraphFile,
     resolved: &[Option<Resolved>],
-    edges: &[(Edge, Range<usize>)],
+    attempted: &Attempted,
     map: &SourceMap,
 ) {
     for r in resolved.iter().flatten() {
@@ -403,10 +410,7 @@ fn check_producers(
             .iter()
             .filter(|s| s.dir == SlotDir::In && !s.optional)
         {
-            let connected = edges
-                .iter()
-                .any(|(e, _)| e.to_node == r.index && e.to_slot == slot.name);
-            if !connected {
+            if !attempted.contains(&(r.index, slot.name.to_string())) {
                 let at = map.nodes.get(r.index).map_or(0, |n| n.span.start);
                 report.error(
                     at,
@@ -494,8 +498,7 @@ fn check_cycles(
         // Walk the component from its first node until a node repeats: that is a cycle.
         let mut path = vec![start];
         let mut first_edge = None;
-        loop {
-            let Some(&here) = path.last() else { break };
+        while let Some(&here) = path.last() {
             let Some(step) = graph
                 .edges(NodeIndex::new(here))
                 .filter(|e| members.contains(&e.target().index()))

@@ -27,14 +27,8 @@ const DEFAULT_BSDF: Bsdf = Bsdf::Diffuse {
 /// Mitsuba's default `rr_depth`.
 const DEFAULT_RR_DEPTH: u32 = 5;
 
-/// Largest film side accepted, a sanity bound against typos such as `width="12800"`.
-const MAX_FILM_SIDE: i64 = 16384;
-
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let text = super::read_text(path)?;
     parse(path, &text)
 }
 
@@ -776,11 +770,14 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn film_side(&self, node: Node, name: &str) -> Result<u32, SceneError> {
         let v = self.integer(node)?;
-        if !(1..=MAX_FILM_SIDE).contains(&v) {
+        if !(1..=super::MAX_FILM_SIDE as i64).contains(&v) {
             return Err(self.attr_error(
                 node,
                 "value",
-                format!("film {name} {v}: expected 1 to {MAX_FILM_SIDE} pixels"),
+                format!(
+                    "film {name} {v}: expected 1 to {} pixels",
+                    super::MAX_FILM_SIDE
+                ),
             ));
         }
         Ok(v as u32)

@@ -286,6 +286,17 @@ pub fn similarity_scale(m: glam::Mat4) -> Option<f32> {
     (scale > 0.0 && scale.is_finite() && uniform && orthogonal).then_some(scale)
 }
 
+/// Largest film side any loader accepts (and `--size`), a sanity bound against typos.
+pub const MAX_FILM_SIDE: u32 = 16384;
+
+/// A scene file's text, or an error naming it.
+pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        file: path.to_path_buf(),
+        source,
+    })
+}
+
 /// A scene that could not be loaded. Every variant names the file; parse errors carry a line and
 /// column.
 #[derive(Debug, thiserror::Error)]

@@ -25,10 +25,7 @@ pub fn load_mesh(
 
 /// The triangles of `path` in the file's coordinates.
 pub fn load_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let text = super::read_text(path)?;
     parse_triangles(path, &text)
 }
 

@@ -151,14 +151,8 @@ struct PointLightFile {
     intensity: [f32; 3],
 }
 
-/// Largest film side accepted, a sanity bound against typos.
-const MAX_FILM_SIDE: u32 = 16384;
-
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        file: path.to_path_buf(),
-        source,
-    })?;
+    let text = super::read_text(path)?;
     parse(path, &text)
 }
 
@@ -286,10 +280,13 @@ impl Builder<'_> {
             ));
         }
         for (name, side) in [("width", c.width), ("height", c.height)] {
-            if !(1..=MAX_FILM_SIDE).contains(&side) {
+            if !(1..=super::MAX_FILM_SIDE).contains(&side) {
                 return Err(self.at(
                     here,
-                    format!("camera: {name} {side}: expected 1 to {MAX_FILM_SIDE} pixels"),
+                    format!(
+                        "camera: {name} {side}: expected 1 to {} pixels",
+                        super::MAX_FILM_SIDE
+                    ),
                 ));
             }
         }

@@ -1,0 +1,350 @@
+//! Graph parsing, validation and scheduling over fake pass kinds (no GPU): one file per error
+//! kind under tests/data/graphs, each error checked for its message and line.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+
+use hppm::graph::pass::{
+    ExecCtx, Pass, PassKind, PrepareCtx, Resource, ResourceKind, SlotDecl, parse_params,
+};
+use hppm::graph::{GraphErrors, ValidGraph, load_graph, parse_graph};
+use serde::Deserialize;
+
+struct Fake;
+
+impl Pass for Fake {
+    fn prepare(
+        &mut self,
+        _: PrepareCtx<'_>,
+    ) -> Result<HashMap<&'static str, Resource>, hppm::Error> {
+        Ok(HashMap::new())
+    }
+    fn execute(&mut self, _: &ExecCtx<'_>, _: &mut wgpu::CommandEncoder) {}
+}
+
+#[derive(Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+#[allow(dead_code)]
+struct CameraParams {
+    max_depth: Option<u32>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+struct NoParams {}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(dead_code)]
+struct PhotonParams {
+    photons_per_iteration: u32,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+#[allow(dead_code)]
+struct SppmParams {
+    alpha: f32,
+}
+
+fn with<P: serde::de::DeserializeOwned>(
+    params: &str,
+) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
+    parse_params::<P>(params).map(|_| Box::new(Fake) as Box<dyn Pass>)
+}
+
+use ResourceKind::*;
+static REGISTRY: &[PassKind] = &[
+    PassKind {
+        name: "path_trace",
+        description: "camera",
+        slots: &[
+            SlotDecl::output("radiance", Radiance).persistent(),
+            SlotDecl::output("hit_points", HitPoints),
+        ],
+        construct: with::<CameraParams>,
+    },
+    PassKind {
+        name: "hit_point_bvh_sah",
+        description: "bvh",
+        slots: &[
+            SlotDecl::input("hit_points", HitPoints),
+            SlotDecl::output("tree", HitPointTree),
+        ],
+        construct: with::<NoParams>,
+    },
+    PassKind {
+        name: "photon_trace",
+        description: "photons",
+        slots: &[
+            SlotDecl::input("hit_point_tree", HitPointTree),
+            SlotDecl::input("hit_points", HitPoints),
+            SlotDecl::output("deposits", Deposits),
+        ],
+        construct: with::<PhotonParams>,
+    },
+    PassKind {
+        name: "sppm",
+        description: "estimator",
+        slots: &[
+            SlotDecl::input("deposits", Deposits),
+            SlotDecl::input("hit_points", HitPoints),
+            SlotDecl::output("radiance", Radiance).persistent(),
+        ],
+        construct: with::<SppmParams>,
+    },
+    PassKind {
+        name: "resolve",
+        description: "resolve",
+        slots: &[
+            SlotDecl::input("pt", Radiance),
+            SlotDecl::input("caustic", Radiance).optional(),
+            SlotDecl::output("combined", Radiance),
+        ],
+        construct: with::<NoParams>,
+    },
+    PassKind {
+        name: "relay",
+        description: "passes radiance through",
+        slots: &[
+            SlotDecl::input("in", Radiance),
+            SlotDecl::output("out", Radiance),
+        ],
+        construct: with::<NoParams>,
+    },
+];
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/graphs/{name}.ron"))
+}
+
+fn errors(name: &str) -> GraphErrors {
+    match load_graph(&data(name), REGISTRY) {
+        Ok(_) => panic!("{name}.ron should not validate"),
+        Err(e) => e,
+    }
+}
+
+/// The file has exactly one error, on `line`, whose message contains `needle`.
+fn single_error(name: &str, line: usize, needle: &str) {
+    let errs = errors(name);
+    assert_eq!(errs.0.len(), 1, "{name}: {errs}");
+    let e = &errs.0[0];
+    assert!(e.location.file.ends_with(format!("{name}.ron")), "{e}");
+    assert_eq!(e.location.line, line, "{name}: {e}");
+    assert!(
+        e.message.contains(needle),
+        "{name}: expected {needle:?} in {e}"
+    );
+}
+
+#[test]
+fn syntax_error() {
+    single_error("syntax", 4, "");
+}
+
+#[test]
+fn unknown_top_level_field() {
+    single_error("unknown_top_field", 5, "outputs");
+}
+
+#[test]
+fn wrong_version() {
+    single_error("wrong_version", 2, "version 7 is not supported");
+}
+
+#[test]
+fn unknown_pass_kind_suggests_the_closest() {
+    single_error(
+        "unknown_kind",
+        4,
+        "unknown pass kind \"path_trcae\" (did you mean \"path_trace\"?)",
+    );
+}
+
+#[test]
+fn unknown_param_points_at_the_key() {
+    single_error("unknown_param", 5, "unknown param \"max_dpth\"");
+    let e = &errors("unknown_param").0[0];
+    assert_eq!(e.location.col, 33, "{e}");
+}
+
+#[test]
+fn bad_param_type() {
+    single_error("bad_param_type", 5, "params:");
+}
+
+#[test]
+fn missing_param() {
+    single_error(
+        "missing_param",
+        6,
+        "missing param \"photons_per_iteration\"",
+    );
+}
+
+#[test]
+fn duplicate_node() {
+    single_error(
+        "duplicate_node",
+        5,
+        "duplicate node name \"camera\" (first defined on line 4)",
+    );
+}
+
+#[test]
+fn malformed_edge() {
+    single_error("malformed_edge", 5, "malformed edge");
+}
+
+#[test]
+fn unknown_node_in_edge() {
+    single_error("unknown_node_in_edge", 6, "no node named \"kamera\"");
+}
+
+#[test]
+fn unknown_slot_lists_the_slots() {
+    single_error(
+        "unknown_slot",
+        5,
+        "has no slot \"radiance_x\"; its slots: radiance, hit_points",
+    );
+}
+
+#[test]
+fn slot_kind_mismatch() {
+    single_error(
+        "type_mismatch",
+        5,
+        "\"camera.radiance\" (radiance) -> \"bvh.hit_points\" (hit_points)",
+    );
+}
+
+#[test]
+fn input_connected_twice() {
+    single_error("connected_twice", 6, "connected twice (first on line 5)");
+}
+
+#[test]
+fn missing_producer() {
+    single_error(
+        "missing_producer",
+        5,
+        "input \"resolve.pt\" has no producer",
+    );
+}
+
+#[test]
+fn bad_output() {
+    single_error("bad_output", 5, "no output slot \"hit_pointz\"");
+}
+
+#[test]
+fn cycle_names_its_nodes() {
+    single_error("cycle", 10, "cycle: a -> b -> c -> a");
+}
+
+#[test]
+fn every_problem_is_reported_at_once() {
+    let errs = errors("many_problems");
+    let lines: Vec<usize> = errs.0.iter().map(|e| e.location.line).collect();
+    assert_eq!(errs.0.len(), 3, "{errs}");
+    assert_eq!(lines, [4, 5, 10], "{errs}");
+    assert!(errs.to_string().ends_with("3 errors in graph"));
+}
+
+fn names_in_order(g: &ValidGraph) -> Vec<&str> {
+    g.order.iter().map(|&i| g.nodes[i].name.as_str()).collect()
+}
+
+#[test]
+fn valid_graph_schedules_in_dependency_order() {
+    let g = load_graph(&data("valid_hybrid"), REGISTRY).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        names_in_order(&g),
+        ["camera", "bvh", "photons", "estimate", "resolve"]
+    );
+    assert_eq!(g.edges.len(), 7);
+    assert!(g.warnings.is_empty());
+    let text = g.schedule_text();
+    assert!(text.contains("1. camera (path_trace)"), "{text}");
+    assert!(text.contains("in  caustic <- estimate.radiance"), "{text}");
+    let dot = g.to_dot();
+    for node in ["camera", "bvh", "photons", "estimate", "resolve"] {
+        assert!(dot.contains(&format!("label=\"{node}\\n(")), "{dot}");
+    }
+    assert_eq!(dot.matches(" -> n").count(), 7, "{dot}");
+}
+
+#[test]
+fn ties_are_broken_by_file_order_and_dead_nodes_warned() {
+    let text = r#"(version: 1, nodes: [(name: "z", pass: "path_trace"), (name: "a", pass: "path_trace")],
+        edges: [], output: "a.radiance")"#;
+    let g =
+        parse_graph(&PathBuf::from("inline.ron"), text, REGISTRY).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(names_in_order(&g), ["z", "a"]);
+    assert_eq!(g.warnings.len(), 1);
+    assert!(g.warnings[0].message.contains("\"z\""));
+}
+
+#[test]
+fn shipped_graphs_validate_against_the_real_registry() {
+    for entry in
+        std::fs::read_dir(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs")).unwrap()
+    {
+        let path = entry.unwrap().path();
+        if let Err(e) = load_graph(&path, hppm::passes::registry()) {
+            panic!("{}: {e}", path.display());
+        }
+    }
+}
+
+/// Truncations at every byte and seeded token swaps never panic; every error points inside the
+/// file.
+#[test]
+fn mangled_graphs_never_panic() {
+    let text = std::fs::read_to_string(data("valid_hybrid")).unwrap();
+    let path = PathBuf::from("mangled.ron");
+    let lines = text.lines().count();
+    let check = |t: &str| {
+        if let Err(errs) = parse_graph(&path, t, REGISTRY) {
+            for e in &errs.0 {
+                assert!(e.location.line >= 1 && e.location.line <= lines + 1, "{e}");
+            }
+        }
+    };
+    for end in (0..text.len()).filter(|&i| text.is_char_boundary(i)) {
+        check(&text[..end]);
+    }
+    let tokens: Vec<&str> = text.split_inclusive([' ', ',', '(', ')', '"']).collect();
+    let mut seed = 2024u64;
+    let mut next = |n: usize| {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 33) as usize % n
+    };
+    let junk = [
+        "",
+        "(",
+        ")",
+        "\"",
+        ",",
+        "1e999",
+        "-1",
+        "x",
+        "[",
+        "::",
+        "->",
+        "None",
+        "\"a.b -> c.d\"",
+    ];
+    for _ in 0..300 {
+        let mut t: Vec<&str> = tokens.clone();
+        let (i, j) = (next(t.len()), next(t.len()));
+        t.swap(i, j);
+        let k = next(t.len());
+        t[k] = junk[next(junk.len())];
+        check(&t.concat());
+    }
+}
