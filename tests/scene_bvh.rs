@@ -4,8 +4,8 @@ use std::path::Path;
 
 use glam::Vec3;
 use hppm::scene::bvh::{
-    Aabb, Bvh, build_sah, closest_hit, intersect_primitive, intersect_sphere, intersect_triangle,
-    scene_boxes,
+    Aabb, Bvh, MAX_SAH_DEPTH, build_sah, closest_hit, intersect_primitive, intersect_sphere,
+    intersect_triangle, scene_boxes,
 };
 use hppm::scene::{self, Bsdf, Camera, Integrator, Material, Scene, Sphere, Triangle};
 
@@ -98,8 +98,16 @@ fn check_structure(boxes: &[Aabb], bvh: &Bvh, max_leaf: usize) {
     }
     assert_eq!(covered, boxes.len());
     assert!(visited.iter().all(|&v| v), "unreachable nodes");
-    let depth_bound = 40 + (boxes.len() as f32).log2().ceil() as u32 + 1;
-    assert!(bvh.depth() <= depth_bound, "depth {}", bvh.depth());
+    assert!(
+        bvh.depth() <= depth_bound(boxes.len()),
+        "depth {}",
+        bvh.depth()
+    );
+}
+
+/// In nodes from the root (`Bvh::depth` counts the root as 1).
+fn depth_bound(n: usize) -> u32 {
+    MAX_SAH_DEPTH + (n as f64).log2().ceil() as u32 + 1
 }
 
 fn ray_hits_box(b: &Aabb, o: Vec3, d: Vec3) -> bool {
@@ -208,6 +216,27 @@ fn empty_and_degenerate_inputs() {
     // A leaf size of 0 is taken as 1.
     let boxes = random_boxes(&mut rng, 64, 0.2);
     check(&boxes, 0, &mut rng);
+}
+
+/// Nested boxes of geometrically growing size make SAH peel off a few boxes per level, past
+/// `MAX_SAH_DEPTH`: the count-split fallback must still bound the depth (the GPU traversal
+/// stack has 64 entries).
+#[test]
+fn depth_stays_bounded_for_adversarial_input() {
+    let boxes: Vec<Aabb> = (0..900)
+        .map(|i| Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::new(1.1f32.powi(i), 1.0, 1.0),
+        })
+        .collect();
+    let bvh = build_sah(&boxes, 1);
+    check_structure(&boxes, &bvh, 1);
+    assert!(
+        bvh.depth() > MAX_SAH_DEPTH + 1,
+        "not adversarial: depth {}",
+        bvh.depth()
+    );
+    assert!(depth_bound(u32::MAX as usize) - 1 <= 64);
 }
 
 #[test]

@@ -134,8 +134,9 @@ pub fn scene_boxes(scene: &Scene) -> Vec<Aabb> {
 
 const BINS: usize = 16;
 /// Beyond this depth splits are by count, which bounds the depth (and so the GPU traversal
-/// stack) whatever the input.
-const MAX_SAH_DEPTH: u32 = 40;
+/// stack) whatever the input: at most `MAX_SAH_DEPTH + ceil(log2 n)` edges from the root to a
+/// leaf, which is at most 64 for any `n` that fits the u32 indices (the shader's stack size).
+pub const MAX_SAH_DEPTH: u32 = 32;
 /// Cost of one box test relative to one primitive test.
 const TRAVERSAL_COST: f32 = 1.0;
 
@@ -146,6 +147,15 @@ fn node_from(bounds: Aabb, left_or_first: u32, count: u32) -> BvhNode {
         max: bounds.max.to_array(),
         count,
     }
+}
+
+/// A box being sorted into the tree, with what the builder reads of it kept together: the
+/// builder moves items rather than indices so each pass over a node reads memory in order.
+#[derive(Clone, Copy)]
+struct Item {
+    bounds: Aabb,
+    centroid: Vec3,
+    index: u32,
 }
 
 /// The boxes on one side of a split: their bounds, their centroids' bounds and how many.
@@ -171,10 +181,10 @@ impl Side {
         }
     }
 
-    fn of(range: &[u32], boxes: &[Aabb], centroids: &[Vec3]) -> Side {
-        range.iter().fold(Side::EMPTY, |side, &i| Side {
-            bounds: side.bounds.union(boxes[i as usize]),
-            centroids: side.centroids.grow(centroids[i as usize]),
+    fn of(items: &[Item]) -> Side {
+        items.iter().fold(Side::EMPTY, |side, item| Side {
+            bounds: side.bounds.union(item.bounds),
+            centroids: side.centroids.grow(item.centroid),
             count: side.count + 1,
         })
     }
@@ -190,7 +200,8 @@ struct Split {
     /// Boxes whose centroid falls in bins below this one go left.
     bin: usize,
     cost: f32,
-    /// What goes left and right, known from the bins: children need no extra pass for bounds.
+    /// What goes left and right, known from the bins (except the centroid bounds, which the
+    /// partition measures): children need no extra pass.
     left: Side,
     right: Side,
 }
@@ -201,44 +212,48 @@ struct Split {
 struct Binning {
     min: f32,
     scale: f32,
+    /// Bins in use: fewer for small nodes, where a sweep over 16 mostly empty bins would cost
+    /// more than the binning itself (most nodes of a large tree are small).
+    bins: usize,
 }
 
 impl Binning {
-    fn along(centroid_bounds: &Aabb, axis: usize) -> Option<Binning> {
+    fn along(centroid_bounds: &Aabb, axis: usize, count: usize) -> Option<Binning> {
+        let bins = count.clamp(2, BINS);
         let extent = centroid_bounds.max[axis] - centroid_bounds.min[axis];
         // An extent so small that its reciprocal overflows cannot be split by position anyway.
-        let scale = BINS as f32 / extent;
+        let scale = bins as f32 / extent;
         (extent > 0.0 && scale.is_finite()).then_some(Binning {
             min: centroid_bounds.min[axis],
             scale,
+            bins,
         })
     }
 
     fn bin(&self, value: f32) -> usize {
-        // `as usize` saturates (and maps NaN to 0), so this never leaves 0..BINS.
-        (((value - self.min) * self.scale) as usize).min(BINS - 1)
+        // `as usize` saturates (and maps NaN to 0), so this never leaves 0..bins.
+        (((value - self.min) * self.scale) as usize).min(self.bins - 1)
     }
 }
 
-/// The cheapest binned SAH split of `range` over all three axes, if any axis has extent.
-fn best_split(
-    boxes: &[Aabb],
-    centroids: &[Vec3],
-    range: &[u32],
-    centroid_bounds: &Aabb,
-) -> Option<(Split, Binning)> {
-    let binnings = [0, 1, 2].map(|axis| Binning::along(centroid_bounds, axis));
+/// The cheapest binned SAH split of `items` over all three axes, if any axis has extent.
+fn best_split(items: &[Item], centroid_bounds: &Aabb) -> Option<(Split, Binning)> {
+    let binnings = [0, 1, 2].map(|axis| Binning::along(centroid_bounds, axis, items.len()));
     if binnings.iter().all(Option::is_none) {
         return None;
     }
     let mut bins = [[Side::EMPTY; BINS]; 3];
-    for &i in range {
-        let (b, c) = (boxes[i as usize], centroids[i as usize]);
+    for &Item {
+        bounds: b,
+        centroid: c,
+        ..
+    } in items
+    {
         for (axis, binning) in binnings.iter().enumerate() {
             if let Some(binning) = binning {
+                // Bins leave `centroids` empty: the partition measures them, once, on one axis.
                 let bin = &mut bins[axis][binning.bin(c[axis])];
                 bin.bounds = bin.bounds.union(b);
-                bin.centroids = bin.centroids.grow(c);
                 bin.count += 1;
             }
         }
@@ -248,7 +263,7 @@ fn best_split(
         let Some(binning) = binning else {
             continue;
         };
-        if let Some(split) = sweep(axis, &bins[axis])
+        if let Some(split) = sweep(axis, &bins[axis][..binning.bins])
             && best.as_ref().is_none_or(|(b, _)| split.cost < b.cost)
         {
             best = Some((split, *binning));
@@ -258,17 +273,17 @@ fn best_split(
 }
 
 /// The cheapest split between bins along one axis (area-weighted counts of both sides).
-fn sweep(axis: usize, bins: &[Side; BINS]) -> Option<Split> {
+fn sweep(axis: usize, bins: &[Side]) -> Option<Split> {
     // From the right first, to know each suffix.
     let mut right = [Side::EMPTY; BINS];
     let mut acc = Side::EMPTY;
-    for k in (1..BINS).rev() {
+    for k in (1..bins.len()).rev() {
         acc = acc.add(&bins[k]);
         right[k] = acc;
     }
     let mut best: Option<Split> = None;
     let mut left = Side::EMPTY;
-    for k in 1..BINS {
+    for k in 1..bins.len() {
         left = left.add(&bins[k - 1]);
         if left.count == 0 || right[k].count == 0 {
             continue;
@@ -298,22 +313,32 @@ struct Task {
 /// Builds a BVH over `boxes` with at most `max_leaf_size` boxes per leaf (0 is taken as 1).
 /// Smaller leaves are made where the surface area heuristic says splitting pays.
 ///
-/// Boxes whose centroids coincide are split in half by count, and past `MAX_SAH_DEPTH` every
-/// split is by count, so the depth stays below `MAX_SAH_DEPTH + log2(len)` for any input. The
-/// build is iterative (no recursion) and O(n log n).
+/// Boxes whose centroids coincide are split in half by count, and past [`MAX_SAH_DEPTH`] every
+/// split is by count, so no leaf is more than `MAX_SAH_DEPTH + ceil(log2 len)` edges below the
+/// root for any input. The build is iterative (no recursion) and O(n log n).
 pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
     let max_leaf_size = max_leaf_size.max(1);
-    let mut indices: Vec<u32> = (0..boxes.len() as u32).collect();
     let mut nodes = vec![node_from(Aabb::EMPTY, 0, 0)];
     if boxes.is_empty() {
-        return Bvh { nodes, indices };
+        return Bvh {
+            nodes,
+            indices: Vec::new(),
+        };
     }
-    let centroids: Vec<Vec3> = boxes.iter().map(Aabb::centroid).collect();
+    let mut items: Vec<Item> = boxes
+        .iter()
+        .zip(0u32..)
+        .map(|(b, index)| Item {
+            bounds: *b,
+            centroid: b.centroid(),
+            index,
+        })
+        .collect();
     nodes.reserve(2 * boxes.len().div_ceil(max_leaf_size));
     let mut stack = vec![Task {
         node: 0,
         start: 0,
-        side: Side::of(&indices, boxes, &centroids),
+        side: Side::of(&items),
         depth: 0,
     }];
     while let Some(task) = stack.pop() {
@@ -322,10 +347,9 @@ pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
             centroids: centroid_bounds,
             count,
         } = task.side;
-        let end = task.start + count as usize;
-        let range = &mut indices[task.start..end];
+        let range = &mut items[task.start..task.start + count as usize];
         let split = if task.depth < MAX_SAH_DEPTH {
-            best_split(boxes, &centroids, range, &centroid_bounds)
+            best_split(range, &centroid_bounds)
         } else {
             None
         };
@@ -338,19 +362,23 @@ pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
         }
         let (left_side, right_side) = match split {
             Some((s, binning)) => {
-                let moved = partition(range, |i| {
-                    binning.bin(centroids[i as usize][s.axis]) < s.bin
-                });
-                debug_assert_eq!(moved, s.left.count as usize);
-                (s.left, s.right)
+                let [left_centroids, right_centroids] =
+                    partition(range, |c| binning.bin(c[s.axis]) < s.bin);
+                (
+                    Side {
+                        centroids: left_centroids,
+                        ..s.left
+                    },
+                    Side {
+                        centroids: right_centroids,
+                        ..s.right
+                    },
+                )
             }
             None => {
-                let half = median_split(range, &centroids, &centroid_bounds);
+                let half = median_split(range, &centroid_bounds);
                 let (l, r) = range.split_at(half);
-                (
-                    Side::of(l, boxes, &centroids),
-                    Side::of(r, boxes, &centroids),
-                )
+                (Side::of(l), Side::of(r))
             }
         };
         let left = nodes.len();
@@ -371,17 +399,16 @@ pub fn build_sah(boxes: &[Aabb], max_leaf_size: usize) -> Bvh {
             depth,
         });
     }
+    let indices = items.iter().map(|item| item.index).collect();
     Bvh { nodes, indices }
 }
 
-/// Halves `range` by count along the widest centroid axis; for coincident centroids (or a
+/// Halves `items` by count along the widest centroid axis; for coincident centroids (or a
 /// node past the SAH depth limit). Returns the size of the left half, always in 1..len.
-fn median_split(range: &mut [u32], centroids: &[Vec3], centroid_bounds: &Aabb) -> usize {
+fn median_split(items: &mut [Item], centroid_bounds: &Aabb) -> usize {
     let axis = widest_axis(centroid_bounds);
-    let half = range.len() / 2;
-    range.select_nth_unstable_by(half, |&a, &b| {
-        centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis])
-    });
+    let half = items.len() / 2;
+    items.select_nth_unstable_by(half, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
     half
 }
 
@@ -396,16 +423,22 @@ fn widest_axis(b: &Aabb) -> usize {
     }
 }
 
-/// Moves the elements satisfying `left` to the front; returns how many there are.
-fn partition(items: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+/// Moves the items whose centroid satisfies `goes_left` to the front, and returns the bounds of
+/// the centroids that went left and right.
+fn partition(items: &mut [Item], goes_left: impl Fn(Vec3) -> bool) -> [Aabb; 2] {
+    let mut centroids = [Aabb::EMPTY; 2];
     let mut first_right = 0;
     for i in 0..items.len() {
-        if left(items[i]) {
+        let c = items[i].centroid;
+        if goes_left(c) {
+            centroids[0] = centroids[0].grow(c);
             items.swap(i, first_right);
             first_right += 1;
+        } else {
+            centroids[1] = centroids[1].grow(c);
         }
     }
-    first_right
+    centroids
 }
 
 impl Bvh {

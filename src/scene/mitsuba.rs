@@ -950,10 +950,9 @@ impl<'a, 'input> Reader<'a, 'input> {
                 .unwrap_or(false),
         };
         self.scene.materials.push(material);
-        let (m, id, flip) = (common.to_world, common.material, common.flip_normals);
         match kind.as_str() {
-            "rectangle" => self.scene.push_mesh(mesh::rectangle(), m, id, flip),
-            "cube" => self.scene.push_mesh(mesh::cube(), m, id, flip),
+            "rectangle" => self.push_mesh(mesh::rectangle(), &common),
+            "cube" => self.push_mesh(mesh::cube(), &common),
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
             _ => self.read_obj(&mut props, &common, node)?,
         }
@@ -1015,12 +1014,17 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         };
         let file = self.string(file_node)?;
-        if let Some(n) = props.take("face_normals")
-            && !self.boolean(n)?
-        {
+        // Mitsuba interpolates vertex normals unless face_normals is true; we only have flat
+        // normals, which match only for meshes meant to be faceted.
+        let face_normals = props
+            .take("face_normals")
+            .map(|n| self.boolean(n))
+            .transpose()?;
+        if face_normals != Some(true) {
             eprintln!(
-                "warning: {}: smooth vertex normals are not supported; using flat face normals",
-                self.location(n)
+                "warning: {}: smooth vertex normals are not supported; using flat face normals \
+                 (set face_normals to true to match)",
+                self.location(node)
             );
         }
         // Texture coordinates are not used, so their orientation does not matter.
@@ -1040,13 +1044,17 @@ impl<'a, 'input> Reader<'a, 'input> {
                 message: format!("{message} (OBJ used at {})", self.location(node)),
             },
         })?;
+        self.push_mesh(triangles, common);
+        Ok(())
+    }
+
+    fn push_mesh(&mut self, triangles: Vec<[Vec3; 3]>, common: &ShapeCommon) {
         self.scene.push_mesh(
             triangles,
             common.to_world,
             common.material,
             common.flip_normals,
         );
-        Ok(())
     }
 
     fn relative(&self, file: &str) -> PathBuf {

@@ -133,7 +133,12 @@ impl Scene {
     }
 
     /// The scene uniformly scaled by `s` about the origin. Point-light intensities scale by s^2
-    /// so irradiance, and hence the image, stays the same.
+    /// so irradiance, and hence the image, stays the same (area emission is radiance, which
+    /// does not change with scale).
+    ///
+    /// `s` must be positive and finite: a negative scale is a point reflection, which mirrors
+    /// the image whatever the camera does, and a zero scale collapses the scene (`validate`
+    /// rejects the result).
     pub fn scaled(&self, s: f32) -> Scene {
         let mut out = self.clone();
         for t in &mut out.triangles {
