@@ -207,3 +207,13 @@ fn overflowing_samples_are_discarded_and_counted() {
     assert!(discarded < 16 * 16 * 4, "not every sample overflows");
     assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
 }
+
+/// Point light (delta NEE): converges to Mitsuba's path tracer, which, like ours, cannot render
+/// the caustic under the glass sphere (only photons reach a point light through glass).
+#[test]
+fn converges_to_mitsuba_path_on_point_light_caustic() {
+    check_convergence(
+        "tests/refs/scenes/point_light_caustic/scene.xml",
+        "point_light_caustic",
+    );
+}
