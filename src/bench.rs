@@ -42,6 +42,7 @@ fn measure(
         Budget {
             spp: Some(1),
             seconds: None,
+            photons: None,
         },
         &never,
         |_, _| {},
@@ -52,6 +53,7 @@ fn measure(
         Budget {
             spp: Some(spp_before + spp),
             seconds: None,
+            photons: None,
         },
         &never,
         |_, _| {},

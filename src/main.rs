@@ -40,7 +40,7 @@ enum Command {
 struct RenderArgs {
     /// Scene file (.xml Mitsuba 3, .ron, .obj); default: the bundled Cornell box.
     scene: Option<PathBuf>,
-    /// Render graph (RON); default: graphs/pt.ron.
+    /// Render graph (RON); default: graphs/hybrid.ron.
     #[arg(long)]
     graph: Option<PathBuf>,
     /// Samples per pixel to render.
@@ -49,6 +49,14 @@ struct RenderArgs {
     /// Seconds to render for.
     #[arg(long)]
     time: Option<f64>,
+    /// Photons to emit in total (graphs with a photon pass); stops at whichever budget comes
+    /// first.
+    #[arg(long)]
+    photons: Option<u64>,
+    /// Also write every image output of the graph's output node (e.g. `pt`, `caustic`,
+    /// `radius` of `resolve`) next to `--out`, as OUT.SLOT.EXT.
+    #[arg(long)]
+    aovs: bool,
     /// Image size WxH (default: the scene's film).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
@@ -130,7 +138,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let scene_path = args
         .scene
         .unwrap_or_else(|| bundled("scenes/cornell_box.ron"));
-    let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/pt.ron"));
+    let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron"));
     OutputFormat::of(&args.out)?;
     let scene = scene::load(&scene_path)?;
     if !scene.has_lights() {
@@ -148,16 +156,18 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let (width, height) = args
         .size
         .unwrap_or((scene.camera.width, scene.camera.height));
+    let implicit_spp = args.time.is_none() && args.photons.is_none();
     let budget = Budget {
         spp: args
             .spp
-            .or(if args.time.is_none() {
+            .or(if implicit_spp {
                 scene.spp_hint.map(u64::from)
             } else {
                 None
             })
-            .or(if args.time.is_none() { Some(64) } else { None }),
+            .or(if implicit_spp { Some(64) } else { None }),
         seconds: args.time,
+        photons: args.photons,
     };
     let mut renderer = Renderer::new(&gpu, &scene, graph, width, height, args.seed)?;
     let cancel = cancel_flag();
@@ -181,21 +191,42 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         .with("hppm_seed", args.seed)
         .with("hppm_seconds", format!("{:.3}", summary.seconds));
     image.write(&args.out, &provenance)?;
+    if args.aovs {
+        for (slot, aov) in renderer.aovs()? {
+            let path = aov_path(&args.out, slot);
+            aov.write(&path, &provenance.clone().with("hppm_aov", slot))?;
+            println!("{}: {slot}", path.display());
+        }
+    }
+    if budget.photons.is_some() && renderer.photons_per_iteration() == 0 {
+        eprintln!("warning: --photons ignored: the graph emits no photons");
+    }
     if summary.cancelled {
         eprintln!("interrupted: wrote what was rendered so far");
     }
     println!(
-        "{}: {}x{}, {} spp in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
+        "{}: {}x{}, {} spp and {} photons in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
         args.out.display(),
         width,
         height,
         summary.samples_per_pixel,
+        summary.photons,
         summary.seconds,
         stats.rays as f64 / summary.seconds.max(1e-9) / 1e6,
         stats.discarded_samples,
         gpu.adapter_label()
     );
     Ok(())
+}
+
+/// `render.exr` + `pt` -> `render.pt.exr`.
+fn aov_path(out: &Path, slot: &str) -> PathBuf {
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match out.extension() {
+        Some(ext) => format!("{stem}.{slot}.{}", ext.to_string_lossy()),
+        None => format!("{stem}.{slot}"),
+    };
+    out.with_file_name(name)
 }
 
 fn info() -> Result<(), Error> {

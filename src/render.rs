@@ -2,7 +2,7 @@
 //! order (wiring each input to the resource its producer made), then runs iterations until a
 //! budget is met.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -10,7 +10,7 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::graph::ValidGraph;
-use crate::graph::pass::{ExecCtx, PassStats, PrepareCtx, Resource};
+use crate::graph::pass::{ExecCtx, PassStats, PrepareCtx, Recorder, Resource, ResourceKind};
 use crate::image::Image;
 use crate::scene::Scene;
 use crate::scene::gpu_layout::{GpuScene, GpuSceneUniform};
@@ -70,11 +70,13 @@ impl SceneResources {
     }
 }
 
-/// When to stop rendering. With both set, whichever comes first.
+/// When to stop rendering. With several set, whichever comes first.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Budget {
     pub spp: Option<u64>,
     pub seconds: Option<f64>,
+    /// Photons emitted in total.
+    pub photons: Option<u64>,
 }
 
 /// A graph prepared on a device for one scene, ready to iterate.
@@ -83,24 +85,40 @@ pub struct Renderer<'a> {
     scene: SceneResources,
     graph: ValidGraph,
     output: Resource,
+    /// Every `Radiance` output of the output node (its AOVs), by slot name.
+    aovs: Vec<(&'static str, Resource)>,
     width: u32,
     height: u32,
     seed: u64,
     iteration: u64,
     spp_per_iteration: u64,
+    photons_per_iteration: u64,
 }
 
 impl<'a> Renderer<'a> {
     pub fn new(
         gpu: &'a GpuContext,
         scene: &Scene,
-        mut graph: ValidGraph,
+        graph: ValidGraph,
         width: u32,
         height: u32,
         seed: u64,
     ) -> Result<Self, Error> {
-        let scene_resources = SceneResources::upload(gpu, &GpuScene::new(scene, width, height))?;
         let shaders = ShaderLibrary::new(gpu.has_float_atomics(), HashMap::new());
+        Self::with_shaders(gpu, scene, graph, width, height, seed, &shaders)
+    }
+
+    /// As `new`, with a shader library chosen by the caller (tests force the CAS atomics path).
+    pub fn with_shaders(
+        gpu: &'a GpuContext,
+        scene: &Scene,
+        mut graph: ValidGraph,
+        width: u32,
+        height: u32,
+        seed: u64,
+        shaders: &ShaderLibrary,
+    ) -> Result<Self, Error> {
+        let scene_resources = SceneResources::upload(gpu, &GpuScene::new(scene, width, height))?;
         let mut produced: HashMap<(usize, &'static str), Resource> = HashMap::new();
         let order = graph.order.clone();
         for &node in &order {
@@ -112,11 +130,19 @@ impl<'a> Renderer<'a> {
                         .map(|r| (e.to_slot, r.clone()))
                 })
                 .collect();
+            let consumed: HashSet<&'static str> = graph
+                .edges
+                .iter()
+                .filter(|e| e.from_node == node)
+                .map(|e| e.from_slot)
+                .chain((graph.output.0 == node).then_some(graph.output.1))
+                .collect();
             let ctx = PrepareCtx {
                 gpu,
                 scene: &scene_resources,
-                shaders: &shaders,
+                shaders,
                 inputs,
+                consumed,
                 width,
                 height,
             };
@@ -125,6 +151,20 @@ impl<'a> Renderer<'a> {
                 produced.insert((node, slot), resource);
             }
         }
+        // The output node's image inputs and outputs, named by its slots.
+        let out_node = graph.output.0;
+        let mut aovs: Vec<(&'static str, Resource)> = produced
+            .iter()
+            .filter(|((node, _), r)| *node == out_node && r.kind == ResourceKind::Radiance)
+            .map(|((_, slot), r)| (*slot, r.clone()))
+            .chain(graph.inputs_of(out_node).filter_map(|e| {
+                produced
+                    .get(&(e.from_node, e.from_slot))
+                    .filter(|r| r.kind == ResourceKind::Radiance)
+                    .map(|r| (e.to_slot, r.clone()))
+            }))
+            .collect();
+        aovs.sort_by_key(|(slot, _)| *slot);
         let output = produced.remove(&graph.output).ok_or_else(|| {
             Error::Other(format!(
                 "node \"{}\" did not produce its output slot \"{}\"",
@@ -137,28 +177,30 @@ impl<'a> Renderer<'a> {
             .map(|n| n.pass.samples_per_iteration() as u64)
             .max()
             .unwrap_or(0);
+        let photons_per_iteration = graph
+            .nodes
+            .iter()
+            .map(|n| n.pass.photons_per_iteration())
+            .sum();
         gpu.check_errors()?;
         Ok(Self {
             gpu,
             scene: scene_resources,
             graph,
             output,
+            aovs,
             width,
             height,
             seed,
             iteration: 0,
             spp_per_iteration,
+            photons_per_iteration,
         })
     }
 
     /// Records and submits one iteration of every node, in schedule order.
     pub fn iterate(&mut self) -> Result<(), Error> {
-        let mut encoder = self
-            .gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("iteration"),
-            });
+        let mut recorder = Recorder::new(self.gpu);
         let ctx = ExecCtx {
             gpu: self.gpu,
             scene: &self.scene,
@@ -166,9 +208,9 @@ impl<'a> Renderer<'a> {
             seed: self.seed,
         };
         for &node in &self.graph.order {
-            self.graph.nodes[node].pass.execute(&ctx, &mut encoder);
+            self.graph.nodes[node].pass.execute(&ctx, &mut recorder)?;
         }
-        self.gpu.queue.submit([encoder.finish()]);
+        recorder.submit();
         self.iteration += 1;
         Ok(())
     }
@@ -185,11 +227,31 @@ impl<'a> Renderer<'a> {
         self.spp_per_iteration
     }
 
+    /// Photons emitted so far (exact: a u64 on the CPU).
+    pub fn photons(&self) -> u64 {
+        self.iteration * self.photons_per_iteration
+    }
+
+    pub fn photons_per_iteration(&self) -> u64 {
+        self.photons_per_iteration
+    }
+
     /// Reads the output slot back and averages it.
     pub fn image(&self) -> Result<Image, Error> {
-        let sums: Vec<[f32; 4]> = self
-            .gpu
-            .read_pod(&self.output.buffer, self.output.len as usize)?;
+        self.read_radiance(&self.output)
+    }
+
+    /// Every `Radiance` output of the output node (e.g. `combined`, `pt`, `caustic`, `radius`
+    /// of `resolve`), by slot name.
+    pub fn aovs(&self) -> Result<Vec<(&'static str, Image)>, Error> {
+        self.aovs
+            .iter()
+            .map(|(slot, r)| Ok((*slot, self.read_radiance(r)?)))
+            .collect()
+    }
+
+    fn read_radiance(&self, resource: &Resource) -> Result<Image, Error> {
+        let sums: Vec<[f32; 4]> = self.gpu.read_pod(&resource.buffer, resource.len as usize)?;
         Ok(Image::from_sums(self.width, self.height, &sums))
     }
 
@@ -197,9 +259,7 @@ impl<'a> Renderer<'a> {
     pub fn stats(&self) -> Result<PassStats, Error> {
         let mut total = PassStats::default();
         for node in &self.graph.nodes {
-            let s = node.pass.stats(self.gpu)?;
-            total.rays += s.rays;
-            total.discarded_samples += s.discarded_samples;
+            total.add(&node.pass.stats(self.gpu)?);
         }
         Ok(total)
     }
@@ -213,9 +273,17 @@ impl<'a> Renderer<'a> {
         mut progress: impl FnMut(&Self, f64),
     ) -> Result<RunSummary, Error> {
         let start = Instant::now();
-        let target_iterations = budget
+        let spp_iterations = budget
             .spp
             .map(|spp| spp.div_ceil(self.spp_per_iteration.max(1)));
+        let photon_iterations = budget
+            .photons
+            .filter(|_| self.photons_per_iteration > 0)
+            .map(|n| n.div_ceil(self.photons_per_iteration.max(1)));
+        let target_iterations = match (spp_iterations, photon_iterations) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
         loop {
             let elapsed = start.elapsed().as_secs_f64();
             let spp_done = target_iterations.is_some_and(|t| self.iteration >= t);
@@ -233,6 +301,7 @@ impl<'a> Renderer<'a> {
             seconds: start.elapsed().as_secs_f64(),
             iterations: self.iteration,
             samples_per_pixel: self.samples_per_pixel(),
+            photons: self.photons(),
             cancelled: cancel.load(Ordering::Relaxed),
         })
     }
@@ -243,5 +312,6 @@ pub struct RunSummary {
     pub seconds: f64,
     pub iterations: u64,
     pub samples_per_pixel: u64,
+    pub photons: u64,
     pub cancelled: bool,
 }

@@ -35,13 +35,31 @@ pub const COMMON_MODULES: &[(&str, &str)] = &[
         "shaders/common/bsdf.wgsl",
         include_str!("../shaders/common/bsdf.wgsl"),
     ),
+    (
+        "shaders/common/hit_points.wgsl",
+        include_str!("../shaders/common/hit_points.wgsl"),
+    ),
 ];
 
 /// Entry-point files, one per pass kind that runs a kernel.
-pub const PASS_SHADERS: &[(&str, &str)] = &[(
-    "shaders/passes/path_trace.wgsl",
-    include_str!("../shaders/passes/path_trace.wgsl"),
-)];
+pub const PASS_SHADERS: &[(&str, &str)] = &[
+    (
+        "shaders/passes/path_trace.wgsl",
+        include_str!("../shaders/passes/path_trace.wgsl"),
+    ),
+    (
+        "shaders/passes/photon_trace.wgsl",
+        include_str!("../shaders/passes/photon_trace.wgsl"),
+    ),
+    (
+        "shaders/passes/merge.wgsl",
+        include_str!("../shaders/passes/merge.wgsl"),
+    ),
+    (
+        "shaders/passes/resolve.wgsl",
+        include_str!("../shaders/passes/resolve.wgsl"),
+    ),
+];
 
 /// The text of shader `path`: from `$HPPM_SHADER_DIR/path` when that variable is set (to edit
 /// shaders without rebuilding), else the copy compiled into the binary.
@@ -68,10 +86,13 @@ pub struct ShaderLibrary {
 
 impl ShaderLibrary {
     /// `float_atomics`: the device has SHADER_FLOAT32_ATOMIC, so modules may use `atomic<f32>`.
-    pub fn new(float_atomics: bool, defs: HashMap<String, ShaderDefValue>) -> Self {
+    /// With `float_atomics` the shader def `FLOAT_ATOMICS` is set, and modules add flux with
+    /// `atomic<f32>`; without it they use a compare-and-swap loop.
+    pub fn new(float_atomics: bool, mut defs: HashMap<String, ShaderDefValue>) -> Self {
         let mut capabilities = naga::valid::Capabilities::default();
         if float_atomics {
             capabilities |= naga::valid::Capabilities::SHADER_FLOAT32_ATOMIC;
+            defs.insert("FLOAT_ATOMICS".into(), ShaderDefValue::Bool(true));
         }
         Self { capabilities, defs }
     }

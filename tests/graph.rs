@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 use hppm::graph::pass::{
-    ExecCtx, Pass, PassKind, PrepareCtx, Resource, ResourceKind, SlotDecl, parse_params,
+    ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl, parse_params,
 };
 use hppm::graph::{GraphErrors, ValidGraph, load_graph, parse_graph};
 use serde::Deserialize;
@@ -19,7 +19,9 @@ impl Pass for Fake {
     ) -> Result<HashMap<&'static str, Resource>, hppm::Error> {
         Ok(HashMap::new())
     }
-    fn execute(&mut self, _: &ExecCtx<'_>, _: &mut wgpu::CommandEncoder) {}
+    fn execute(&mut self, _: &ExecCtx<'_>, _: &mut Recorder<'_>) -> Result<(), hppm::Error> {
+        Ok(())
+    }
 }
 
 #[derive(Deserialize, Default)]

@@ -1,6 +1,11 @@
 // Path tracing with next-event estimation, MIS (power heuristic) for area lights, Mitsuba's depth
 // rule (max_depth counts segments) and optional Russian roulette. Each invocation adds
 // `samples_per_iteration` samples to one pixel's running sum (xyz) and count (w).
+//
+// With `merge_depth` > 0 the first `merge_depth` diffuse vertices of the first sample are
+// photon-mapped (design.md section 1): each is recorded as a hit point, and emission reached from
+// it through one or more specular vertices is dropped, because photon mapping adds exactly that.
+// With `trace_beyond` 0 (photon mapping only) a path stops at its first photon-mapped vertex.
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
 #import common::sampling::{INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
@@ -8,6 +13,7 @@
 #import common::camera::camera_direction
 #import common::lights::{sample_light, area_light_pdf}
 #import common::bsdf::{sample_dielectric, reflect_about}
+#import common::hit_points::{HitPoint, HitPointBuffer, NO_PIXEL, initial_radius}
 
 struct PathTraceParams {
     sample_base: u32,
@@ -15,15 +21,19 @@ struct PathTraceParams {
     seed: u32,
     max_depth: u32,
     rr_depth: u32,
-    pad_a: u32,
-    pad_b: u32,
-    pad_c: u32,
+    // Photon-mapped diffuse vertices per path (hit-point slots per pixel); 0 = none.
+    merge_depth: u32,
+    // 1: write this iteration's hit points; 0: keep the ones stored (ppm).
+    record: u32,
+    // 1: continue paths past photon-mapped vertices (hybrid); 0: stop there (photon mapping only).
+    trace_beyond: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: PathTraceParams;
 @group(1) @binding(1) var<storage, read_write> radiance: array<vec4<f32>>;
 // [rays low, rays high, discarded low, discarded high]: 64-bit totals from 32-bit atomics.
 @group(1) @binding(2) var<storage, read_write> counters: array<atomic<u32>, 4>;
+@group(1) @binding(3) var<storage, read_write> hit_points: HitPointBuffer;
 
 const COUNTER_RAYS: u32 = 0u;
 const COUNTER_DISCARDED: u32 = 2u;
@@ -49,6 +59,29 @@ struct PathState {
     bsdf_pdf: f32,
     // The last vertex was delta (or the camera): emission reached through it takes full weight.
     after_delta: bool,
+    // The last diffuse vertex was photon-mapped: emission reached from it through specular
+    // vertices belongs to photon mapping.
+    after_merge: bool,
+    diffuse_vertices: u32,
+    // Distance travelled from the camera, for the pixel footprint at a hit point.
+    travelled: f32,
+}
+
+// Where the camera pass hands a sample over to photon mapping.
+struct HitPointSink {
+    pixel: u32,
+    // Record hit points for this sample (the first sample of the iteration, when recording).
+    enabled: bool,
+}
+
+fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f32>, depth: u32, weight: vec3<f32>, travelled: f32) {
+    let index = sink.pixel * params.merge_depth + slot;
+    let footprint = travelled * 2.0 * scene_info.tan_half_x / f32(scene_info.width);
+    var radius = hit_points.points[index].radius;
+    if radius <= 0.0 {
+        radius = initial_radius(hit_points.header, footprint);
+    }
+    hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight, footprint);
 }
 
 // Next-event estimation at a diffuse vertex: one light sample with a shadow ray.
@@ -75,8 +108,8 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, u32>, ra
     return albedo * INV_PI * cos_i * ls.radiance * weight / ls.pdf;
 }
 
-fn trace_path(pixel: vec2<u32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
-    var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true);
+fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+    var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
     var result = vec3<f32>(0.0);
     let max_depth = min(params.max_depth, SAFETY_MAX_DEPTH);
     // `depth` counts segments traced so far (Mitsuba's rule).
@@ -90,8 +123,9 @@ fn trace_path(pixel: vec2<u32>, rng: ptr<function, u32>, rays: ptr<function, u32
         let material = materials[surface.material];
         let wo = -path.dir;
         let cos_o = dot(wo, surface.normal);
+        path.travelled += hit.t;
 
-        if surface.light != NO_LIGHT && cos_o > 0.0 {
+        if surface.light != NO_LIGHT && cos_o > 0.0 && !(path.after_delta && path.after_merge) {
             var weight = 1.0;
             if !path.after_delta {
                 weight = power_heuristic(path.bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
@@ -113,6 +147,17 @@ fn trace_path(pixel: vec2<u32>, rng: ptr<function, u32>, rays: ptr<function, u32
             // One-sided, as Mitsuba's diffuse: black from behind.
             if cos_o <= 0.0 {
                 break;
+            }
+            path.diffuse_vertices += 1u;
+            path.after_merge = path.diffuse_vertices <= params.merge_depth;
+            if path.after_merge {
+                let weight = path.throughput * material.albedo * INV_PI;
+                if sink.enabled && max_component(weight) > 0.0 {
+                    record_hit_point(sink, path.diffuse_vertices - 1u, surface, wo, depth, weight, path.travelled);
+                }
+                if params.trace_beyond == 0u {
+                    break;
+                }
             }
             result += path.throughput * direct_light(surface, material.albedo, rng, rays);
             let dir = sample_cosine_hemisphere(surface.normal, rng_next_vec2(rng));
@@ -150,12 +195,19 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let pixel_index = id.y * scene_info.width + id.x;
+    let recording = params.merge_depth > 0u && params.record != 0u;
+    if recording {
+        for (var slot = 0u; slot < params.merge_depth; slot++) {
+            hit_points.points[pixel_index * params.merge_depth + slot].pixel = NO_PIXEL;
+        }
+    }
     var sum = vec3<f32>(0.0);
     var accepted = 0u;
     var rays = 0u;
     for (var s = 0u; s < params.samples_per_iteration; s++) {
         var rng = rng_seed(pixel_index, params.sample_base + s, params.seed);
-        let sample = trace_path(id.xy, &rng, &rays);
+        let sink = HitPointSink(pixel_index, recording && s == 0u);
+        let sample = trace_path(id.xy, sink, &rng, &rays);
         // One NaN or Inf sample (or one that would overflow the sum) must not poison the
         // pixel: drop it and count it.
         let next = sum + sample;

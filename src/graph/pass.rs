@@ -3,8 +3,9 @@
 //! declarations before any GPU work, then asks each node to `prepare` (create pipelines and its
 //! output resources) and, per iteration, to `execute` (record its GPU work).
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 use crate::gpu::GpuContext;
 
@@ -85,8 +86,22 @@ impl SlotDecl {
 pub struct Resource {
     pub kind: ResourceKind,
     pub buffer: Arc<wgpu::Buffer>,
-    /// Number of elements (pixels for `Radiance`).
+    /// Number of elements (pixels for `Radiance`, hit-point slots for `HitPoints`).
     pub len: u64,
+    /// Raised by a consumer that wants the producer to stop rewriting the contents after the
+    /// first iteration (`ppm` keeps the hit points of one camera pass). Shared by every clone.
+    pub frozen: Arc<AtomicBool>,
+}
+
+impl Resource {
+    pub fn new(kind: ResourceKind, buffer: wgpu::Buffer, len: u64) -> Self {
+        Self {
+            kind,
+            buffer: Arc::new(buffer),
+            len,
+            frozen: Arc::new(AtomicBool::new(false)),
+        }
+    }
 }
 
 /// What a pass sees when it is prepared: the device, the scene's shared resources, the resources
@@ -96,8 +111,57 @@ pub struct PrepareCtx<'a> {
     pub scene: &'a crate::render::SceneResources,
     pub shaders: &'a crate::shaders::ShaderLibrary,
     pub inputs: HashMap<&'static str, Resource>,
+    /// Output slots that feed another node or are the graph's output. A pass may skip work for
+    /// the others (`path_trace` records no hit points, and drops nothing, when none are used).
+    pub consumed: HashSet<&'static str>,
     pub width: u32,
     pub height: u32,
+}
+
+impl PrepareCtx<'_> {
+    /// The resource connected to input `slot`: present for every required input of a validated
+    /// graph, so a miss is a wiring bug worth a clear error rather than a panic.
+    pub fn input(&self, slot: &str) -> Result<&Resource, crate::Error> {
+        self.inputs
+            .get(slot)
+            .ok_or_else(|| crate::Error::Other(format!("input slot \"{slot}\" is not connected")))
+    }
+}
+
+/// Records the GPU work of one iteration. A pass that needs results on the CPU mid-iteration
+/// (the CPU BVH builder) calls `flush` to submit what was recorded so far and wait for it.
+pub struct Recorder<'a> {
+    gpu: &'a GpuContext,
+    encoder: Option<wgpu::CommandEncoder>,
+}
+
+impl<'a> Recorder<'a> {
+    pub fn new(gpu: &'a GpuContext) -> Self {
+        Self { gpu, encoder: None }
+    }
+
+    pub fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        let device = &self.gpu.device;
+        self.encoder.get_or_insert_with(|| {
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("iteration"),
+            })
+        })
+    }
+
+    /// Submits what was recorded (if anything) without waiting.
+    pub fn submit(&mut self) {
+        if let Some(encoder) = self.encoder.take() {
+            self.gpu.queue.submit([encoder.finish()]);
+        }
+    }
+
+    /// Submits what was recorded and waits until the GPU has finished it.
+    pub fn flush(&mut self) -> Result<(), crate::Error> {
+        self.submit();
+        self.gpu.wait()?;
+        Ok(())
+    }
 }
 
 /// Per-iteration information handed to `execute`.
@@ -114,6 +178,18 @@ pub struct ExecCtx<'a> {
 pub struct PassStats {
     pub rays: u64,
     pub discarded_samples: u64,
+    /// Photons emitted and the segments they were traced along.
+    pub photons: u64,
+    pub photon_segments: u64,
+}
+
+impl PassStats {
+    pub fn add(&mut self, other: &PassStats) {
+        self.rays += other.rays;
+        self.discarded_samples += other.discarded_samples;
+        self.photons += other.photons;
+        self.photon_segments += other.photon_segments;
+    }
 }
 
 pub trait Pass {
@@ -124,10 +200,19 @@ pub trait Pass {
     ) -> Result<HashMap<&'static str, Resource>, crate::Error>;
 
     /// Record this iteration's GPU work.
-    fn execute(&mut self, ctx: &ExecCtx<'_>, encoder: &mut wgpu::CommandEncoder);
+    fn execute(
+        &mut self,
+        ctx: &ExecCtx<'_>,
+        recorder: &mut Recorder<'_>,
+    ) -> Result<(), crate::Error>;
 
     /// Camera samples per pixel this pass adds each iteration (0 for passes that add none).
     fn samples_per_iteration(&self) -> u32 {
+        0
+    }
+
+    /// Photons this pass emits each iteration (known after `prepare`).
+    fn photons_per_iteration(&self) -> u64 {
         0
     }
 

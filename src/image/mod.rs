@@ -66,15 +66,29 @@ impl Image {
     /// Relative MSE against `reference`: mean over pixels and RGB of (x-r)^2/(r^2+0.01), the
     /// metric of the reference set (tests/refs/README.md).
     pub fn relmse(&self, reference: &Image) -> Result<f64, Error> {
+        self.relmse_where(reference, |_| true)
+    }
+
+    /// Relative MSE over the pixels (row-major indices) for which `keep` holds.
+    pub fn relmse_where(
+        &self,
+        reference: &Image,
+        keep: impl Fn(usize) -> bool,
+    ) -> Result<f64, Error> {
         self.check_same_size(reference)?;
         let mut sum = 0.0f64;
-        for (x, r) in self.pixels.iter().zip(&reference.pixels) {
+        let mut count = 0usize;
+        for (i, (x, r)) in self.pixels.iter().zip(&reference.pixels).enumerate() {
+            if !keep(i) {
+                continue;
+            }
+            count += 1;
             for c in 0..3 {
                 let (x, r) = (x[c] as f64, r[c] as f64);
                 sum += (x - r) * (x - r) / (r * r + 0.01);
             }
         }
-        Ok(sum / (3 * self.pixels.len().max(1)) as f64)
+        Ok(sum / (3 * count.max(1)) as f64)
     }
 
     fn check_same_size(&self, other: &Image) -> Result<(), Error> {

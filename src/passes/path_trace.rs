@@ -1,7 +1,12 @@
 //! `path_trace`: the camera pass. Traces `samples_per_iteration` paths per pixel with next-event
 //! estimation and adds them to the persistent `radiance` accumulator (sum and count per pixel).
+//!
+//! When its `hit_points` output feeds another node, the first `merge_depth` diffuse vertices of
+//! each pixel's first sample become hit points for photon mapping, and the emission that photon
+//! mapping will add there (reached through specular vertices) is left out of `radiance`.
 
 use std::collections::HashMap;
+use std::sync::atomic::Ordering;
 
 use serde::Deserialize;
 
@@ -9,14 +14,21 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::graph::pass::{
-    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Resource, ResourceKind, SlotDecl, parse_params,
+    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl,
+    parse_params,
+};
+use crate::passes::hit_points::{
+    HEADER_BYTES, HIT_POINT_BYTES, HitPointHeader, MIN_RADIUS_FRACTION,
 };
 use crate::scene::gpu_layout::UNBOUNDED;
 
 const SHADER: &str = "shaders/passes/path_trace.wgsl";
 const WORKGROUP: u32 = 8;
 
-static SLOTS: &[SlotDecl] = &[SlotDecl::output("radiance", ResourceKind::Radiance).persistent()];
+static SLOTS: &[SlotDecl] = &[
+    SlotDecl::output("radiance", ResourceKind::Radiance).persistent(),
+    SlotDecl::output("hit_points", ResourceKind::HitPoints).persistent(),
+];
 
 pub const KIND: PassKind = PassKind {
     name: "path_trace",
@@ -43,6 +55,13 @@ pub struct PathTraceParams {
     /// Depth from which Russian roulette terminates paths; `None` takes the scene's (off unless
     /// the scene asks for it, or its depth is unbounded).
     pub rr_depth: Option<u32>,
+    /// Photon-mapped diffuse vertices per path: `1` (SPPM) up to `max` (every diffuse vertex,
+    /// as in the original hybrid report). Used only when `hit_points` is connected.
+    pub merge_depth: MergeDepth,
+    /// Continue paths past photon-mapped vertices (hybrid). `false` stops them there, so path
+    /// tracing adds only emission seen directly or through specular surfaces (photon mapping
+    /// alone).
+    pub trace_beyond: bool,
 }
 
 impl Default for PathTraceParams {
@@ -51,7 +70,53 @@ impl Default for PathTraceParams {
             max_depth: None,
             samples_per_iteration: 1,
             rr_depth: None,
+            merge_depth: MergeDepth::Depth(1),
+            trace_beyond: true,
         }
+    }
+}
+
+/// `merge_depth: 2` or `merge_depth: max`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MergeDepth {
+    Depth(u32),
+    Max,
+}
+
+/// Hit-point slots per pixel for `merge_depth: max` when the path depth is unbounded.
+const MAX_MERGE_SLOTS: u32 = 16;
+
+impl MergeDepth {
+    /// Hit-point slots per pixel: a diffuse vertex needs at least one segment before it and one
+    /// after it, so a path of `max_depth` segments has at most `max_depth - 1`.
+    pub fn slots(self, max_depth: u32) -> u32 {
+        let possible = if max_depth == UNBOUNDED {
+            MAX_MERGE_SLOTS
+        } else {
+            max_depth.saturating_sub(1)
+        };
+        match self {
+            MergeDepth::Depth(d) => d.min(possible),
+            MergeDepth::Max => possible,
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for MergeDepth {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        // RON hands a bare identifier such as `max` to generic visitors as a unit value without
+        // its name, so read the raw text of the value and look at it.
+        use serde::de::Error as _;
+        let raw = Box::<ron::value::RawValue>::deserialize(deserializer)?;
+        let text = raw.get_ron().trim();
+        if text == "max" {
+            return Ok(MergeDepth::Max);
+        }
+        raw.into_rust::<u32>().map(MergeDepth::Depth).map_err(|_| {
+            D::Error::custom(format!(
+                "merge_depth is a whole number (1, 2, ...) or `max`, got `{text}`"
+            ))
+        })
     }
 }
 
@@ -63,7 +128,9 @@ struct GpuParams {
     seed: u32,
     max_depth: u32,
     rr_depth: u32,
-    _pad: [u32; 3],
+    merge_depth: u32,
+    record: u32,
+    trace_beyond: u32,
 }
 
 struct Prepared {
@@ -75,6 +142,8 @@ struct Prepared {
     height: u32,
     max_depth: u32,
     rr_depth: u32,
+    merge_slots: u32,
+    hit_points: Resource,
 }
 
 pub struct PathTrace {
@@ -101,11 +170,6 @@ impl PathTrace {
     }
 }
 
-/// Splits a 64-bit seed into the 32 bits the kernel hashes, keeping both halves' entropy.
-fn seed32(seed: u64) -> u32 {
-    (seed ^ (seed >> 32)) as u32
-}
-
 impl Pass for PathTrace {
     fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
         let gpu = ctx.gpu;
@@ -125,6 +189,31 @@ impl Pass for PathTrace {
             16,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
+        let (max_depth, rr_depth) =
+            self.depths(ctx.scene.uniform.max_depth, ctx.scene.uniform.rr_depth);
+        // No consumer, no hit points: the pass is then a plain path tracer that drops nothing.
+        let merge_slots = if ctx.consumed.contains("hit_points") {
+            self.params.merge_depth.slots(max_depth)
+        } else {
+            0
+        };
+        let hit_point_slots = pixels * merge_slots as u64;
+        let hit_points = gpu.create_buffer(
+            "path_trace hit_points",
+            HEADER_BYTES + hit_point_slots.max(1) * HIT_POINT_BYTES,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        )?;
+        // A default the estimator overwrites when it is prepared.
+        let header = HitPointHeader {
+            initial_radius: 0.0,
+            radius_pixels: 2.0,
+            min_radius: MIN_RADIUS_FRACTION * ctx.scene.uniform.scene_radius,
+            slots_per_pixel: merge_slots,
+        };
+        gpu.queue
+            .write_buffer(&hit_points, 0, bytemuck::bytes_of(&header));
         let (layout, bind_group) = bind_buffers(
             &gpu.device,
             "path_trace",
@@ -132,13 +221,13 @@ impl Pass for PathTrace {
                 (Access::Uniform, &params),
                 (Access::ReadWrite, &radiance),
                 (Access::ReadWrite, &counters),
+                (Access::ReadWrite, &hit_points),
             ],
         );
         let pipeline =
             ctx.shaders
                 .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
-        let (max_depth, rr_depth) =
-            self.depths(ctx.scene.uniform.max_depth, ctx.scene.uniform.rr_depth);
+        let hit_points = Resource::new(ResourceKind::HitPoints, hit_points, hit_point_slots);
         self.prepared = Some(Prepared {
             pipeline,
             bind_group,
@@ -148,37 +237,46 @@ impl Pass for PathTrace {
             height: ctx.height,
             max_depth,
             rr_depth,
+            merge_slots,
+            hit_points: hit_points.clone(),
         });
-        let resource = Resource {
-            kind: ResourceKind::Radiance,
-            buffer: std::sync::Arc::new(radiance),
-            len: pixels,
-        };
-        Ok(HashMap::from([("radiance", resource)]))
+        let radiance = Resource::new(ResourceKind::Radiance, radiance, pixels);
+        Ok(HashMap::from([
+            ("radiance", radiance),
+            ("hit_points", hit_points),
+        ]))
     }
 
-    fn execute(&mut self, ctx: &ExecCtx<'_>, encoder: &mut wgpu::CommandEncoder) {
-        let Some(p) = &self.prepared else { return };
+    fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
+        let Some(p) = &self.prepared else {
+            return Ok(());
+        };
+        let record = ctx.iteration == 0 || !p.hit_points.frozen.load(Ordering::Relaxed);
         let spp = self.params.samples_per_iteration;
         let gpu_params = GpuParams {
             sample_base: (ctx.iteration as u32).wrapping_mul(spp),
             samples_per_iteration: spp,
-            seed: seed32(ctx.seed),
+            seed: crate::passes::seed32(ctx.seed),
             max_depth: p.max_depth,
             rr_depth: p.rr_depth,
-            _pad: [0; 3],
+            merge_depth: p.merge_slots,
+            record: record as u32,
+            trace_beyond: self.params.trace_beyond as u32,
         };
         ctx.gpu
             .queue
             .write_buffer(&p.params, 0, bytemuck::bytes_of(&gpu_params));
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("path_trace"),
-            timestamp_writes: None,
-        });
+        let mut pass = recorder
+            .encoder()
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("path_trace"),
+                timestamp_writes: None,
+            });
         pass.set_pipeline(&p.pipeline);
         pass.set_bind_group(0, &ctx.scene.bind_group, &[]);
         pass.set_bind_group(1, &p.bind_group, &[]);
         pass.dispatch_workgroups(p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1);
+        Ok(())
     }
 
     fn samples_per_iteration(&self) -> u32 {
@@ -194,6 +292,7 @@ impl Pass for PathTrace {
         Ok(PassStats {
             rays: wide(c[0], c[1]),
             discarded_samples: wide(c[2], c[3]),
+            ..Default::default()
         })
     }
 }

@@ -58,6 +58,7 @@ pub fn render_to(renderer: &mut Renderer<'_>, spp: u64) -> Image {
             Budget {
                 spp: Some(spp),
                 seconds: None,
+                photons: None,
             },
             &never,
             |_, _| {},

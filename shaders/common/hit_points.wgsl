@@ -1,0 +1,90 @@
+#define_import_path common::hit_points
+
+// Hit points (camera-path vertices where photon mapping takes over), the BVH over them, and the
+// per-iteration photon deposits. Layouts mirror src/passes/hit_points.rs.
+
+struct HitPoint {
+    position: vec3<f32>,
+    // Pixel index, or NO_PIXEL when the slot holds no hit point this iteration.
+    pixel: u32,
+    // Front normal of the (one-sided) diffuse surface.
+    normal: vec3<f32>,
+    // Search radius. Set once from `HitPointHeader` when the slot is first used, then owned by
+    // the estimator, which shrinks it after each merge.
+    radius: f32,
+    // Unit direction towards where the camera path came from.
+    wo: vec3<f32>,
+    // Path segments from the camera to this point: a photon path may add at most
+    // max_depth - depth segments, so photon mapping obeys the same depth rule as path tracing.
+    depth: u32,
+    // Camera path throughput times the diffuse BSDF value (albedo / pi): the radiance one unit
+    // of photon flux per unit area adds to the pixel.
+    weight: vec3<f32>,
+    // Width of one pixel at this point (distance travelled times the pixel's angle).
+    footprint: f32,
+}
+
+// Written by the estimator when it is prepared: how the camera pass sets a slot's first radius.
+struct HitPointHeader {
+    // Absolute initial radius in scene units; 0 means `radius_pixels` footprints.
+    initial_radius: f32,
+    radius_pixels: f32,
+    // Floor relative to the scene's size, so radii never underflow.
+    min_radius: f32,
+    // Hit-point slots per pixel (merge depth).
+    slots_per_pixel: u32,
+}
+
+struct HitPointBuffer {
+    header: HitPointHeader,
+    points: array<HitPoint>,
+}
+
+const NO_PIXEL: u32 = 0xffffffffu;
+
+// BVH over hit-point spheres. Every leaf holds exactly one hit point: `count` == 1 and
+// `left_or_first` is its index. Interior nodes have `count` == 0 and their right child follows
+// the left one.
+struct HitPointNode {
+    min: vec3<f32>,
+    left_or_first: u32,
+    max: vec3<f32>,
+    count: u32,
+}
+
+struct HitPointTree {
+    node_count: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
+    nodes: array<HitPointNode>,
+}
+
+const TREE_STACK_SIZE: u32 = 64u;
+
+// Photons gathered by one hit point in one iteration. Flux is an RGB sum added with float
+// atomics where the device has them, else with a compare-and-swap loop on the f32 bits.
+#ifdef FLOAT_ATOMICS
+struct DepositCell {
+    count: atomic<u32>,
+    flux: array<atomic<f32>, 3>,
+}
+#else
+struct DepositCell {
+    count: atomic<u32>,
+    flux: array<atomic<u32>, 3>,
+}
+#endif
+
+// Radius of a slot used for the first time.
+fn initial_radius(header: HitPointHeader, footprint: f32) -> f32 {
+    var r = header.initial_radius;
+    if r <= 0.0 {
+        r = header.radius_pixels * footprint;
+    }
+    return max(r, header.min_radius);
+}
+
+fn point_in_box(p: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> bool {
+    return all(p >= lo) && all(p <= hi);
+}

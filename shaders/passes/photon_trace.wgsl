@@ -1,0 +1,264 @@
+// Photon tracing. Each invocation emits one photon from a light chosen in proportion to its power
+// (area lights: uniform position, cosine direction; point lights: uniform direction), traces it
+// through mirrors and dielectrics, and deposits it into every hit point whose sphere contains
+// the deposit (a range query over the hit-point BVH), skipping hit points it reaches from behind.
+//
+// Mode CAUSTIC deposits only at the first diffuse vertex after at least one specular vertex and
+// stops there (L S+ D: what the hybrid's path tracer leaves out). Mode ALL deposits at every
+// diffuse vertex and continues (photon mapping alone).
+
+#import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
+#import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, max_component, any_not_finite}
+#import common::scene::{scene_info, materials, lights, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_origin}
+#import common::lights::{pick_light, sample_area_light_point}
+#import common::bsdf::{sample_dielectric, reflect_about}
+#import common::hit_points::{HitPointBuffer, HitPointTree, DepositCell, TREE_STACK_SIZE, point_in_box}
+
+struct PhotonParams {
+    photons: u32,
+    seed: u32,
+    iteration: u32,
+    mode: u32,
+    max_depth: u32,
+    rr_depth: u32,
+    // 1 / photons: deposits are flux per emitted photon of this iteration.
+    flux_scale: f32,
+    // Workgroups per row of the 2D dispatch (one row holds at most 65535).
+    groups_per_row: u32,
+}
+
+@group(1) @binding(0) var<uniform> params: PhotonParams;
+@group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
+@group(1) @binding(2) var<storage, read> tree: HitPointTree;
+@group(1) @binding(3) var<storage, read_write> deposits: array<DepositCell>;
+// [segments low, segments high]: a 64-bit total from 32-bit atomics. (Photon counts are exact on
+// the CPU: every iteration emits `photons`.)
+@group(1) @binding(4) var<storage, read_write> counters: array<atomic<u32>, 2>;
+// RGB flux emitted so far (already scaled by flux_scale): the light's power per iteration.
+#ifdef FLOAT_ATOMICS
+@group(1) @binding(5) var<storage, read_write> emitted: array<atomic<f32>, 3>;
+#else
+@group(1) @binding(5) var<storage, read_write> emitted: array<atomic<u32>, 3>;
+#endif
+
+const MODE_CAUSTIC: u32 = 0u;
+const MODE_ALL: u32 = 1u;
+const WORKGROUP: u32 = 64u;
+const SAFETY_MAX_DEPTH: u32 = 1024u;
+
+var<workgroup> group_flux: array<vec3<f32>, WORKGROUP>;
+var<workgroup> group_segments: atomic<u32>;
+
+fn add_segments(value: u32) {
+    if value == 0u {
+        return;
+    }
+    let old = atomicAdd(&counters[0], value);
+    if old > 0xffffffffu - value {
+        atomicAdd(&counters[1], 1u);
+    }
+}
+
+fn add_deposit_flux(cell: u32, channel: u32, value: f32) {
+#ifdef FLOAT_ATOMICS
+    atomicAdd(&deposits[cell].flux[channel], value);
+#else
+    var old = atomicLoad(&deposits[cell].flux[channel]);
+    loop {
+        let updated = bitcast<u32>(bitcast<f32>(old) + value);
+        let r = atomicCompareExchangeWeak(&deposits[cell].flux[channel], old, updated);
+        if r.exchanged {
+            break;
+        }
+        old = r.old_value;
+    }
+#endif
+}
+
+fn add_emitted(channel: u32, value: f32) {
+#ifdef FLOAT_ATOMICS
+    atomicAdd(&emitted[channel], value);
+#else
+    var old = atomicLoad(&emitted[channel]);
+    loop {
+        let updated = bitcast<u32>(bitcast<f32>(old) + value);
+        let r = atomicCompareExchangeWeak(&emitted[channel], old, updated);
+        if r.exchanged {
+            break;
+        }
+        old = r.old_value;
+    }
+#endif
+}
+
+struct Photon {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    flux: vec3<f32>,
+    valid: bool,
+}
+
+fn emit_photon(rng: ptr<function, u32>) -> Photon {
+    var photon: Photon;
+    photon.valid = false;
+    if scene_info.num_lights == 0u {
+        return photon;
+    }
+    let light = lights[pick_light(rng_next_f32(rng))];
+    if light.select_prob <= 0.0 {
+        return photon;
+    }
+    let u_position = rng_next_vec2(rng);
+    let u_direction = rng_next_vec2(rng);
+    if light.kind == LIGHT_POINT {
+        // Intensity I over the sphere of directions: power 4 pi I.
+        photon.origin = light.position;
+        photon.dir = sample_uniform_sphere(u_direction);
+        photon.flux = light.radiance * (4.0 * PI / light.select_prob);
+    } else {
+        // One-sided Lambertian emitter of radiance L and area A: power pi A L.
+        let point = sample_area_light_point(light, u_position);
+        photon.dir = sample_cosine_hemisphere(point.normal, u_direction);
+        photon.origin = offset_origin(point.position, point.normal, photon.dir);
+        photon.flux = light.radiance * (PI * light.area / light.select_prob);
+    }
+    photon.flux *= params.flux_scale;
+    photon.valid = !any_not_finite(photon.flux) && max_component(photon.flux) > 0.0;
+    return photon;
+}
+
+// Adds the photon to every hit point whose sphere contains `position`.
+fn deposit(position: vec3<f32>, wi: vec3<f32>, flux: vec3<f32>, segments: u32) {
+    if tree.node_count == 0u {
+        return;
+    }
+    var stack: array<u32, TREE_STACK_SIZE>;
+    var top = 1u;
+    stack[0] = 0u;
+    while top > 0u {
+        top -= 1u;
+        let index = stack[top];
+        let node_min = tree.nodes[index].min;
+        let node_max = tree.nodes[index].max;
+        if !point_in_box(position, node_min, node_max) {
+            continue;
+        }
+        let first = tree.nodes[index].left_or_first;
+        if tree.nodes[index].count > 0u {
+            let hp = hit_points.points[first];
+            let d = position - hp.position;
+            if dot(d, d) > hp.radius * hp.radius {
+                continue;
+            }
+            // One-sided diffuse: light arriving from behind the hit point's surface adds nothing.
+            if dot(hp.normal, wi) <= 0.0 {
+                continue;
+            }
+            // The whole path (camera part + photon part) obeys max_depth, as in path tracing.
+            if params.max_depth != UNBOUNDED && hp.depth + segments > params.max_depth {
+                continue;
+            }
+            atomicAdd(&deposits[first].count, 1u);
+            let added = flux * hp.weight;
+            add_deposit_flux(first, 0u, added.x);
+            add_deposit_flux(first, 1u, added.y);
+            add_deposit_flux(first, 2u, added.z);
+        } else if top + 2u <= TREE_STACK_SIZE {
+            stack[top] = first;
+            stack[top + 1u] = first + 1u;
+            top += 2u;
+        }
+    }
+}
+
+// Traces one photon; returns the segments traced.
+fn trace_photon(start: Photon, rng: ptr<function, u32>) -> u32 {
+    var photon = start;
+    var after_specular = false;
+    let initial = max_component(start.flux);
+    let max_segments = min(params.max_depth, SAFETY_MAX_DEPTH);
+    var segments = 0u;
+    while segments < max_segments {
+        segments += 1u;
+        let hit = intersect_scene(photon.origin, photon.dir);
+        if hit.prim == NO_HIT {
+            break;
+        }
+        let surface = surface_at(hit, photon.origin, photon.dir);
+        let material = materials[surface.material];
+        let wi = -photon.dir;
+        let cos_i = dot(wi, surface.normal);
+        if material.kind == MATERIAL_DIFFUSE {
+            // One-sided, as the camera pass: the back of a diffuse surface absorbs.
+            if cos_i <= 0.0 {
+                break;
+            }
+            if params.mode == MODE_CAUSTIC {
+                if after_specular {
+                    deposit(surface.position, wi, photon.flux, segments);
+                }
+                break;
+            }
+            deposit(surface.position, wi, photon.flux, segments);
+            photon.dir = sample_cosine_hemisphere(surface.normal, rng_next_vec2(rng));
+            // Cosine sampling: f cos / pdf = albedo.
+            photon.flux *= material.albedo;
+            after_specular = false;
+        } else if material.kind == MATERIAL_MIRROR {
+            if cos_i <= 0.0 {
+                break;
+            }
+            photon.dir = reflect_about(wi, surface.normal);
+            after_specular = true;
+        } else {
+            // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
+            let s = sample_dielectric(wi, surface.normal, materials[surface.material].int_ior, materials[surface.material].ext_ior, rng_next_f32(rng), false);
+            photon.flux *= s.weight;
+            photon.dir = s.dir;
+            after_specular = true;
+        }
+        photon.origin = offset_origin(surface.position, surface.normal, photon.dir);
+        if segments >= params.rr_depth {
+            let survive = min(max_component(photon.flux) / initial, 0.95);
+            if rng_next_f32(rng) >= survive {
+                break;
+            }
+            photon.flux /= survive;
+        }
+        if max_component(photon.flux) <= 0.0 {
+            break;
+        }
+    }
+    return segments;
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let index = (group.y * params.groups_per_row + group.x) * WORKGROUP + local;
+    var flux = vec3<f32>(0.0);
+    var segments = 0u;
+    if index < params.photons {
+        var rng = rng_seed(index, params.iteration, params.seed);
+        let photon = emit_photon(&rng);
+        if photon.valid {
+            flux = photon.flux;
+            segments = trace_photon(photon, &rng);
+        }
+    }
+    // One global atomic per workgroup for the counters, not one per photon.
+    group_flux[local] = flux;
+    atomicAdd(&group_segments, segments);
+    workgroupBarrier();
+    for (var stride = WORKGROUP / 2u; stride > 0u; stride /= 2u) {
+        if local < stride {
+            group_flux[local] += group_flux[local + stride];
+        }
+        workgroupBarrier();
+    }
+    if local == 0u {
+        add_emitted(0u, group_flux[0].x);
+        add_emitted(1u, group_flux[0].y);
+        add_emitted(2u, group_flux[0].z);
+        add_segments(atomicLoad(&group_segments));
+    }
+}

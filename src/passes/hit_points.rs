@@ -1,0 +1,151 @@
+//! Hit points, the tree over them and photon deposits: the GPU layouts several passes share
+//! (mirrored in `shaders/common/hit_points.wgsl`) and the CPU side of the hit-point BVH (build,
+//! range query) that the SAH builder node and the tests use.
+
+use glam::Vec3;
+
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::scene::bvh::{Aabb, BvhNode, build_sah};
+
+/// `HitPoint.pixel` of a slot that holds no hit point this iteration.
+pub const NO_PIXEL: u32 = u32::MAX;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuHitPoint {
+    pub position: [f32; 3],
+    pub pixel: u32,
+    pub normal: [f32; 3],
+    pub radius: f32,
+    pub wo: [f32; 3],
+    pub depth: u32,
+    pub weight: [f32; 3],
+    pub footprint: f32,
+}
+
+impl GpuHitPoint {
+    pub fn is_valid(&self) -> bool {
+        self.pixel != NO_PIXEL && self.radius > 0.0
+    }
+}
+
+/// How the camera pass sets a slot's first radius; written by the estimator.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HitPointHeader {
+    /// Absolute radius in scene units; 0 means `radius_pixels` pixel footprints.
+    pub initial_radius: f32,
+    pub radius_pixels: f32,
+    pub min_radius: f32,
+    pub slots_per_pixel: u32,
+}
+
+/// Bytes before the first hit point in a `HitPoints` buffer.
+pub const HEADER_BYTES: u64 = std::mem::size_of::<HitPointHeader>() as u64;
+pub const HIT_POINT_BYTES: u64 = std::mem::size_of::<GpuHitPoint>() as u64;
+/// One `DepositCell`: photon count and RGB flux.
+pub const DEPOSIT_BYTES: u64 = 16;
+/// Bytes before the first node in a `HitPointTree` buffer (the node count and padding).
+pub const TREE_HEADER_BYTES: u64 = 16;
+
+/// Minimum search radius as a fraction of the scene's bounding radius: far above f32
+/// resolution of positions, far below any useful radius.
+pub const MIN_RADIUS_FRACTION: f32 = 1e-5;
+
+/// Size in bytes of a tree buffer able to hold a BVH over `capacity` hit points.
+pub fn tree_bytes(capacity: u64) -> u64 {
+    TREE_HEADER_BYTES + (2 * capacity.max(1) - 1) * std::mem::size_of::<BvhNode>() as u64
+}
+
+/// Reads the hit points of a `HitPoints` buffer back.
+pub fn read_hit_points(
+    gpu: &GpuContext,
+    buffer: &wgpu::Buffer,
+    len: u64,
+) -> Result<Vec<GpuHitPoint>, Error> {
+    let bytes = gpu.read_buffer(buffer, HEADER_BYTES, len * HIT_POINT_BYTES)?;
+    Ok(bytemuck::pod_collect_to_vec(
+        &bytes[..(len * HIT_POINT_BYTES) as usize],
+    ))
+}
+
+/// The bounding box of a hit point's search sphere, padded a little so that no point the
+/// leaf's f32 distance test accepts can fall outside it by rounding.
+pub fn sphere_box(hp: &GpuHitPoint) -> Aabb {
+    Aabb::of_sphere(Vec3::from(hp.position), hp.radius * (1.0 + 1e-5))
+}
+
+/// A SAH BVH over the spheres of the valid hit points, in the layout the photon pass traverses:
+/// one hit point per leaf, `left_or_first` its index in `hit_points`. Empty when none is valid.
+pub fn build_tree(hit_points: &[GpuHitPoint]) -> Vec<BvhNode> {
+    let valid: Vec<u32> = (0u32..)
+        .zip(hit_points)
+        .filter(|(_, hp)| hp.is_valid())
+        .map(|(i, _)| i)
+        .collect();
+    if valid.is_empty() {
+        return Vec::new();
+    }
+    let boxes: Vec<Aabb> = valid
+        .iter()
+        .map(|&i| sphere_box(&hit_points[i as usize]))
+        .collect();
+    // With at most one box per leaf the builder splits every larger node (by count where the
+    // centres coincide), so every leaf holds exactly one hit point.
+    let bvh = build_sah(&boxes, 1);
+    bvh.nodes
+        .iter()
+        .map(|n| {
+            if n.count == 0 {
+                *n
+            } else {
+                BvhNode {
+                    left_or_first: valid[bvh.indices[n.left_or_first as usize] as usize],
+                    count: 1,
+                    ..*n
+                }
+            }
+        })
+        .collect()
+}
+
+/// The tree buffer's contents: the node count, padding, then the nodes.
+pub fn tree_bytes_of(nodes: &[BvhNode]) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(TREE_HEADER_BYTES as usize + std::mem::size_of_val(nodes));
+    let header = [nodes.len() as u32, 0, 0, 0];
+    bytes.extend_from_slice(bytemuck::cast_slice(&header));
+    bytes.extend_from_slice(bytemuck::cast_slice(nodes));
+    bytes
+}
+
+/// Indices of the hit points whose sphere contains `p`, found through `nodes` (a tree in the
+/// GPU layout), in traversal order. The CPU twin of the photon pass's query.
+pub fn tree_range_query(nodes: &[BvhNode], hit_points: &[GpuHitPoint], p: Vec3) -> Vec<u32> {
+    let mut found = Vec::new();
+    if nodes.is_empty() {
+        return found;
+    }
+    let mut stack = vec![0usize];
+    while let Some(i) = stack.pop() {
+        let n = &nodes[i];
+        let inside = Aabb {
+            min: Vec3::from(n.min),
+            max: Vec3::from(n.max),
+        }
+        .contains_point(p);
+        if !inside {
+            continue;
+        }
+        if n.count > 0 {
+            let hp = &hit_points[n.left_or_first as usize];
+            if Vec3::from(hp.position).distance_squared(p) <= hp.radius * hp.radius {
+                found.push(n.left_or_first);
+            }
+        } else {
+            stack.push(n.left_or_first as usize);
+            stack.push(n.left_or_first as usize + 1);
+        }
+    }
+    found
+}

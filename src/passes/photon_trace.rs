@@ -1,0 +1,250 @@
+//! `photon_trace`: emits `photons_per_iteration` photons, traces them through specular surfaces
+//! and adds each deposit to every hit point whose radius contains it (photon count and flux per
+//! hit point, in the `deposits` output, cleared at the start of every iteration).
+
+use std::collections::HashMap;
+
+use serde::Deserialize;
+
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::gpu::binding::{Access, bind_buffers};
+use crate::graph::pass::{
+    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl,
+    parse_params,
+};
+use crate::passes::hit_points::DEPOSIT_BYTES;
+use crate::scene::gpu_layout::UNBOUNDED;
+
+const SHADER: &str = "shaders/passes/photon_trace.wgsl";
+const WORKGROUP: u32 = 64;
+/// Workgroups per row of the dispatch grid (wgpu's limit per dimension is 65535).
+const GROUPS_PER_ROW: u32 = 32768;
+/// Photons per iteration per image pixel when the graph does not say. Chosen so that photon
+/// tracing and the camera pass take similar time (BENCHMARKS.md).
+pub const DEFAULT_PHOTONS_PER_PIXEL: u32 = 4;
+/// Decorrelates photon random streams from camera streams that share the seed.
+const PHOTON_STREAM: u32 = 0x9e37_79b9;
+
+static SLOTS: &[SlotDecl] = &[
+    SlotDecl::input("hit_points", ResourceKind::HitPoints),
+    SlotDecl::input("hit_point_tree", ResourceKind::HitPointTree),
+    SlotDecl::output("deposits", ResourceKind::Deposits),
+];
+
+pub const KIND: PassKind = PassKind {
+    name: "photon_trace",
+    description: "photons from the lights through specular surfaces, gathered by hit points",
+    slots: SLOTS,
+    construct,
+};
+
+fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
+    Ok(Box::new(PhotonTrace::new(parse_params(params)?)))
+}
+
+/// Where photons are deposited.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+pub enum PhotonMode {
+    /// Only at the first diffuse vertex after one or more specular ones, then stop (hybrid).
+    Caustic,
+    /// At every diffuse vertex, continuing the path (photon mapping alone).
+    All,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PhotonTraceParams {
+    pub mode: PhotonMode,
+    /// `None`: DEFAULT_PHOTONS_PER_PIXEL per image pixel.
+    pub photons_per_iteration: Option<u32>,
+    /// Longest full path (camera segments + photon segments); `None` takes the scene's.
+    pub max_depth: Option<u32>,
+    /// Photon segments after which Russian roulette starts; `None` takes the scene's.
+    pub rr_depth: Option<u32>,
+}
+
+impl Default for PhotonTraceParams {
+    fn default() -> Self {
+        Self {
+            mode: PhotonMode::Caustic,
+            photons_per_iteration: None,
+            max_depth: None,
+            rr_depth: None,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParams {
+    photons: u32,
+    seed: u32,
+    iteration: u32,
+    mode: u32,
+    max_depth: u32,
+    rr_depth: u32,
+    flux_scale: f32,
+    groups_per_row: u32,
+}
+
+struct Prepared {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    params: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    emitted: wgpu::Buffer,
+    deposits: Resource,
+    photons: u32,
+    max_depth: u32,
+    rr_depth: u32,
+}
+
+pub struct PhotonTrace {
+    params: PhotonTraceParams,
+    prepared: Option<Prepared>,
+    iterations: u64,
+}
+
+impl PhotonTrace {
+    pub fn new(params: PhotonTraceParams) -> Self {
+        Self {
+            params,
+            prepared: None,
+            iterations: 0,
+        }
+    }
+
+    /// RGB flux emitted so far, summed over iterations (each iteration's photons carry the
+    /// lights' total power between them). Reads back.
+    pub fn emitted_flux(&self, gpu: &GpuContext) -> Result<[f32; 3], Error> {
+        let Some(p) = &self.prepared else {
+            return Ok([0.0; 3]);
+        };
+        let v: Vec<f32> = gpu.read_pod(&p.emitted, 3)?;
+        Ok([v[0], v[1], v[2]])
+    }
+}
+
+impl Pass for PhotonTrace {
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+        let gpu = ctx.gpu;
+        let hit_points = ctx.input("hit_points")?;
+        let tree = ctx.input("hit_point_tree")?;
+        let pixels = ctx.width as u64 * ctx.height as u64;
+        let photons = match self.params.photons_per_iteration {
+            Some(n) => n,
+            None => u32::try_from(pixels * DEFAULT_PHOTONS_PER_PIXEL as u64).unwrap_or(u32::MAX),
+        };
+        let deposits = gpu.create_buffer(
+            "photon_trace deposits",
+            hit_points.len.max(1) * DEPOSIT_BYTES,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let params = gpu.create_buffer(
+            "photon_trace params",
+            std::mem::size_of::<GpuParams>() as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let counters = gpu.create_buffer(
+            "photon_trace counters",
+            8,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let emitted = gpu.create_buffer(
+            "photon_trace emitted",
+            16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let (layout, bind_group) = bind_buffers(
+            &gpu.device,
+            "photon_trace",
+            &[
+                (Access::Uniform, &params),
+                (Access::Read, &hit_points.buffer),
+                (Access::Read, &tree.buffer),
+                (Access::ReadWrite, &deposits),
+                (Access::ReadWrite, &counters),
+                (Access::ReadWrite, &emitted),
+            ],
+        );
+        let pipeline =
+            ctx.shaders
+                .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
+        let scene = &ctx.scene.uniform;
+        let max_depth = self.params.max_depth.unwrap_or(scene.max_depth);
+        let mut rr_depth = self.params.rr_depth.unwrap_or(scene.rr_depth);
+        if max_depth == UNBOUNDED && rr_depth == UNBOUNDED {
+            rr_depth = 5;
+        }
+        let deposits = Resource::new(ResourceKind::Deposits, deposits, hit_points.len);
+        self.prepared = Some(Prepared {
+            pipeline,
+            bind_group,
+            params,
+            counters,
+            emitted,
+            deposits: deposits.clone(),
+            photons,
+            max_depth,
+            rr_depth,
+        });
+        Ok(HashMap::from([("deposits", deposits)]))
+    }
+
+    fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
+        let Some(p) = &self.prepared else {
+            return Ok(());
+        };
+        let groups = p.photons.div_ceil(WORKGROUP);
+        let groups_per_row = groups.clamp(1, GROUPS_PER_ROW);
+        let gpu_params = GpuParams {
+            photons: p.photons,
+            seed: crate::passes::seed32(ctx.seed) ^ PHOTON_STREAM,
+            iteration: ctx.iteration as u32,
+            mode: match self.params.mode {
+                PhotonMode::Caustic => 0,
+                PhotonMode::All => 1,
+            },
+            max_depth: p.max_depth,
+            rr_depth: p.rr_depth,
+            flux_scale: (1.0 / p.photons.max(1) as f64) as f32,
+            groups_per_row,
+        };
+        ctx.gpu
+            .queue
+            .write_buffer(&p.params, 0, bytemuck::bytes_of(&gpu_params));
+        let encoder = recorder.encoder();
+        encoder.clear_buffer(&p.deposits.buffer, 0, None);
+        if groups > 0 {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("photon_trace"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&p.pipeline);
+            pass.set_bind_group(0, &ctx.scene.bind_group, &[]);
+            pass.set_bind_group(1, &p.bind_group, &[]);
+            pass.dispatch_workgroups(groups_per_row, groups.div_ceil(groups_per_row), 1);
+        }
+        self.iterations += 1;
+        Ok(())
+    }
+
+    fn photons_per_iteration(&self) -> u64 {
+        self.prepared.as_ref().map_or(0, |p| p.photons as u64)
+    }
+
+    fn stats(&self, gpu: &GpuContext) -> Result<PassStats, Error> {
+        let Some(p) = &self.prepared else {
+            return Ok(PassStats::default());
+        };
+        let c: Vec<u32> = gpu.read_pod(&p.counters, 2)?;
+        Ok(PassStats {
+            photons: self.iterations * p.photons as u64,
+            photon_segments: (c[1] as u64) << 32 | c[0] as u64,
+            ..Default::default()
+        })
+    }
+}

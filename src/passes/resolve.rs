@@ -1,0 +1,143 @@
+//! `resolve`: the final image, path-traced radiance plus photon-mapped radiance. Without a
+//! `caustic` input it is the path-traced image alone. Outputs `combined` and `radius` (each
+//! pixel's first hit-point search radius, in scene units, for debugging); with `hppm render
+//! --aovs` its `pt` and `caustic` inputs are written too.
+
+use std::collections::HashMap;
+
+use serde::Deserialize;
+
+use crate::Error;
+use crate::gpu::binding::{Access, bind_buffers};
+use crate::graph::pass::{
+    ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl, parse_params,
+};
+
+const SHADER: &str = "shaders/passes/resolve.wgsl";
+const WORKGROUP: u32 = 8;
+
+static SLOTS: &[SlotDecl] = &[
+    SlotDecl::input("pt", ResourceKind::Radiance),
+    SlotDecl::input("caustic", ResourceKind::Radiance).optional(),
+    SlotDecl::input("hit_points", ResourceKind::HitPoints).optional(),
+    SlotDecl::output("combined", ResourceKind::Radiance),
+    SlotDecl::output("radius", ResourceKind::Radiance),
+];
+
+pub const KIND: PassKind = PassKind {
+    name: "resolve",
+    description: "final image: path-traced + photon-mapped radiance (AOVs pt, caustic, radius)",
+    slots: SLOTS,
+    construct,
+};
+
+fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
+    let _: ResolveParams = parse_params(params)?;
+    Ok(Box::new(Resolve { prepared: None }))
+}
+
+/// No parameters yet; declared so that unknown ones are rejected.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct ResolveParams {}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParams {
+    width: u32,
+    height: u32,
+    has_caustic: u32,
+    has_hit_points: u32,
+}
+
+struct Prepared {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    width: u32,
+    height: u32,
+}
+
+pub struct Resolve {
+    prepared: Option<Prepared>,
+}
+
+impl Pass for Resolve {
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+        let gpu = ctx.gpu;
+        let pixels = ctx.width as u64 * ctx.height as u64;
+        let pt = ctx.input("pt")?;
+        let caustic = ctx.inputs.get("caustic");
+        let hit_points = ctx.inputs.get("hit_points");
+        // Unconnected optional inputs are bound to a small placeholder the kernel never reads.
+        let placeholder =
+            gpu.create_buffer("resolve placeholder", 64, wgpu::BufferUsages::STORAGE)?;
+        let image = |label| {
+            gpu.create_buffer(
+                label,
+                pixels * 16,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            )
+        };
+        let combined = image("resolve combined")?;
+        let radius = image("resolve radius")?;
+        let params = GpuParams {
+            width: ctx.width,
+            height: ctx.height,
+            has_caustic: caustic.is_some() as u32,
+            has_hit_points: hit_points.is_some_and(|h| h.len > 0) as u32,
+        };
+        let params = gpu.create_buffer_init(
+            "resolve params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let (layout, bind_group) = bind_buffers(
+            &gpu.device,
+            "resolve",
+            &[
+                (Access::Uniform, &params),
+                (Access::Read, &pt.buffer),
+                (Access::Read, caustic.map_or(&placeholder, |r| &r.buffer)),
+                (Access::Read, hit_points.map_or(&placeholder, |r| &r.buffer)),
+                (Access::ReadWrite, &combined),
+                (Access::ReadWrite, &radius),
+            ],
+        );
+        let pipeline =
+            ctx.shaders
+                .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
+        self.prepared = Some(Prepared {
+            pipeline,
+            bind_group,
+            width: ctx.width,
+            height: ctx.height,
+        });
+        Ok(HashMap::from([
+            (
+                "combined",
+                Resource::new(ResourceKind::Radiance, combined, pixels),
+            ),
+            (
+                "radius",
+                Resource::new(ResourceKind::Radiance, radius, pixels),
+            ),
+        ]))
+    }
+
+    fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
+        let Some(p) = &self.prepared else {
+            return Ok(());
+        };
+        let mut pass = recorder
+            .encoder()
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("resolve"),
+                timestamp_writes: None,
+            });
+        pass.set_pipeline(&p.pipeline);
+        pass.set_bind_group(0, &ctx.scene.bind_group, &[]);
+        pass.set_bind_group(1, &p.bind_group, &[]);
+        pass.dispatch_workgroups(p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1);
+        Ok(())
+    }
+}
