@@ -1,0 +1,697 @@
+//! The photon-mapping passes run alone on small synthetic inputs: the hit-point BVH against
+//! all-pairs search, photon deposits against a CPU tracer of the same photons, emitted power
+//! against the lights' analytic power, and the merge against the update formulas in f64. The
+//! float-atomic and compare-and-swap paths are both run and must agree.
+
+mod common;
+
+use std::collections::{HashMap, HashSet};
+
+use common::*;
+use glam::Vec3;
+use hppm::gpu::GpuContext;
+use hppm::graph::pass::{ExecCtx, Pass, PrepareCtx, Recorder, Resource, ResourceKind};
+use hppm::passes::hit_point_bvh_sah::HitPointBvhSah;
+use hppm::passes::hit_points::{
+    GpuHitPoint, HitPointHeader, NO_PIXEL, build_tree, tree_range_query,
+};
+use hppm::passes::photon_trace::{PhotonMode, PhotonTrace, PhotonTraceParams};
+use hppm::passes::sppm::{Merge, MergeParams};
+use hppm::render::SceneResources;
+use hppm::scene::Scene;
+use hppm::scene::bvh::{build_sah, closest_hit, scene_boxes};
+use hppm::scene::gpu_layout::GpuScene;
+use hppm::shaders::ShaderLibrary;
+
+// ---------------------------------------------------------------------------------------------
+// Running one pass alone.
+
+struct Harness<'a> {
+    gpu: &'a GpuContext,
+    scene: SceneResources,
+    shaders: ShaderLibrary,
+    width: u32,
+    height: u32,
+}
+
+impl<'a> Harness<'a> {
+    fn new(gpu: &'a GpuContext, scene: &Scene, size: (u32, u32), float_atomics: bool) -> Self {
+        let gpu_scene = GpuScene::new(scene, size.0, size.1);
+        Self {
+            gpu,
+            scene: SceneResources::upload(gpu, &gpu_scene).expect("scene upload"),
+            shaders: ShaderLibrary::new(float_atomics, HashMap::new()),
+            width: size.0,
+            height: size.1,
+        }
+    }
+
+    fn prepare(
+        &self,
+        pass: &mut dyn Pass,
+        inputs: &[(&'static str, &Resource)],
+    ) -> HashMap<&'static str, Resource> {
+        let ctx = PrepareCtx {
+            gpu: self.gpu,
+            scene: &self.scene,
+            shaders: &self.shaders,
+            inputs: inputs.iter().map(|(s, r)| (*s, (*r).clone())).collect(),
+            consumed: HashSet::new(),
+            width: self.width,
+            height: self.height,
+        };
+        pass.prepare(ctx).expect("prepare")
+    }
+
+    fn run(&self, pass: &mut dyn Pass, iteration: u64, seed: u64) {
+        let ctx = ExecCtx {
+            gpu: self.gpu,
+            scene: &self.scene,
+            iteration,
+            seed,
+        };
+        let mut recorder = Recorder::new(self.gpu);
+        pass.execute(&ctx, &mut recorder).expect("execute");
+        recorder.flush().expect("flush");
+    }
+}
+
+fn hit_point_resource(
+    gpu: &GpuContext,
+    header: HitPointHeader,
+    points: &[GpuHitPoint],
+) -> Resource {
+    let mut bytes = bytemuck::bytes_of(&header).to_vec();
+    bytes.extend_from_slice(bytemuck::cast_slice(points));
+    let usage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+    let buffer = gpu
+        .create_buffer_init("test hit points", &bytes, usage)
+        .expect("buffer");
+    Resource::new(ResourceKind::HitPoints, buffer, points.len() as u64)
+}
+
+/// (count, RGB flux) per hit point from a deposits buffer; the bytes are the same for both
+/// atomics paths (a u32 count, then the f32 bits of each channel).
+fn read_deposits(gpu: &GpuContext, deposits: &Resource) -> Vec<(u32, [f32; 3])> {
+    let words: Vec<[u32; 4]> = gpu
+        .read_pod(&deposits.buffer, deposits.len as usize)
+        .expect("readback");
+    words
+        .iter()
+        .map(|w| (w[0], [w[1], w[2], w[3]].map(f32::from_bits)))
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hit-point BVH range queries (CPU builder, GPU layout) against all pairs.
+
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 40) as f32) / (1u64 << 24) as f32
+    }
+    fn vec3(&mut self, scale: f32) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next()) * scale
+    }
+}
+
+fn hit_point(position: Vec3, radius: f32) -> GpuHitPoint {
+    GpuHitPoint {
+        position: position.to_array(),
+        pixel: 0,
+        normal: [0.0, 1.0, 0.0],
+        radius,
+        wo: [0.0, 1.0, 0.0],
+        depth: 1,
+        weight: [1.0; 3],
+        footprint: radius,
+    }
+}
+
+fn brute_force(points: &[GpuHitPoint], p: Vec3) -> Vec<u32> {
+    (0u32..)
+        .zip(points)
+        .filter(|(_, hp)| {
+            hp.is_valid() && Vec3::from(hp.position).distance_squared(p) <= hp.radius * hp.radius
+        })
+        .map(|(i, _)| i)
+        .collect()
+}
+
+fn check_queries(name: &str, points: &[GpuHitPoint], queries: &[Vec3]) {
+    let nodes = build_tree(points);
+    let mut total = 0;
+    for &q in queries {
+        let mut found = tree_range_query(&nodes, points, q);
+        found.sort_unstable();
+        let expected = brute_force(points, q);
+        assert_eq!(found, expected, "{name}: query at {q}");
+        total += expected.len();
+    }
+    eprintln!(
+        "{name}: {} hit points, {} queries, {total} pairs found",
+        points.len(),
+        queries.len()
+    );
+}
+
+#[test]
+fn hit_point_tree_range_queries_match_brute_force() {
+    let mut rng = Lcg(1);
+    let queries: Vec<Vec3> = (0..2000).map(|_| rng.vec3(10.0)).collect();
+    check_queries("empty", &[], &queries);
+    check_queries("one point", &[hit_point(Vec3::splat(5.0), 1.0)], &queries);
+    let random: Vec<GpuHitPoint> = (0..3000)
+        .map(|_| hit_point(rng.vec3(10.0), 0.05 + rng.next()))
+        .collect();
+    check_queries("random", &random, &queries);
+    // Queries at the hit points themselves: every one must find at least itself.
+    let centres: Vec<Vec3> = random.iter().map(|h| Vec3::from(h.position)).collect();
+    check_queries("random, queries at centres", &random, &centres);
+    let coincident: Vec<GpuHitPoint> = (0..500)
+        .map(|i| hit_point(Vec3::splat(3.0), 0.1 + i as f32 * 1e-3))
+        .collect();
+    check_queries("coincident", &coincident, &queries);
+    let near_coincident: Vec<Vec3> = (0..200).map(|_| Vec3::splat(3.0) + rng.vec3(0.2)).collect();
+    check_queries("coincident, near queries", &coincident, &near_coincident);
+    let huge: Vec<GpuHitPoint> = (0..300).map(|_| hit_point(rng.vec3(10.0), 1e4)).collect();
+    check_queries("huge radii", &huge, &queries[..100]);
+    let tiny: Vec<GpuHitPoint> = (0..3000).map(|_| hit_point(rng.vec3(10.0), 1e-6)).collect();
+    let at_tiny: Vec<Vec3> = tiny
+        .iter()
+        .step_by(3)
+        .map(|h| Vec3::from(h.position) + Vec3::splat(3e-7))
+        .collect();
+    check_queries("tiny radii", &tiny, &at_tiny);
+    let mut mixed = random.clone();
+    for (i, hp) in mixed.iter_mut().enumerate() {
+        if i % 3 == 0 {
+            hp.pixel = NO_PIXEL;
+        }
+        if i % 7 == 0 {
+            hp.radius = 0.0;
+        }
+    }
+    check_queries("some invalid", &mixed, &queries);
+}
+
+#[test]
+fn hit_point_tree_leaves_hold_one_hit_point_each_and_nodes_bound_children() {
+    let mut rng = Lcg(2);
+    let points: Vec<GpuHitPoint> = (0..1000)
+        .map(|_| hit_point(rng.vec3(4.0), 0.01 + rng.next() * 0.2))
+        .collect();
+    let nodes = build_tree(&points);
+    let mut seen = vec![0u32; points.len()];
+    for n in &nodes {
+        if n.count > 0 {
+            assert_eq!(n.count, 1);
+            seen[n.left_or_first as usize] += 1;
+            let hp = &points[n.left_or_first as usize];
+            for a in 0..3 {
+                assert!(
+                    n.min[a] <= hp.position[a] - hp.radius
+                        && n.max[a] >= hp.position[a] + hp.radius
+                );
+            }
+        } else {
+            for child in [
+                &nodes[n.left_or_first as usize],
+                &nodes[n.left_or_first as usize + 1],
+            ] {
+                for a in 0..3 {
+                    assert!(n.min[a] <= child.min[a] && n.max[a] >= child.max[a]);
+                }
+            }
+        }
+    }
+    assert!(
+        seen.iter().all(|&s| s == 1),
+        "every hit point in exactly one leaf"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Photon deposits against a CPU tracer of the same photons.
+
+const PHOTON_SEED: u64 = 7;
+
+fn pcg_hash(input: u32) -> u32 {
+    let state = input.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+/// The shaders' random stream (shaders/common/rng.wgsl).
+struct Rng(u32);
+
+impl Rng {
+    fn new(a: u32, b: u32, c: u32) -> Self {
+        Rng(pcg_hash(a ^ pcg_hash(b ^ pcg_hash(c))))
+    }
+    fn next_f32(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(747796405).wrapping_add(2891336453);
+        let s = self.0;
+        let word = ((s >> ((s >> 28) + 4)) ^ s).wrapping_mul(277803737);
+        (((word >> 22) ^ word) >> 8) as f32 * (1.0 / 16777216.0)
+    }
+}
+
+fn floor_hit_points() -> Vec<GpuHitPoint> {
+    let n = 24;
+    let mut points = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let x = -1.9 + 3.8 * (i as f32 + 0.5) / n as f32;
+            let z = -1.9 + 3.8 * (j as f32 + 0.5) / n as f32;
+            let mut hp = hit_point(
+                Vec3::new(x, 0.0, z),
+                0.12 + 0.05 * ((i * 7 + j * 3) % 5) as f32,
+            );
+            hp.pixel = (j * n + i) as u32;
+            hp.weight = [1.0, 0.5, 0.25];
+            if (i + j) % 11 == 0 {
+                hp.pixel = NO_PIXEL;
+            }
+            if (i * j) % 13 == 5 {
+                // Facing down: photons reach it from behind and must be skipped.
+                hp.normal = [0.0, -1.0, 0.0];
+            }
+            points.push(hp);
+        }
+    }
+    points
+}
+
+/// Traces the photons of iteration 0 on the CPU with the shaders' random numbers and sampling,
+/// depositing into every hit point within reach (all pairs). Caustic mode, one point light.
+fn cpu_caustic_deposits(
+    scene: &Scene,
+    points: &[GpuHitPoint],
+    photons: u32,
+) -> Vec<(u32, [f64; 3])> {
+    let bvh = build_sah(&scene_boxes(scene), 4);
+    let epsilon = GpuScene::new(scene, 32, 32).uniform.epsilon;
+    let light = scene.point_lights[0];
+    let seed = ((PHOTON_SEED ^ (PHOTON_SEED >> 32)) as u32) ^ 0x9e37_79b9;
+    let flux = light.intensity * (4.0 * std::f32::consts::PI) * (1.0 / photons as f32);
+    let mut result = vec![(0u32, [0.0f64; 3]); points.len()];
+    for index in 0..photons {
+        let mut rng = Rng::new(index, 0, seed);
+        let _pick = rng.next_f32();
+        let _position = (rng.next_f32(), rng.next_f32());
+        let u = (rng.next_f32(), rng.next_f32());
+        let z = 1.0 - 2.0 * u.0;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = 2.0 * std::f32::consts::PI * u.1;
+        let mut dir = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+        let mut origin = light.position;
+        let mut after_specular = false;
+        for segments in 1..=11u32 {
+            let Some((t, prim)) = closest_hit(scene, &bvh, origin, dir) else {
+                break;
+            };
+            let tri = &scene.triangles[prim as usize];
+            let normal = (tri.v[1] - tri.v[0]).cross(tri.v[2] - tri.v[0]).normalize();
+            let position = origin + t * dir;
+            let wi = -dir;
+            if wi.dot(normal) <= 0.0 {
+                break;
+            }
+            match scene.materials[tri.material as usize].bsdf {
+                hppm::scene::Bsdf::Mirror => {
+                    dir = 2.0 * wi.dot(normal) * normal - wi;
+                    after_specular = true;
+                    let side = if dir.dot(normal) >= 0.0 { 1.0 } else { -1.0 };
+                    origin = position + side * epsilon * normal;
+                }
+                _ => {
+                    if after_specular {
+                        for i in brute_force(points, position) {
+                            let hp = &points[i as usize];
+                            if Vec3::from(hp.normal).dot(wi) > 0.0 && hp.depth + segments <= 12 {
+                                result[i as usize].0 += 1;
+                                for c in 0..3 {
+                                    result[i as usize].1[c] += (flux[c] * hp.weight[c]) as f64;
+                                }
+                            }
+                        }
+                    }
+                    break;
+                }
+            }
+        }
+    }
+    result
+}
+
+/// Runs hit_point_bvh_sah then photon_trace (caustic mode) alone; returns the deposits.
+fn gpu_caustic_deposits(
+    gpu: &GpuContext,
+    scene: &Scene,
+    points: &[GpuHitPoint],
+    photons: u32,
+    float_atomics: bool,
+) -> Vec<(u32, [f32; 3])> {
+    let h = Harness::new(gpu, scene, (32, 32), float_atomics);
+    let header = HitPointHeader {
+        initial_radius: 0.0,
+        radius_pixels: 1.0,
+        min_radius: 0.0,
+        slots_per_pixel: 1,
+    };
+    let hit_points = hit_point_resource(gpu, header, points);
+    let mut bvh = HitPointBvhSah::default();
+    let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
+    h.run(&mut bvh, 0, PHOTON_SEED);
+    let mut photon_pass = PhotonTrace::new(PhotonTraceParams {
+        mode: PhotonMode::Caustic,
+        photons_per_iteration: Some(photons),
+        ..Default::default()
+    });
+    let out = h.prepare(
+        &mut photon_pass,
+        &[("hit_points", &hit_points), ("hit_point_tree", &tree)],
+    );
+    h.run(&mut photon_pass, 0, PHOTON_SEED);
+    read_deposits(gpu, &out["deposits"])
+}
+
+#[test]
+fn photon_deposits_match_a_cpu_tracer_of_the_same_photons() {
+    let gpu = gpu();
+    let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
+    let points = floor_hit_points();
+    let photons = 1 << 16;
+    let expected = cpu_caustic_deposits(&scene, &points, photons);
+    for float_atomics in [gpu.has_float_atomics(), false] {
+        let got = gpu_caustic_deposits(&gpu, &scene, &points, photons, float_atomics);
+        let expected_total: u64 = expected.iter().map(|e| e.0 as u64).sum();
+        let mut count_mismatch = 0u64;
+        let mut flux_got = [0.0f64; 3];
+        let mut flux_expected = [0.0f64; 3];
+        for (i, (g, e)) in got.iter().zip(&expected).enumerate() {
+            count_mismatch += (g.0 as i64 - e.0 as i64).unsigned_abs();
+            for c in 0..3 {
+                flux_got[c] += g.1[c] as f64;
+                flux_expected[c] += e.1[c];
+            }
+            let hp = &points[i];
+            if !hp.is_valid() || hp.normal[1] < 0.0 {
+                assert_eq!(
+                    g.0, 0,
+                    "hit point {i} is invalid or faces away but got photons"
+                );
+            }
+        }
+        eprintln!(
+            "float atomics {float_atomics}: {expected_total} deposits on the CPU, {count_mismatch} differ on the GPU; flux GPU {flux_got:?} CPU {flux_expected:?}"
+        );
+        assert!(
+            expected_total > 10_000,
+            "the test scene must produce caustic deposits"
+        );
+        // GPU and CPU sines differ in the last bits, which moves a deposit across a radius
+        // boundary now and then; nothing else may differ.
+        assert!(
+            (count_mismatch as f64) < 2e-3 * expected_total as f64,
+            "{count_mismatch} of {expected_total} deposits differ"
+        );
+        for c in 0..3 {
+            let rel = (flux_got[c] - flux_expected[c]).abs() / flux_expected[c];
+            assert!(rel < 2e-3, "channel {c}: flux differs by {rel}");
+        }
+    }
+}
+
+#[test]
+fn float_atomic_and_compare_and_swap_deposits_agree() {
+    let gpu = gpu();
+    if !gpu.has_float_atomics() {
+        eprintln!("adapter has no SHADER_FLOAT32_ATOMIC: only the CAS path exists here");
+    }
+    let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
+    let points = floor_hit_points();
+    let a = gpu_caustic_deposits(&gpu, &scene, &points, 1 << 15, gpu.has_float_atomics());
+    let b = gpu_caustic_deposits(&gpu, &scene, &points, 1 << 15, false);
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        assert_eq!(x.0, y.0, "hit point {i}: counts differ");
+        for c in 0..3 {
+            // Only the order of the float additions may differ.
+            assert!(
+                (x.1[c] - y.1[c]).abs() <= 1e-5 * x.1[c].abs().max(1e-30),
+                "hit point {i}: {:?} vs {:?}",
+                x.1,
+                y.1
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Emitted power.
+
+#[test]
+fn photons_carry_the_lights_power() {
+    let gpu = gpu();
+    let dir = std::env::temp_dir().join(format!("hppm-power-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("two_lights.ron");
+    // A point light (power 4 pi I) and a one-sided area light 2 x 1 (power pi A L).
+    std::fs::write(
+        &path,
+        r#"(
+            camera: (origin: (0, 0, 5), target: (0, 0, 0), up: (0, 1, 0), fov_x: 40, width: 16, height: 16),
+            materials: { "black": Diffuse(reflectance: (0, 0, 0)) },
+            shapes: [
+                (shape: Rectangle, material: "black", emission: Some((1.5, 2, 0.5)), to_world: [Scale((1, 0.5, 1))]),
+            ],
+            point_lights: [(position: (0, 0, 2), intensity: (0.3, 0.1, 0.2))],
+        )"#,
+    )
+    .expect("write scene");
+    let scene = hppm::scene::load(&path).expect("scene");
+    let pi = std::f64::consts::PI;
+    let expected = [
+        pi * 2.0 * 1.5 + 4.0 * pi * 0.3,
+        pi * 2.0 * 2.0 + 4.0 * pi * 0.1,
+        pi * 2.0 * 0.5 + 4.0 * pi * 0.2,
+    ];
+    for float_atomics in [gpu.has_float_atomics(), false] {
+        let h = Harness::new(&gpu, &scene, (16, 16), float_atomics);
+        let header = HitPointHeader {
+            initial_radius: 0.0,
+            radius_pixels: 1.0,
+            min_radius: 0.0,
+            slots_per_pixel: 1,
+        };
+        let hit_points = hit_point_resource(&gpu, header, &[hit_point(Vec3::ZERO, 0.0)]);
+        let mut bvh = HitPointBvhSah::default();
+        let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
+        let mut photons = PhotonTrace::new(PhotonTraceParams {
+            mode: PhotonMode::All,
+            photons_per_iteration: Some(1 << 18),
+            ..Default::default()
+        });
+        h.prepare(
+            &mut photons,
+            &[("hit_points", &hit_points), ("hit_point_tree", &tree)],
+        );
+        h.run(&mut bvh, 0, 1);
+        h.run(&mut photons, 0, 1);
+        let emitted = photons.emitted_flux(&gpu).expect("readback");
+        eprintln!("float atomics {float_atomics}: emitted {emitted:?}, analytic {expected:?}");
+        for c in 0..3 {
+            let rel = (emitted[c] as f64 - expected[c]).abs() / expected[c];
+            // Which light each photon picks is random: about 0.2% noise for 2^18 photons.
+            assert!(
+                rel < 0.01,
+                "channel {c}: emitted {} vs power {}",
+                emitted[c],
+                expected[c]
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Merge against the formulas in f64.
+
+struct CpuSlot {
+    n: f64,
+    r: f64,
+    tau: [f64; 3],
+    photons: u64,
+}
+
+#[test]
+fn merge_matches_the_progressive_update_in_f64() {
+    let gpu = gpu();
+    let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
+    let (width, height, slots) = (4u32, 2u32, 2u32);
+    let count = (width * height * slots) as usize;
+    let alpha = 0.7f64;
+    let min_radius = 1e-5 * GpuScene::new(&scene, width, height).uniform.scene_radius as f64;
+    let mut rng = Lcg(9);
+    let mut points: Vec<GpuHitPoint> = (0..count)
+        .map(|i| {
+            let mut hp = hit_point(rng.vec3(1.0), 0.05 + 0.1 * rng.next());
+            hp.pixel = i as u32 / slots;
+            hp
+        })
+        .collect();
+    points[5].radius = 0.0; // never used: contributes nothing
+    points[6].radius = 1.5 * min_radius as f32; // will hit the floor
+    // Iterations of (count, flux) per slot; the last has counts beyond 2^24.
+    let iterations: Vec<Vec<(u32, [f32; 3])>> = (0..4)
+        .map(|it| {
+            (0..count)
+                .map(|i| {
+                    let m = match (it, i % 4) {
+                        (3, _) => (1 << 24) + 3 + i as u32,
+                        (_, 0) => 0,
+                        _ => 1 + (rng.next() * 40.0) as u32,
+                    };
+                    let f = [rng.next(), rng.next(), rng.next()].map(|v| v * m as f32 * 0.01);
+                    (m, f)
+                })
+                .collect()
+        })
+        .collect();
+
+    let mut results = Vec::new();
+    for float_atomics in [gpu.has_float_atomics(), false] {
+        let h = Harness::new(&gpu, &scene, (width, height), float_atomics);
+        let header = HitPointHeader {
+            initial_radius: 0.0,
+            radius_pixels: 1.0,
+            min_radius: 0.0,
+            slots_per_pixel: slots,
+        };
+        let hit_points = hit_point_resource(&gpu, header, &points);
+        let deposits_buffer = gpu
+            .create_buffer(
+                "test deposits",
+                count as u64 * 16,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            )
+            .expect("buffer");
+        let deposits = Resource::new(ResourceKind::Deposits, deposits_buffer, count as u64);
+        let mut merge = Merge::new(
+            MergeParams {
+                alpha: alpha as f32,
+                ..Default::default()
+            },
+            false,
+        );
+        let out = h.prepare(
+            &mut merge,
+            &[("hit_points", &hit_points), ("deposits", &deposits)],
+        );
+        for (it, deposit) in iterations.iter().enumerate() {
+            let words: Vec<[u32; 4]> = deposit
+                .iter()
+                .map(|(m, f)| [*m, f[0].to_bits(), f[1].to_bits(), f[2].to_bits()])
+                .collect();
+            gpu.queue
+                .write_buffer(&deposits.buffer, 0, bytemuck::cast_slice(&words));
+            h.run(&mut merge, it as u64, 0);
+        }
+        let stats = merge.slot_stats(&gpu).expect("stats");
+        let radii: Vec<f32> =
+            hppm::passes::hit_points::read_hit_points(&gpu, &hit_points.buffer, count as u64)
+                .expect("readback")
+                .iter()
+                .map(|h| h.radius)
+                .collect();
+        let radiance: Vec<[f32; 4]> = gpu
+            .read_pod(&out["radiance"].buffer, (width * height) as usize)
+            .expect("readback");
+        results.push((stats, radii, radiance));
+    }
+
+    // The same update on the CPU in f64.
+    let mut cpu: Vec<CpuSlot> = points
+        .iter()
+        .map(|p| CpuSlot {
+            n: 0.0,
+            r: p.radius as f64,
+            tau: [0.0; 3],
+            photons: 0,
+        })
+        .collect();
+    for deposit in &iterations {
+        for (s, (m, f)) in cpu.iter_mut().zip(deposit) {
+            if *m == 0 || s.r <= 0.0 {
+                continue;
+            }
+            let m = *m as f64;
+            let r_new = (s.r * ((s.n + alpha * m) / (s.n + m)).sqrt()).max(min_radius);
+            for c in 0..3 {
+                s.tau[c] = (s.tau[c] + f[c] as f64) * (r_new / s.r).powi(2);
+            }
+            s.n += alpha * m;
+            s.r = r_new;
+            s.photons += m as u64;
+        }
+    }
+    let close = |a: f64, b: f64| (a - b).abs() <= 2e-5 * b.abs().max(1e-12);
+    for (stats, radii, radiance) in &results {
+        for (i, s) in cpu.iter().enumerate() {
+            assert_eq!(stats[i].photons, s.photons, "slot {i}: exact photon total");
+            assert!(
+                close(stats[i].n as f64, s.n),
+                "slot {i}: N {} vs {}",
+                stats[i].n,
+                s.n
+            );
+            assert!(
+                close(radii[i] as f64, s.r),
+                "slot {i}: R {} vs {}",
+                radii[i],
+                s.r
+            );
+            for c in 0..3 {
+                assert!(
+                    close(stats[i].tau[c] as f64, s.tau[c]),
+                    "slot {i}: tau {:?} vs {:?}",
+                    stats[i].tau,
+                    s.tau
+                );
+            }
+        }
+        assert!(cpu[6].r == min_radius, "slot 6 reached the radius floor");
+        assert!(
+            cpu.iter().any(|s| s.photons > 1 << 24),
+            "totals beyond 2^24 are exercised"
+        );
+        let k = iterations.len() as f64;
+        for p in 0..(width * height) as usize {
+            for c in 0..3 {
+                let expected: f64 = (0..slots as usize)
+                    .map(|j| &cpu[p * slots as usize + j])
+                    .filter(|s| s.r > 0.0)
+                    .map(|s| s.tau[c] / (std::f64::consts::PI * s.r * s.r) / k)
+                    .sum();
+                assert!(
+                    close(radiance[p][c] as f64, expected),
+                    "pixel {p}: {} vs {expected}",
+                    radiance[p][c]
+                );
+            }
+            assert_eq!(radiance[p][3], 1.0);
+        }
+    }
+    eprintln!(
+        "merge: {} slots x {} iterations match the f64 update",
+        count,
+        iterations.len()
+    );
+}
