@@ -93,6 +93,8 @@ pub struct Renderer<'a> {
     iteration: u64,
     spp_per_iteration: u64,
     photons_per_iteration: u64,
+    /// Seconds spent in each node (schedule order) when profiling; `None` otherwise.
+    node_seconds: Option<Vec<f64>>,
 }
 
 impl<'a> Renderer<'a> {
@@ -195,6 +197,7 @@ impl<'a> Renderer<'a> {
             iteration: 0,
             spp_per_iteration,
             photons_per_iteration,
+            node_seconds: None,
         })
     }
 
@@ -208,11 +211,38 @@ impl<'a> Renderer<'a> {
             seed: self.seed,
         };
         for &node in &self.graph.order {
+            let start = Instant::now();
             self.graph.nodes[node].pass.execute(&ctx, &mut recorder)?;
+            if let Some(seconds) = &mut self.node_seconds {
+                // Each node's work is submitted and waited for on its own: wall time per node,
+                // at the cost of the overlap a real render has.
+                recorder.flush()?;
+                seconds[node] += start.elapsed().as_secs_f64();
+            }
         }
         recorder.submit();
         self.iteration += 1;
         Ok(())
+    }
+
+    /// Times every node from now on (CPU wall clock, GPU waited for after each node).
+    pub fn enable_profiling(&mut self) {
+        self.node_seconds = Some(vec![0.0; self.graph.nodes.len()]);
+    }
+
+    /// (node name, pass kind, seconds) in schedule order, when profiling.
+    pub fn node_times(&self) -> Vec<(String, &'static str, f64)> {
+        let Some(seconds) = &self.node_seconds else {
+            return Vec::new();
+        };
+        self.graph
+            .order
+            .iter()
+            .map(|&n| {
+                let node = &self.graph.nodes[n];
+                (node.name.clone(), node.kind.name, seconds[n])
+            })
+            .collect()
     }
 
     pub fn iterations(&self) -> u64 {

@@ -358,6 +358,7 @@ fn gpu_caustic_deposits(
     points: &[GpuHitPoint],
     photons: u32,
     float_atomics: bool,
+    aim: bool,
 ) -> Vec<(u32, [f32; 3])> {
     let h = Harness::new(gpu, scene, (32, 32), float_atomics);
     let header = HitPointHeader {
@@ -373,6 +374,7 @@ fn gpu_caustic_deposits(
     let mut photon_pass = PhotonTrace::new(PhotonTraceParams {
         mode: PhotonMode::Caustic,
         photons_per_iteration: Some(photons),
+        aim,
         ..Default::default()
     });
     let out = h.prepare(
@@ -388,10 +390,10 @@ fn photon_deposits_match_a_cpu_tracer_of_the_same_photons() {
     let gpu = gpu();
     let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
     let points = floor_hit_points();
-    let photons = 1 << 16;
+    let photons = 1 << 18;
     let expected = cpu_caustic_deposits(&scene, &points, photons);
     for float_atomics in [gpu.has_float_atomics(), false] {
-        let got = gpu_caustic_deposits(&gpu, &scene, &points, photons, float_atomics);
+        let got = gpu_caustic_deposits(&gpu, &scene, &points, photons, float_atomics, false);
         let expected_total: u64 = expected.iter().map(|e| e.0 as u64).sum();
         let mut count_mismatch = 0u64;
         let mut flux_got = [0.0f64; 3];
@@ -438,8 +440,15 @@ fn float_atomic_and_compare_and_swap_deposits_agree() {
     }
     let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
     let points = floor_hit_points();
-    let a = gpu_caustic_deposits(&gpu, &scene, &points, 1 << 15, gpu.has_float_atomics());
-    let b = gpu_caustic_deposits(&gpu, &scene, &points, 1 << 15, false);
+    let a = gpu_caustic_deposits(
+        &gpu,
+        &scene,
+        &points,
+        1 << 15,
+        gpu.has_float_atomics(),
+        true,
+    );
+    let b = gpu_caustic_deposits(&gpu, &scene, &points, 1 << 15, false, true);
     for (i, (x, y)) in a.iter().zip(&b).enumerate() {
         assert_eq!(x.0, y.0, "hit point {i}: counts differ");
         for c in 0..3 {
@@ -451,6 +460,52 @@ fn float_atomic_and_compare_and_swap_deposits_agree() {
                 y.1
             );
         }
+    }
+}
+
+/// Aiming caustic photons at the specular surfaces' bounding sphere only changes which photons
+/// are spent: the flux each hit point gathers is the same in expectation, with more deposits.
+#[test]
+fn aimed_caustic_photons_gather_the_same_flux() {
+    let gpu = gpu();
+    let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
+    let points = floor_hit_points();
+    let photons = 1 << 20;
+    let fa = gpu.has_float_atomics();
+    let plain = gpu_caustic_deposits(&gpu, &scene, &points, photons, fa, false);
+    let aimed = gpu_caustic_deposits(&gpu, &scene, &points, photons, fa, true);
+    let total = |d: &[(u32, [f32; 3])]| -> (u64, f64) {
+        (
+            d.iter().map(|x| x.0 as u64).sum(),
+            d.iter().map(|x| x.1[0] as f64).sum(),
+        )
+    };
+    let (n_plain, f_plain) = total(&plain);
+    let (n_aimed, f_aimed) = total(&aimed);
+    eprintln!(
+        "unaimed: {n_plain} deposits, flux {f_plain:.4}; aimed: {n_aimed} deposits, flux {f_aimed:.4}"
+    );
+    assert!(
+        (f_aimed - f_plain).abs() < 0.02 * f_plain,
+        "total flux {f_aimed} vs {f_plain}"
+    );
+    assert!(n_aimed > n_plain, "aiming must not lose caustic photons");
+    // Per quarter of the floor, so a wrong direction distribution shows too.
+    for quarter in 0..4 {
+        let sum = |d: &[(u32, [f32; 3])]| -> f64 {
+            (0..points.len())
+                .filter(|&i| {
+                    let p = points[i].position;
+                    ((p[0] > 0.0) as usize) * 2 + (p[2] > 0.0) as usize == quarter
+                })
+                .map(|i| d[i].1[0] as f64)
+                .sum()
+        };
+        let (a, b) = (sum(&aimed), sum(&plain));
+        assert!(
+            (a - b).abs() <= 0.05 * b,
+            "quarter {quarter}: aimed {a} vs unaimed {b}"
+        );
     }
 }
 
@@ -634,8 +689,8 @@ fn merge_matches_the_progressive_update_in_f64() {
             }
             let m = *m as f64;
             let r_new = (s.r * ((s.n + alpha * m) / (s.n + m)).sqrt()).max(min_radius);
-            for c in 0..3 {
-                s.tau[c] = (s.tau[c] + f[c] as f64) * (r_new / s.r).powi(2);
+            for (tau, flux) in s.tau.iter_mut().zip(f) {
+                *tau = (*tau + *flux as f64) * (r_new / s.r).powi(2);
             }
             s.n += alpha * m;
             s.r = r_new;
@@ -673,20 +728,19 @@ fn merge_matches_the_progressive_update_in_f64() {
             "totals beyond 2^24 are exercised"
         );
         let k = iterations.len() as f64;
-        for p in 0..(width * height) as usize {
-            for c in 0..3 {
+        for (p, pixel) in radiance.iter().enumerate() {
+            for (c, &value) in pixel[..3].iter().enumerate() {
                 let expected: f64 = (0..slots as usize)
                     .map(|j| &cpu[p * slots as usize + j])
                     .filter(|s| s.r > 0.0)
                     .map(|s| s.tau[c] / (std::f64::consts::PI * s.r * s.r) / k)
                     .sum();
                 assert!(
-                    close(radiance[p][c] as f64, expected),
-                    "pixel {p}: {} vs {expected}",
-                    radiance[p][c]
+                    close(value as f64, expected),
+                    "pixel {p}: {value} vs {expected}"
                 );
             }
-            assert_eq!(radiance[p][3], 1.0);
+            assert_eq!(pixel[3], 1.0);
         }
     }
     eprintln!(

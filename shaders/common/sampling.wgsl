@@ -30,6 +30,17 @@ fn sample_uniform_sphere(u: vec2<f32>) -> vec3<f32> {
     return vec3<f32>(r * cos(phi), r * sin(phi), z);
 }
 
+// Uniform direction within the cone around unit `axis` whose solid angle is
+// 2 pi `one_minus_cos_max`; pdf = 1 / (2 pi one_minus_cos_max). Taking 1 - cos(theta_max)
+// rather than cos(theta_max) keeps narrow cones accurate.
+fn sample_cone(axis: vec3<f32>, one_minus_cos_max: f32, u: vec2<f32>) -> vec3<f32> {
+    let cos_t = 1.0 - u.x * one_minus_cos_max;
+    let sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));
+    let phi = 2.0 * PI * u.y;
+    let local = vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+    return normalize(basis_from_normal(axis) * local);
+}
+
 // Uniform barycentrics (b1, b2) on a triangle (square-root parametrisation).
 fn sample_triangle_barycentrics(u: vec2<f32>) -> vec2<f32> {
     let su = sqrt(u.x);

@@ -24,6 +24,9 @@ struct SceneUniform {
     pad_a: u32,
     pad_b: u32,
     pad_c: u32,
+    // A sphere around every specular surface (radius 0 when there is none).
+    specular_center: vec3<f32>,
+    specular_radius: f32,
 }
 
 struct BvhNode {

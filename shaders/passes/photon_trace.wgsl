@@ -6,9 +6,14 @@
 // Mode CAUSTIC deposits only at the first diffuse vertex after at least one specular vertex and
 // stops there (L S+ D: what the hybrid's path tracer leaves out). Mode ALL deposits at every
 // diffuse vertex and continues (photon mapping alone).
+//
+// With `aim` (caustic mode only) photons leave only in directions that meet the sphere around
+// every specular surface (Jensen's projection maps, reduced to one sphere): a photon sent
+// elsewhere reaches a diffuse surface first and would be discarded, so leaving those directions
+// out changes nothing but the cost. The flux is divided by the cone's density instead.
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
-#import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, max_component, any_not_finite}
+#import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
 #import common::scene::{scene_info, materials, lights, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_origin}
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::{sample_dielectric, reflect_about}
@@ -25,6 +30,11 @@ struct PhotonParams {
     flux_scale: f32,
     // Workgroups per row of the 2D dispatch (one row holds at most 65535).
     groups_per_row: u32,
+    // 1: aim caustic photons at the specular surfaces' bounding sphere.
+    aim: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: PhotonParams;
@@ -91,6 +101,36 @@ fn add_emitted(channel: u32, value: f32) {
 #endif
 }
 
+// A direction towards the specular bounding sphere, uniform over the cone it subtends from
+// `origin`, with the cone's solid angle; `valid` is false where no cone applies (no specular
+// surface, aiming off, or `origin` inside the sphere).
+struct Aim {
+    dir: vec3<f32>,
+    solid_angle: f32,
+    valid: bool,
+}
+
+fn aim_at_specular(origin: vec3<f32>, u: vec2<f32>) -> Aim {
+    var aim: Aim;
+    aim.valid = false;
+    let radius = scene_info.specular_radius;
+    if params.aim == 0u || params.mode != MODE_CAUSTIC || radius <= 0.0 {
+        return aim;
+    }
+    let to_center = scene_info.specular_center - origin;
+    let d2 = dot(to_center, to_center);
+    let r2 = radius * radius;
+    if d2 <= r2 {
+        return aim;
+    }
+    let s2 = r2 / d2;
+    let one_minus_cos = s2 / (1.0 + sqrt(1.0 - s2));
+    aim.dir = sample_cone(to_center / sqrt(d2), one_minus_cos, u);
+    aim.solid_angle = 2.0 * PI * one_minus_cos;
+    aim.valid = true;
+    return aim;
+}
+
 struct Photon {
     origin: vec3<f32>,
     dir: vec3<f32>,
@@ -111,16 +151,31 @@ fn emit_photon(rng: ptr<function, u32>) -> Photon {
     let u_position = rng_next_vec2(rng);
     let u_direction = rng_next_vec2(rng);
     if light.kind == LIGHT_POINT {
-        // Intensity I over the sphere of directions: power 4 pi I.
         photon.origin = light.position;
-        photon.dir = sample_uniform_sphere(u_direction);
-        photon.flux = light.radiance * (4.0 * PI / light.select_prob);
+        let aim = aim_at_specular(light.position, u_direction);
+        if aim.valid {
+            photon.dir = aim.dir;
+            photon.flux = light.radiance * (aim.solid_angle / light.select_prob);
+        } else {
+            // Intensity I over the sphere of directions: power 4 pi I.
+            photon.dir = sample_uniform_sphere(u_direction);
+            photon.flux = light.radiance * (4.0 * PI / light.select_prob);
+        }
     } else {
-        // One-sided Lambertian emitter of radiance L and area A: power pi A L.
         let point = sample_area_light_point(light, u_position);
-        photon.dir = sample_cosine_hemisphere(point.normal, u_direction);
+        let aim = aim_at_specular(point.position, u_direction);
+        if aim.valid {
+            // L cos / (pdf_position pdf_direction) with pdfs 1 / A and 1 / solid angle; the
+            // part of the cone behind the light carries nothing.
+            photon.dir = aim.dir;
+            let cos_light = max(dot(aim.dir, point.normal), 0.0);
+            photon.flux = light.radiance * (cos_light * light.area * aim.solid_angle / light.select_prob);
+        } else {
+            // One-sided Lambertian emitter of radiance L and area A: power pi A L.
+            photon.dir = sample_cosine_hemisphere(point.normal, u_direction);
+            photon.flux = light.radiance * (PI * light.area / light.select_prob);
+        }
         photon.origin = offset_origin(point.position, point.normal, photon.dir);
-        photon.flux = light.radiance * (PI * light.area / light.select_prob);
     }
     photon.flux *= params.flux_scale;
     photon.valid = !any_not_finite(photon.flux) && max_component(photon.flux) > 0.0;

@@ -208,7 +208,7 @@ impl Pass for PathTrace {
         // A default the estimator overwrites when it is prepared.
         let header = HitPointHeader {
             initial_radius: 0.0,
-            radius_pixels: 2.0,
+            radius_pixels: 1.0,
             min_radius: MIN_RADIUS_FRACTION * ctx.scene.uniform.scene_radius,
             slots_per_pixel: merge_slots,
         };

@@ -62,6 +62,9 @@ pub struct PhotonTraceParams {
     pub max_depth: Option<u32>,
     /// Photon segments after which Russian roulette starts; `None` takes the scene's.
     pub rr_depth: Option<u32>,
+    /// Caustic mode: emit only towards the sphere around the specular surfaces (unbiased: other
+    /// photons could not become caustic photons). `false` emits over the whole emission lobe.
+    pub aim: bool,
 }
 
 impl Default for PhotonTraceParams {
@@ -71,6 +74,7 @@ impl Default for PhotonTraceParams {
             photons_per_iteration: None,
             max_depth: None,
             rr_depth: None,
+            aim: true,
         }
     }
 }
@@ -86,6 +90,8 @@ struct GpuParams {
     rr_depth: u32,
     flux_scale: f32,
     groups_per_row: u32,
+    aim: u32,
+    _pad: [u32; 3],
 }
 
 struct Prepared {
@@ -212,6 +218,8 @@ impl Pass for PhotonTrace {
             rr_depth: p.rr_depth,
             flux_scale: (1.0 / p.photons.max(1) as f64) as f32,
             groups_per_row,
+            aim: self.params.aim as u32,
+            _pad: [0; 3],
         };
         ctx.gpu
             .queue

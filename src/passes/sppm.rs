@@ -56,7 +56,7 @@ impl Default for MergeParams {
         Self {
             alpha: 0.7,
             initial_radius: None,
-            radius_pixels: 2.0,
+            radius_pixels: 1.0,
         }
     }
 }

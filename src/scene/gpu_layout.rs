@@ -96,6 +96,10 @@ pub struct GpuSceneUniform {
     pub max_depth: u32,
     pub rr_depth: u32,
     pub _pad: [u32; 3],
+    /// A sphere around every specular (delta) surface; radius 0 when there is none. Caustic
+    /// photons are aimed at it: a photon that misses it can never cross a specular vertex.
+    pub specular_center: [f32; 3],
+    pub specular_radius: f32,
 }
 
 /// Everything the GPU needs to trace rays through a scene. Arrays are never empty (a zeroed
@@ -292,6 +296,11 @@ impl GpuScene {
         uniform.num_lights = lights.len() as u32;
         uniform.max_depth = scene.integrator.max_depth.unwrap_or(UNBOUNDED);
         uniform.rr_depth = scene.integrator.rr_depth.unwrap_or(UNBOUNDED);
+        if let Some((center, radius)) = specular_bounds(scene) {
+            uniform.specular_center = center.to_array();
+            // Padded so that rounding never lets a specular surface poke out of the sphere.
+            uniform.specular_radius = radius * (1.0 + 1e-4) + uniform.epsilon;
+        }
 
         Self {
             uniform,
@@ -304,6 +313,37 @@ impl GpuScene {
             light_cdf: non_empty(light_cdf),
         }
     }
+}
+
+/// A sphere containing every specular (delta) primitive: centred on their bounding box, with
+/// the radius that just reaches the farthest vertex or sphere surface, so that one specular
+/// sphere gets exactly its own bounds. `None` when the scene has no specular surface.
+fn specular_bounds(scene: &Scene) -> Option<(Vec3, f32)> {
+    let is_specular = |material: u32| {
+        scene
+            .materials
+            .get(material as usize)
+            .is_some_and(|m| m.bsdf.is_delta())
+    };
+    let triangles = || scene.triangles.iter().filter(|t| is_specular(t.material));
+    let spheres = || scene.spheres.iter().filter(|s| is_specular(s.material));
+    let mut bounds = bvh::Aabb::EMPTY;
+    for t in triangles() {
+        bounds = bounds.union(bvh::Aabb::of_triangle(&t.v));
+    }
+    for s in spheres() {
+        bounds = bounds.union(bvh::Aabb::of_sphere(s.center, s.radius));
+    }
+    if bounds.is_empty() {
+        return None;
+    }
+    let center = bounds.centroid();
+    let radius = triangles()
+        .flat_map(|t| t.v)
+        .map(|v| v.distance(center))
+        .chain(spheres().map(|s| s.center.distance(center) + s.radius))
+        .fold(0.0f32, f32::max);
+    Some((center, radius))
 }
 
 fn non_empty<T: Zeroable>(mut v: Vec<T>) -> Vec<T> {
