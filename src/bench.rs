@@ -93,16 +93,21 @@ pub fn run(
     }
     print!("{table}");
     if let Some(path) = write {
-        let io = |source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        let mut file = std::fs::OpenOptions::new()
-            .create(true)
-            .append(true)
-            .open(path)
-            .map_err(io)?;
-        file.write_all(table.as_bytes()).map_err(io)?;
+        append_markdown(path, &table)?;
     }
     Ok(())
+}
+
+/// Appends `text` to the Markdown file at `path` (created if missing).
+pub fn append_markdown(path: &Path, text: &str) -> Result<(), Error> {
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .map_err(io)?;
+    file.write_all(text.as_bytes()).map_err(io)
 }

@@ -2,6 +2,7 @@
 //! render graph of wgpu compute passes described in RON.
 
 pub mod bench;
+pub mod bench_hybrid;
 pub mod error;
 pub mod gpu;
 pub mod graph;

@@ -32,7 +32,8 @@ enum Command {
         #[arg(long)]
         dot: bool,
     },
-    /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes.
+    /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes; with
+    /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error).
     Bench(BenchArgs),
 }
 
@@ -81,6 +82,15 @@ struct BenchArgs {
     /// Append the results to this Markdown file (e.g. BENCHMARKS.md).
     #[arg(long)]
     write: Option<PathBuf>,
+    /// Benchmark the hybrid instead (needs tests/refs from the source tree).
+    #[arg(long)]
+    hybrid: bool,
+    /// Wall-clock budgets for the equal-time error table, comma-separated (with --hybrid).
+    #[arg(long, value_delimiter = ',', default_value = "10,60")]
+    seconds: Vec<f64>,
+    /// Iterations of the 512x512 report workload to run (with --hybrid).
+    #[arg(long, default_value_t = 4)]
+    workload_iterations: u64,
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
@@ -270,12 +280,27 @@ fn show_graph(file: &Path, dot: bool) -> Result<(), Error> {
     Ok(())
 }
 
+fn bench_hybrid(args: &BenchArgs) -> Result<(), Error> {
+    let options = hppm::bench_hybrid::HybridBenchOptions {
+        adapter: args.adapter.as_deref(),
+        seconds: args.seconds.clone(),
+        workload_iterations: args.workload_iterations.max(1),
+    };
+    let text = hppm::bench_hybrid::run(&options, bundled)?;
+    print!("{text}");
+    if let Some(path) = &args.write {
+        bench::append_markdown(path, &text)?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),
         Command::Info => info(),
         Command::Graph { file, dot } => show_graph(&file, dot),
+        Command::Bench(args) if args.hybrid => bench_hybrid(&args),
         Command::Bench(args) => bench::run(
             args.adapter.as_deref(),
             args.spp,

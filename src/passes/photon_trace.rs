@@ -20,9 +20,12 @@ const SHADER: &str = "shaders/passes/photon_trace.wgsl";
 const WORKGROUP: u32 = 64;
 /// Workgroups per row of the dispatch grid (wgpu's limit per dimension is 65535).
 const GROUPS_PER_ROW: u32 = 32768;
-/// Photons per iteration per image pixel when the graph does not say. Chosen so that photon
-/// tracing and the camera pass take similar time (BENCHMARKS.md).
-pub const DEFAULT_PHOTONS_PER_PIXEL: u32 = 4;
+/// Photons per iteration per image pixel when the graph does not say, by mode. Caustic: of 1/2,
+/// 1 and 4 per pixel, 1 gave the lowest error after equal time on both the glass Cornell box and
+/// the point-light caustic (BENCHMARKS.md). All (photon mapping alone, where photons carry every
+/// bounce of indirect light): 4.
+pub const DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC: u32 = 1;
+pub const DEFAULT_PHOTONS_PER_PIXEL_ALL: u32 = 4;
 /// Decorrelates photon random streams from camera streams that share the seed.
 const PHOTON_STREAM: u32 = 0x9e37_79b9;
 
@@ -56,7 +59,7 @@ pub enum PhotonMode {
 #[serde(default, deny_unknown_fields)]
 pub struct PhotonTraceParams {
     pub mode: PhotonMode,
-    /// `None`: DEFAULT_PHOTONS_PER_PIXEL per image pixel.
+    /// `None`: DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC or _ALL per image pixel.
     pub photons_per_iteration: Option<u32>,
     /// Longest full path (camera segments + photon segments); `None` takes the scene's.
     pub max_depth: Option<u32>,
@@ -140,7 +143,13 @@ impl Pass for PhotonTrace {
         let pixels = ctx.width as u64 * ctx.height as u64;
         let photons = match self.params.photons_per_iteration {
             Some(n) => n,
-            None => u32::try_from(pixels * DEFAULT_PHOTONS_PER_PIXEL as u64).unwrap_or(u32::MAX),
+            None => {
+                let per_pixel = match self.params.mode {
+                    PhotonMode::Caustic => DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC,
+                    PhotonMode::All => DEFAULT_PHOTONS_PER_PIXEL_ALL,
+                };
+                u32::try_from(pixels * per_pixel as u64).unwrap_or(u32::MAX)
+            }
         };
         let deposits = gpu.create_buffer(
             "photon_trace deposits",

@@ -3,8 +3,8 @@
 //! passes repeat; the merge is the same as `sppm`'s (src/passes/sppm.rs). Path tracing, when the
 //! graph has it, still adds a sample per pixel every iteration.
 
-use crate::graph::pass::{Pass, PassKind, parse_params};
-use crate::passes::sppm::{Merge, SLOTS};
+use crate::graph::pass::{Pass, PassKind};
+use crate::passes::sppm::{Merge, MergeParams, SLOTS};
 
 pub const KIND: PassKind = PassKind {
     name: "ppm",
@@ -14,5 +14,5 @@ pub const KIND: PassKind = PassKind {
 };
 
 fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
-    Ok(Box::new(Merge::new(parse_params(params)?, true)))
+    Ok(Box::new(Merge::new(MergeParams::parse(params)?, true)))
 }

@@ -37,7 +37,7 @@ pub const KIND: PassKind = PassKind {
 };
 
 fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
-    Ok(Box::new(Merge::new(parse_params(params)?, false)))
+    Ok(Box::new(Merge::new(MergeParams::parse(params)?, false)))
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -49,6 +49,35 @@ pub struct MergeParams {
     pub initial_radius: Option<f32>,
     /// Initial radius in pixel footprints (the width of a pixel at the hit point's distance).
     pub radius_pixels: f32,
+}
+
+impl MergeParams {
+    /// Parses and range-checks the params; an error points at the params in the graph file.
+    pub fn parse(text: &str) -> Result<Self, ron::error::SpannedError> {
+        let params: MergeParams = parse_params(text)?;
+        let problem = if !(params.alpha > 0.0 && params.alpha < 1.0) {
+            Some(format!("alpha must lie in (0, 1), got {}", params.alpha))
+        } else if params
+            .initial_radius
+            .is_some_and(|r| !(r.is_finite() && r > 0.0))
+        {
+            Some("initial_radius must be a positive finite number".to_string())
+        } else if !(params.radius_pixels.is_finite() && params.radius_pixels > 0.0) {
+            Some("radius_pixels must be a positive finite number".to_string())
+        } else {
+            None
+        };
+        match problem {
+            None => Ok(params),
+            Some(message) => {
+                let start = ron::error::Position { line: 1, col: 1 };
+                Err(ron::error::SpannedError {
+                    code: ron::Error::Message(message),
+                    span: ron::error::Span { start, end: start },
+                })
+            }
+        }
+    }
 }
 
 impl Default for MergeParams {
@@ -99,23 +128,6 @@ impl Merge {
         }
     }
 
-    fn check_params(&self) -> Result<(), Error> {
-        let p = &self.params;
-        let bad = |field: &str, why: &str| Err(Error::Other(format!("merge param {field} {why}")));
-        if !(p.alpha > 0.0 && p.alpha < 1.0) {
-            return bad("alpha", &format!("must lie in (0, 1), got {}", p.alpha));
-        }
-        if p.initial_radius
-            .is_some_and(|r| !(r.is_finite() && r > 0.0))
-        {
-            return bad("initial_radius", "must be a positive finite number");
-        }
-        if !(p.radius_pixels.is_finite() && p.radius_pixels > 0.0) {
-            return bad("radius_pixels", "must be a positive finite number");
-        }
-        Ok(())
-    }
-
     /// Per slot: tau (RGB), N, and the exact photon total. Reads back; for tests and reports.
     pub fn slot_stats(&self, gpu: &GpuContext) -> Result<Vec<SlotStats>, Error> {
         let Some(p) = &self.prepared else {
@@ -149,7 +161,6 @@ pub struct SlotStats {
 
 impl Pass for Merge {
     fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
-        self.check_params()?;
         let gpu = ctx.gpu;
         let hit_points = ctx.input("hit_points")?;
         let deposits = ctx.input("deposits")?;
