@@ -143,8 +143,8 @@ fn workload_table(
     iterations: u64,
 ) -> Result<String, Error> {
     let scene = scene::load(&locate(GLASS))?;
-    let mut out = format!(
-        "| graph | iterations run | s/iteration | node ms/iteration | extrapolated 512 spp (s) |\n|---|---|---|---|---|\n"
+    let mut out = String::from(
+        "| graph | iterations run | s/iteration | node ms/iteration | extrapolated 512 spp (s) |\n|---|---|---|---|---|\n",
     );
     for graph_path in GRAPHS {
         let graph = graph_with(
