@@ -149,6 +149,29 @@ impl<'a> Recorder<'a> {
         })
     }
 
+    /// Records one dispatch of `pipeline` with the scene as bind group 0 and the pass's own
+    /// resources as group 1 (the layout every pass kernel follows).
+    pub fn dispatch(
+        &mut self,
+        label: &str,
+        pipeline: &wgpu::ComputePipeline,
+        scene: &wgpu::BindGroup,
+        pass_group: &wgpu::BindGroup,
+        workgroups: [u32; 3],
+    ) {
+        let mut pass = self
+            .encoder()
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(label),
+                timestamp_writes: None,
+            });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, scene, &[]);
+        pass.set_bind_group(1, pass_group, &[]);
+        let [x, y, z] = workgroups;
+        pass.dispatch_workgroups(x, y, z);
+    }
+
     /// Submits what was recorded (if anything) without waiting.
     pub fn submit(&mut self) {
         if let Some(encoder) = self.encoder.take() {

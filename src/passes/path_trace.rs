@@ -266,16 +266,13 @@ impl Pass for PathTrace {
         ctx.gpu
             .queue
             .write_buffer(&p.params, 0, bytemuck::bytes_of(&gpu_params));
-        let mut pass = recorder
-            .encoder()
-            .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("path_trace"),
-                timestamp_writes: None,
-            });
-        pass.set_pipeline(&p.pipeline);
-        pass.set_bind_group(0, &ctx.scene.bind_group, &[]);
-        pass.set_bind_group(1, &p.bind_group, &[]);
-        pass.dispatch_workgroups(p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1);
+        recorder.dispatch(
+            "path_trace",
+            &p.pipeline,
+            &ctx.scene.bind_group,
+            &p.bind_group,
+            [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
+        );
         Ok(())
     }
 

@@ -233,17 +233,15 @@ impl Pass for PhotonTrace {
         ctx.gpu
             .queue
             .write_buffer(&p.params, 0, bytemuck::bytes_of(&gpu_params));
-        let encoder = recorder.encoder();
-        encoder.clear_buffer(&p.deposits.buffer, 0, None);
+        recorder.encoder().clear_buffer(&p.deposits.buffer, 0, None);
         if groups > 0 {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("photon_trace"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&p.pipeline);
-            pass.set_bind_group(0, &ctx.scene.bind_group, &[]);
-            pass.set_bind_group(1, &p.bind_group, &[]);
-            pass.dispatch_workgroups(groups_per_row, groups.div_ceil(groups_per_row), 1);
+            recorder.dispatch(
+                "photon_trace",
+                &p.pipeline,
+                &ctx.scene.bind_group,
+                &p.bind_group,
+                [groups_per_row, groups.div_ceil(groups_per_row), 1],
+            );
         }
         self.iterations += 1;
         Ok(())

@@ -128,16 +128,13 @@ impl Pass for Resolve {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let mut pass = recorder
-            .encoder()
-            .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("resolve"),
-                timestamp_writes: None,
-            });
-        pass.set_pipeline(&p.pipeline);
-        pass.set_bind_group(0, &ctx.scene.bind_group, &[]);
-        pass.set_bind_group(1, &p.bind_group, &[]);
-        pass.dispatch_workgroups(p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1);
+        recorder.dispatch(
+            "resolve",
+            &p.pipeline,
+            &ctx.scene.bind_group,
+            &p.bind_group,
+            [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
+        );
         Ok(())
     }
 }
