@@ -172,3 +172,46 @@ fn time_budget_stops_the_render() {
     assert!(path.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn hybrid_render_stops_at_a_photon_budget_and_writes_its_aovs() {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-aovs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let out_path = dir.join("glass.exr");
+    let out_text = out_path.to_string_lossy().into_owned();
+    // 24x16 pixels = 384 photons per iteration in Caustic mode: 1000 photons take 3 iterations.
+    let out = hppm(&[
+        "render",
+        "tests/refs/scenes/cornell_glass_sphere/scene.xml",
+        "--graph",
+        "graphs/hybrid.ron",
+        "--size",
+        "24x16",
+        "--photons",
+        "1000",
+        "--aovs",
+        "--out",
+        &out_text,
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("3 spp and 1152 photons"), "{stdout}");
+    let read = |name: &str| {
+        hppm::image::Image::read_exr(&dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+    };
+    let (combined, pt, caustic, radius) = (
+        read("glass.exr"),
+        read("glass.pt.exr"),
+        read("glass.caustic.exr"),
+        read("glass.radius.exr"),
+    );
+    // combined = pt + caustic, pixel by pixel.
+    for i in 0..combined.pixels.len() {
+        for c in 0..3 {
+            let sum = pt.pixels[i][c] + caustic.pixels[i][c];
+            assert!((combined.pixels[i][c] - sum).abs() <= 1e-5 * sum.abs().max(1.0));
+        }
+    }
+    assert!(radius.mean()[0] > 0.0, "hit points have radii");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -30,8 +30,8 @@ pub enum GpuError {
     Device { adapter: String, message: String },
     #[error(
         "buffer \"{label}\" needs {size} bytes ({mib:.1} MiB) but adapter {adapter} allows at most \
-         {limit} bytes ({limit_mib:.1} MiB) per {what}; render a smaller image or use fewer \
-         samples per iteration",
+         {limit} bytes ({limit_mib:.1} MiB) per {what}; render a smaller image, or ask less per \
+         pixel (samples_per_iteration, merge_depth) or per iteration (photons_per_iteration)",
         mib = *size as f64 / 1048576.0,
         limit_mib = *limit as f64 / 1048576.0
     )]
