@@ -31,6 +31,9 @@ enum Command {
         /// Print Graphviz instead of the schedule.
         #[arg(long)]
         dot: bool,
+        /// Prune the graph for this scene first (drop what the scene has no use for).
+        #[arg(long)]
+        scene: Option<PathBuf>,
     },
     /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes; with
     /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error).
@@ -180,6 +183,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         photons: args.photons,
     };
     let mut renderer = Renderer::new(&gpu, &scene, graph, width, height, args.seed)?;
+    for pruned in renderer.pruned() {
+        eprintln!("{pruned}");
+    }
     let cancel = cancel_flag();
     let bar = progress_bar(budget);
     let summary = renderer.run(budget, &cancel, |r, seconds| {
@@ -267,10 +273,16 @@ fn info() -> Result<(), Error> {
     Ok(())
 }
 
-fn show_graph(file: &Path, dot: bool) -> Result<(), Error> {
-    let graph = graph::load_graph(file, passes::registry())?;
+fn show_graph(file: &Path, dot: bool, scene_path: Option<&Path>) -> Result<(), Error> {
+    let mut graph = graph::load_graph(file, passes::registry())?;
     for warning in &graph.warnings {
         eprintln!("warning: {warning}");
+    }
+    if let Some(scene_path) = scene_path {
+        let scene = scene::load(scene_path)?;
+        for pruned in graph.prune(|need| scene.meets(need))? {
+            println!("{pruned}");
+        }
     }
     if dot {
         print!("{}", graph.to_dot());
@@ -299,7 +311,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render(args),
         Command::Info => info(),
-        Command::Graph { file, dot } => show_graph(&file, dot),
+        Command::Graph { file, dot, scene } => show_graph(&file, dot, scene.as_deref()),
         Command::Bench(args) if args.hybrid => bench_hybrid(&args),
         Command::Bench(args) => bench::run(
             args.adapter.as_deref(),

@@ -95,6 +95,8 @@ pub struct Renderer<'a> {
     photons_per_iteration: u64,
     /// Seconds spent in each node (schedule order) when profiling; `None` otherwise.
     node_seconds: Option<Vec<f64>>,
+    /// Nodes the scene had no use for, removed before preparing.
+    pruned: Vec<crate::graph::Pruned>,
 }
 
 impl<'a> Renderer<'a> {
@@ -120,6 +122,7 @@ impl<'a> Renderer<'a> {
         seed: u64,
         shaders: &ShaderLibrary,
     ) -> Result<Self, Error> {
+        let pruned = graph.prune(|need| scene.meets(need))?;
         let scene_resources = SceneResources::upload(gpu, &GpuScene::new(scene, width, height))?;
         let mut produced: HashMap<(usize, &'static str), Resource> = HashMap::new();
         let order = graph.order.clone();
@@ -198,6 +201,7 @@ impl<'a> Renderer<'a> {
             spp_per_iteration,
             photons_per_iteration,
             node_seconds: None,
+            pruned,
         })
     }
 
@@ -223,6 +227,11 @@ impl<'a> Renderer<'a> {
         recorder.submit();
         self.iteration += 1;
         Ok(())
+    }
+
+    /// Nodes removed because the scene had no use for them, with the reason.
+    pub fn pruned(&self) -> &[crate::graph::Pruned] {
+        &self.pruned
     }
 
     /// Times every node from now on (CPU wall clock, GPU waited for after each node).

@@ -367,3 +367,53 @@ fn mangled_graphs_never_panic() {
         check(&t.concat());
     }
 }
+
+/// Pruning with the real pass kinds: without a specular surface the hybrid keeps only what path
+/// tracing needs; photon mapping alone (photons in `All` mode) keeps everything.
+#[test]
+fn pruning_drops_the_photon_nodes_when_the_scene_has_no_specular_surface() {
+    let load = |name: &str| {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(name);
+        load_graph(&path, hppm::passes::registry()).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let mut hybrid = load("graphs/hybrid.ron");
+    let pruned = hybrid.prune(|_| false).expect("prune");
+    let names: Vec<&str> = pruned.iter().map(|p| p.node.as_str()).collect();
+    assert_eq!(names, ["bvh", "photons", "estimate"]);
+    assert!(pruned[1].reason.contains("specular"), "{}", pruned[1]);
+    let kept: Vec<&str> = hybrid
+        .order
+        .iter()
+        .map(|&i| hybrid.nodes[i].name.as_str())
+        .collect();
+    assert_eq!(kept, ["camera", "resolve"]);
+    assert_eq!(hybrid.nodes[hybrid.output.0].name, "resolve");
+    assert!(
+        hybrid
+            .edges
+            .iter()
+            .all(|e| e.from_node < 2 && e.to_node < 2)
+    );
+
+    let mut with_glass = load("graphs/hybrid.ron");
+    assert!(with_glass.prune(|_| true).expect("prune").is_empty());
+    assert_eq!(with_glass.nodes.len(), 5);
+
+    let mut ppm_only = load("graphs/ppm_only.ron");
+    assert!(ppm_only.prune(|_| false).expect("prune").is_empty());
+}
+
+#[test]
+fn pruning_the_output_node_is_an_error() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("graphs/hybrid.ron");
+    let text = std::fs::read_to_string(&path).expect("read").replace(
+        "output: \"resolve.combined\"",
+        "output: \"estimate.radiance\"",
+    );
+    let mut graph = parse_graph(&path, &text, hppm::passes::registry()).expect("valid");
+    let error = graph.prune(|_| false).expect_err("output pruned");
+    assert!(
+        error.to_string().contains("output node \"estimate\""),
+        "{error}"
+    );
+}

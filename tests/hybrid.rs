@@ -17,13 +17,17 @@ fn render(scene_file: &str, graph: &str, spp: u64, seed: u64) -> Image {
     render_to(&mut r, spp)
 }
 
-/// Without specular surfaces no photon is ever deposited and path tracing drops nothing: the
+/// Without specular surfaces the photon nodes are pruned and path tracing drops nothing: the
 /// hybrid is path tracing, sample for sample.
 #[test]
 fn hybrid_is_path_tracing_on_a_diffuse_scene() {
     let scene = "tests/refs/scenes/cornell_diffuse/scene.xml";
     let pt = render(scene, "graphs/pt.ron", 8, 5);
-    let hybrid = render(scene, "graphs/hybrid.ron", 8, 5);
+    let gpu = gpu();
+    let mut r = renderer(&gpu, &load_scene(scene), load_graph("graphs/hybrid.ron"), 5);
+    let pruned: Vec<&str> = r.pruned().iter().map(|p| p.node.as_str()).collect();
+    assert_eq!(pruned, ["bvh", "photons", "estimate"]);
+    let hybrid = render_to(&mut r, 8);
     let difference = relmse(&hybrid, &pt);
     eprintln!("cornell_diffuse: relMSE(hybrid, pt) = {difference:e} at 8 spp, same seed");
     assert!(difference < 1e-12, "hybrid differs from pt: {difference}");

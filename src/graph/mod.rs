@@ -3,6 +3,7 @@
 //! scheduled in topological order with petgraph.
 
 pub mod pass;
+mod prune;
 mod source_map;
 mod validate;
 
@@ -12,6 +13,7 @@ use std::path::{Path, PathBuf};
 use crate::error::Location;
 use pass::{Pass, PassKind, SlotDir};
 
+pub use prune::Pruned;
 pub use validate::parse_graph;
 
 /// One problem in a graph file.

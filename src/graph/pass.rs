@@ -234,6 +234,12 @@ pub trait Pass {
         0
     }
 
+    /// What the scene must have for this node to do anything; after validation the graph drops
+    /// nodes whose needs the scene lacks (src/graph/prune.rs).
+    fn needs(&self) -> &'static [SceneNeed] {
+        &[]
+    }
+
     /// Photons this pass emits each iteration (known after `prepare`).
     fn photons_per_iteration(&self) -> u64 {
         0
@@ -242,6 +248,21 @@ pub trait Pass {
     /// Counters gathered on the GPU so far (may read back; called rarely).
     fn stats(&self, _gpu: &GpuContext) -> Result<PassStats, crate::Error> {
         Ok(PassStats::default())
+    }
+}
+
+/// A scene feature a pass may need.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SceneNeed {
+    /// A mirror or dielectric surface (caustic photons need one to become caustic photons).
+    SpecularSurface,
+}
+
+impl SceneNeed {
+    pub fn describe(self) -> &'static str {
+        match self {
+            SceneNeed::SpecularSurface => "specular (mirror or dielectric) surface",
+        }
     }
 }
 

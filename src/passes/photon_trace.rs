@@ -10,8 +10,8 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::graph::pass::{
-    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl,
-    parse_params,
+    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SceneNeed,
+    SlotDecl, parse_params,
 };
 use crate::passes::hit_points::DEPOSIT_BYTES;
 use crate::scene::gpu_layout::UNBOUNDED;
@@ -245,6 +245,14 @@ impl Pass for PhotonTrace {
         }
         self.iterations += 1;
         Ok(())
+    }
+
+    fn needs(&self) -> &'static [SceneNeed] {
+        match self.params.mode {
+            // Without a specular surface no photon is ever deposited.
+            PhotonMode::Caustic => &[SceneNeed::SpecularSurface],
+            PhotonMode::All => &[],
+        }
     }
 
     fn photons_per_iteration(&self) -> u64 {

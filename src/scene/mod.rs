@@ -169,6 +169,24 @@ impl Scene {
             .extend(place_triangles(triangles, to_world, material, flip_normals));
     }
 
+    /// Whether some shape has a delta (mirror or dielectric) BSDF.
+    pub fn has_specular_surface(&self) -> bool {
+        let is_delta = |m: u32| {
+            self.materials
+                .get(m as usize)
+                .is_some_and(|mat| mat.bsdf.is_delta())
+        };
+        self.triangles.iter().any(|t| is_delta(t.material))
+            || self.spheres.iter().any(|s| is_delta(s.material))
+    }
+
+    /// Whether the scene meets a pass's need (graph pruning).
+    pub fn meets(&self, need: crate::graph::pass::SceneNeed) -> bool {
+        match need {
+            crate::graph::pass::SceneNeed::SpecularSurface => self.has_specular_surface(),
+        }
+    }
+
     pub fn has_lights(&self) -> bool {
         !self.point_lights.is_empty()
             || self
