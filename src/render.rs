@@ -108,7 +108,8 @@ impl<'a> Renderer<'a> {
         height: u32,
         seed: u64,
     ) -> Result<Self, Error> {
-        let shaders = ShaderLibrary::new(gpu.has_float_atomics(), HashMap::new());
+        let shaders =
+            ShaderLibrary::new(gpu.has_float_atomics(), crate::shaders::scene_defs(scene));
         Self::with_shaders(gpu, scene, graph, width, height, seed, &shaders)
     }
 

@@ -40,7 +40,7 @@ impl<'a> Harness<'a> {
         Self {
             gpu,
             scene: SceneResources::upload(gpu, &gpu_scene).expect("scene upload"),
-            shaders: ShaderLibrary::new(float_atomics, HashMap::new()),
+            shaders: ShaderLibrary::new(float_atomics, hppm::shaders::scene_defs(scene)),
             width: size.0,
             height: size.1,
         }

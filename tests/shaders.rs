@@ -9,13 +9,31 @@ use hppm::shaders::{PASS_SHADERS, ShaderLibrary};
 use wgpu::naga;
 
 fn library(float_atomics: bool) -> ShaderLibrary {
-    ShaderLibrary::new(float_atomics, HashMap::new())
+    ShaderLibrary::new(float_atomics, hppm::shaders::all_scene_defs())
+}
+
+/// Every subset of the scene defs (2^3) with and without float atomics.
+fn every_def_combination() -> Vec<(bool, HashMap<String, naga_oil::compose::ShaderDefValue>)> {
+    let names = hppm::shaders::SCENE_DEFS;
+    let mut out = Vec::new();
+    for float_atomics in [true, false] {
+        for mask in 0..(1u32 << names.len()) {
+            let defs = names
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| mask & (1 << i) != 0)
+                .map(|(_, n)| (n.to_string(), naga_oil::compose::ShaderDefValue::Bool(true)))
+                .collect();
+            out.push((float_atomics, defs));
+        }
+    }
+    out
 }
 
 #[test]
 fn every_pass_shader_composes_and_validates() {
-    for float_atomics in [true, false] {
-        let lib = library(float_atomics);
+    for (float_atomics, defs) in every_def_combination() {
+        let lib = ShaderLibrary::new(float_atomics, defs);
         for (path, _) in PASS_SHADERS {
             let module = lib
                 .compose(path)
@@ -78,4 +96,62 @@ fn a_wgsl_error_names_the_module_file_and_line() {
     let message = err.to_string();
     assert!(message.contains("shaders/passes/broken.wgsl"), "{message}");
     assert!(message.contains(":4:"), "line 4 expected in: {message}");
+}
+
+fn function_names(module: &naga::Module) -> Vec<String> {
+    module
+        .functions
+        .iter()
+        .filter_map(|(_, f)| f.name.clone())
+        .collect()
+}
+
+/// Code for what a scene lacks is compiled out: a diffuse-only scene's kernels have no
+/// dielectric function, a scene without spheres no sphere intersection.
+#[test]
+fn scene_features_compile_code_in_and_out() {
+    let load = |p: &str| {
+        hppm::scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(p))
+            .unwrap_or_else(|e| panic!("{p}: {e}"))
+    };
+    let has = |lib: &ShaderLibrary, path: &str, name: &str| {
+        let module = lib.compose(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        function_names(&module).iter().any(|f| f.contains(name))
+    };
+    let diffuse = ShaderLibrary::new(
+        true,
+        hppm::shaders::scene_defs(&load("tests/refs/scenes/cornell_diffuse/scene.xml")),
+    );
+    let glass = ShaderLibrary::new(
+        true,
+        hppm::shaders::scene_defs(&load("tests/refs/scenes/cornell_glass_sphere/scene.xml")),
+    );
+    for path in [
+        "shaders/passes/path_trace.wgsl",
+        "shaders/passes/photon_trace.wgsl",
+    ] {
+        assert!(
+            !has(&diffuse, path, "sample_dielectric"),
+            "{path}: diffuse scene"
+        );
+        assert!(
+            !has(&diffuse, path, "fresnel_dielectric"),
+            "{path}: diffuse scene"
+        );
+        assert!(
+            !has(&diffuse, path, "intersect_sphere"),
+            "{path}: no spheres"
+        );
+        assert!(
+            has(&glass, path, "sample_dielectric"),
+            "{path}: glass scene"
+        );
+        assert!(
+            has(&glass, path, "intersect_sphere"),
+            "{path}: glass scene has spheres"
+        );
+    }
+    let defs = |p: &str| hppm::shaders::scene_defs(&load(p));
+    assert!(!defs("tests/refs/scenes/cornell_glass_sphere/scene.xml").contains_key("POINT_LIGHTS"));
+    assert!(defs("tests/refs/scenes/point_light_caustic/scene.xml").contains_key("POINT_LIGHTS"));
 }

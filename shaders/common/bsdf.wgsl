@@ -1,5 +1,10 @@
 #define_import_path common::bsdf
 
+fn reflect_about(wo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return 2.0 * dot(wo, n) * n - wo;
+}
+
+#ifdef DIELECTRIC
 // Unpolarised Fresnel reflectance of a smooth dielectric interface. `cos_i` >= 0 is measured on
 // the incident side and `eta` = n_incident / n_transmitted. Returns 1 under total internal
 // reflection.
@@ -18,10 +23,6 @@ struct SpecularSample {
     dir: vec3<f32>,
     // Throughput factor of this choice, already divided by its probability.
     weight: f32,
-}
-
-fn reflect_about(wo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return 2.0 * dot(wo, n) * n - wo;
 }
 
 // Samples reflection or refraction in proportion to Fresnel. `wo` points away from the surface
@@ -46,3 +47,4 @@ fn sample_dielectric(wo: vec3<f32>, normal: vec3<f32>, int_ior: f32, ext_ior: f3
     let weight = select(1.0, eta * eta, radiance);
     return SpecularSample(dir, weight);
 }
+#endif

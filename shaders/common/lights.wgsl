@@ -38,16 +38,18 @@ struct LightPoint {
 }
 
 fn sample_area_light_point(light: Light, u: vec2<f32>) -> LightPoint {
-    if light.kind == LIGHT_TRIANGLE {
-        let tri = triangles[light.prim];
-        let b = sample_triangle_barycentrics(u);
-        let position = tri.vertex + b.x * tri.edge_a + b.y * tri.edge_b;
-        return LightPoint(position, normalize(cross(tri.edge_a, tri.edge_b)));
+#ifdef SPHERES
+    if light.kind == LIGHT_SPHERE {
+        let sphere = spheres[light.prim];
+        let d = sample_uniform_sphere(u);
+        let normal = select(d, -d, sphere.flip_normals != 0u);
+        return LightPoint(sphere.center + sphere.radius * d, normal);
     }
-    let sphere = spheres[light.prim];
-    let d = sample_uniform_sphere(u);
-    let normal = select(d, -d, sphere.flip_normals != 0u);
-    return LightPoint(sphere.center + sphere.radius * d, normal);
+#endif
+    let tri = triangles[light.prim];
+    let b = sample_triangle_barycentrics(u);
+    let position = tri.vertex + b.x * tri.edge_a + b.y * tri.edge_b;
+    return LightPoint(position, normalize(cross(tri.edge_a, tri.edge_b)));
 }
 
 // Solid-angle density of reaching area light `index` at distance `dist`, where the direction
@@ -71,6 +73,7 @@ fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
     if light.select_prob <= 0.0 {
         return result;
     }
+#ifdef POINT_LIGHTS
     if light.kind == LIGHT_POINT {
         let to_light = light.position - from_point;
         let dist2 = dot(to_light, to_light);
@@ -86,6 +89,7 @@ fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
         result.valid = true;
         return result;
     }
+#endif
     let point = sample_area_light_point(light, u);
     let to_light = point.position - from_point;
     let dist = length(to_light);

@@ -1,5 +1,9 @@
 #define_import_path common::scene
 
+// Shader defs (src/shaders.rs, from the scene): SPHERES compiles in sphere intersection,
+// DIELECTRIC the dielectric BSDF, POINT_LIGHTS point-light sampling. Code for what a scene
+// lacks is left out of every kernel.
+
 // The scene every pass shares (bind group 0). Layouts mirror src/scene/gpu_layout.rs.
 
 struct SceneUniform {
@@ -140,6 +144,7 @@ fn intersect_triangle(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
     return select(T_INFINITE, t, t > 0.0);
 }
 
+#ifdef SPHERES
 // Nearest positive root, computed as in Haines et al., "Precision Improvements for Ray/Sphere
 // Intersection" (Ray Tracing Gems, ch. 7), which keeps grazing and distant hits accurate.
 fn intersect_sphere(sphere: Sphere, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
@@ -165,12 +170,15 @@ fn intersect_sphere(sphere: Sphere, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
     }
     return select(T_INFINITE, far, far > 0.0);
 }
+#endif
 
 fn intersect_prim(prim: u32, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
-    if prim < scene_info.num_triangles {
-        return intersect_triangle(prim, origin, dir);
+#ifdef SPHERES
+    if prim >= scene_info.num_triangles {
+        return intersect_sphere(spheres[prim - scene_info.num_triangles], origin, dir);
     }
-    return intersect_sphere(spheres[prim - scene_info.num_triangles], origin, dir);
+#endif
+    return intersect_triangle(prim, origin, dir);
 }
 
 // Slab test; returns the entry distance or T_INFINITE.
@@ -261,16 +269,18 @@ fn occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
 
 fn surface_at(hit: Hit, origin: vec3<f32>, dir: vec3<f32>) -> Surface {
     let position = origin + hit.t * dir;
-    if hit.prim < scene_info.num_triangles {
-        let tri = triangles[hit.prim];
-        return Surface(position, normalize(cross(tri.edge_a, tri.edge_b)), tri.material, tri.light);
+#ifdef SPHERES
+    if hit.prim >= scene_info.num_triangles {
+        let sphere = spheres[hit.prim - scene_info.num_triangles];
+        var normal = normalize(position - sphere.center);
+        if sphere.flip_normals != 0u {
+            normal = -normal;
+        }
+        return Surface(position, normal, sphere.material, sphere.light);
     }
-    let sphere = spheres[hit.prim - scene_info.num_triangles];
-    var normal = normalize(position - sphere.center);
-    if sphere.flip_normals != 0u {
-        normal = -normal;
-    }
-    return Surface(position, normal, sphere.material, sphere.light);
+#endif
+    let tri = triangles[hit.prim];
+    return Surface(position, normalize(cross(tri.edge_a, tri.edge_b)), tri.material, tri.light);
 }
 
 // Start point for a ray leaving `position` towards the side of `normal` that `dir` points to.

@@ -12,7 +12,10 @@
 #import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, occluded, surface_at, offset_origin}
 #import common::camera::camera_direction
 #import common::lights::{sample_light, area_light_pdf}
-#import common::bsdf::{sample_dielectric, reflect_about}
+#import common::bsdf::reflect_about
+#ifdef DIELECTRIC
+#import common::bsdf::sample_dielectric
+#endif
 #import common::hit_points::{HitPoint, HitPointBuffer, NO_PIXEL, initial_radius}
 
 struct PathTraceParams {
@@ -176,10 +179,14 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, ray
             path.dir = reflect_about(wo, surface.normal);
             path.after_delta = true;
         } else {
+#ifdef DIELECTRIC
             let s = sample_dielectric(wo, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
             path.throughput *= s.weight;
             path.dir = s.dir;
             path.after_delta = true;
+#else
+            break;
+#endif
         }
         path.origin = offset_origin(surface.position, surface.normal, path.dir);
         if max_component(path.throughput) <= 0.0 {

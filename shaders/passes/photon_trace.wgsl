@@ -16,7 +16,10 @@
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
 #import common::scene::{scene_info, materials, lights, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_origin}
 #import common::lights::{pick_light, sample_area_light_point}
-#import common::bsdf::{sample_dielectric, reflect_about}
+#import common::bsdf::reflect_about
+#ifdef DIELECTRIC
+#import common::bsdf::sample_dielectric
+#endif
 #import common::hit_points::{HitPointBuffer, HitPointTree, DepositCell, TREE_STACK_SIZE, point_in_box}
 
 struct PhotonParams {
@@ -138,6 +141,14 @@ struct Photon {
     valid: bool,
 }
 
+// Flux per photon of this iteration; a photon with nothing (or not a number) to carry is invalid.
+fn normalised(emitted: Photon) -> Photon {
+    var photon = emitted;
+    photon.flux *= params.flux_scale;
+    photon.valid = !any_not_finite(photon.flux) && max_component(photon.flux) > 0.0;
+    return photon;
+}
+
 fn emit_photon(rng: ptr<function, u32>) -> Photon {
     var photon: Photon;
     photon.valid = false;
@@ -150,6 +161,7 @@ fn emit_photon(rng: ptr<function, u32>) -> Photon {
     }
     let u_position = rng_next_vec2(rng);
     let u_direction = rng_next_vec2(rng);
+#ifdef POINT_LIGHTS
     if light.kind == LIGHT_POINT {
         photon.origin = light.position;
         let aim = aim_at_specular(light.position, u_direction);
@@ -161,25 +173,24 @@ fn emit_photon(rng: ptr<function, u32>) -> Photon {
             photon.dir = sample_uniform_sphere(u_direction);
             photon.flux = light.radiance * (4.0 * PI / light.select_prob);
         }
-    } else {
-        let point = sample_area_light_point(light, u_position);
-        let aim = aim_at_specular(point.position, u_direction);
-        if aim.valid {
-            // L cos / (pdf_position pdf_direction) with pdfs 1 / A and 1 / solid angle; the
-            // part of the cone behind the light carries nothing.
-            photon.dir = aim.dir;
-            let cos_light = max(dot(aim.dir, point.normal), 0.0);
-            photon.flux = light.radiance * (cos_light * light.area * aim.solid_angle / light.select_prob);
-        } else {
-            // One-sided Lambertian emitter of radiance L and area A: power pi A L.
-            photon.dir = sample_cosine_hemisphere(point.normal, u_direction);
-            photon.flux = light.radiance * (PI * light.area / light.select_prob);
-        }
-        photon.origin = offset_origin(point.position, point.normal, photon.dir);
+        return normalised(photon);
     }
-    photon.flux *= params.flux_scale;
-    photon.valid = !any_not_finite(photon.flux) && max_component(photon.flux) > 0.0;
-    return photon;
+#endif
+    let point = sample_area_light_point(light, u_position);
+    let aim = aim_at_specular(point.position, u_direction);
+    if aim.valid {
+        // L cos / (pdf_position pdf_direction) with pdfs 1 / A and 1 / solid angle; the
+        // part of the cone behind the light carries nothing.
+        photon.dir = aim.dir;
+        let cos_light = max(dot(aim.dir, point.normal), 0.0);
+        photon.flux = light.radiance * (cos_light * light.area * aim.solid_angle / light.select_prob);
+    } else {
+        // One-sided Lambertian emitter of radiance L and area A: power pi A L.
+        photon.dir = sample_cosine_hemisphere(point.normal, u_direction);
+        photon.flux = light.radiance * (PI * light.area / light.select_prob);
+    }
+    photon.origin = offset_origin(point.position, point.normal, photon.dir);
+    return normalised(photon);
 }
 
 // Adds the photon to every hit point whose sphere contains `position`.
@@ -266,11 +277,15 @@ fn trace_photon(start: Photon, rng: ptr<function, u32>) -> u32 {
             photon.dir = reflect_about(wi, surface.normal);
             after_specular = true;
         } else {
+#ifdef DIELECTRIC
             // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
-            let s = sample_dielectric(wi, surface.normal, materials[surface.material].int_ior, materials[surface.material].ext_ior, rng_next_f32(rng), false);
+            let s = sample_dielectric(wi, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
             photon.flux *= s.weight;
             photon.dir = s.dir;
             after_specular = true;
+#else
+            break;
+#endif
         }
         photon.origin = offset_origin(surface.position, surface.normal, photon.dir);
         if segments >= params.rr_depth {
