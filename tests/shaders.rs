@@ -151,7 +151,21 @@ fn scene_features_compile_code_in_and_out() {
             "{path}: glass scene has spheres"
         );
     }
-    let defs = |p: &str| hppm::shaders::scene_defs(&load(p));
-    assert!(!defs("tests/refs/scenes/cornell_glass_sphere/scene.xml").contains_key("POINT_LIGHTS"));
-    assert!(defs("tests/refs/scenes/point_light_caustic/scene.xml").contains_key("POINT_LIGHTS"));
+    let point_light = ShaderLibrary::new(
+        true,
+        hppm::shaders::scene_defs(&load("tests/refs/scenes/point_light_caustic/scene.xml")),
+    );
+    for (path, function) in [
+        ("shaders/passes/path_trace.wgsl", "sample_point_light"),
+        ("shaders/passes/photon_trace.wgsl", "emit_point_photon"),
+    ] {
+        assert!(
+            !has(&glass, path, function),
+            "{path}: no point light in the glass scene"
+        );
+        assert!(
+            has(&point_light, path, function),
+            "{path}: point-light scene"
+        );
+    }
 }

@@ -62,6 +62,28 @@ fn area_light_pdf(index: u32, dist: f32, cos_light: f32) -> f32 {
     return light.select_prob * dist * dist / (light.area * cos_light);
 }
 
+#ifdef POINT_LIGHTS
+// A point light seen from `from_point`: a delta direction; `pdf` is the light's selection
+// probability.
+fn sample_point_light(light: Light, from_point: vec3<f32>) -> LightSample {
+    var result: LightSample;
+    result.valid = false;
+    let to_light = light.position - from_point;
+    let dist2 = dot(to_light, to_light);
+    if dist2 <= 0.0 {
+        return result;
+    }
+    let dist = sqrt(dist2);
+    result.dir = to_light / dist;
+    result.distance = dist;
+    result.radiance = light.radiance / dist2;
+    result.pdf = light.select_prob;
+    result.is_delta = true;
+    result.valid = true;
+    return result;
+}
+#endif
+
 fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample {
     var result: LightSample;
     result.valid = false;
@@ -75,19 +97,7 @@ fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
     }
 #ifdef POINT_LIGHTS
     if light.kind == LIGHT_POINT {
-        let to_light = light.position - from_point;
-        let dist2 = dot(to_light, to_light);
-        if dist2 <= 0.0 {
-            return result;
-        }
-        let dist = sqrt(dist2);
-        result.dir = to_light / dist;
-        result.distance = dist;
-        result.radiance = light.radiance / dist2;
-        result.pdf = light.select_prob;
-        result.is_delta = true;
-        result.valid = true;
-        return result;
+        return sample_point_light(light, from_point);
     }
 #endif
     let point = sample_area_light_point(light, u);

@@ -14,7 +14,7 @@
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, lights, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_origin}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_origin}
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
@@ -149,6 +149,23 @@ fn normalised(emitted: Photon) -> Photon {
     return photon;
 }
 
+#ifdef POINT_LIGHTS
+fn emit_point_photon(light: Light, u: vec2<f32>) -> Photon {
+    var photon: Photon;
+    photon.origin = light.position;
+    let aim = aim_at_specular(light.position, u);
+    if aim.valid {
+        photon.dir = aim.dir;
+        photon.flux = light.radiance * (aim.solid_angle / light.select_prob);
+    } else {
+        // Intensity I over the sphere of directions: power 4 pi I.
+        photon.dir = sample_uniform_sphere(u);
+        photon.flux = light.radiance * (4.0 * PI / light.select_prob);
+    }
+    return photon;
+}
+#endif
+
 fn emit_photon(rng: ptr<function, u32>) -> Photon {
     var photon: Photon;
     photon.valid = false;
@@ -163,17 +180,7 @@ fn emit_photon(rng: ptr<function, u32>) -> Photon {
     let u_direction = rng_next_vec2(rng);
 #ifdef POINT_LIGHTS
     if light.kind == LIGHT_POINT {
-        photon.origin = light.position;
-        let aim = aim_at_specular(light.position, u_direction);
-        if aim.valid {
-            photon.dir = aim.dir;
-            photon.flux = light.radiance * (aim.solid_angle / light.select_prob);
-        } else {
-            // Intensity I over the sphere of directions: power 4 pi I.
-            photon.dir = sample_uniform_sphere(u_direction);
-            photon.flux = light.radiance * (4.0 * PI / light.select_prob);
-        }
-        return normalised(photon);
+        return normalised(emit_point_photon(light, u_direction));
     }
 #endif
     let point = sample_area_light_point(light, u_position);
