@@ -161,3 +161,88 @@ fn hybrid_renders_the_point_light_caustic_that_path_tracing_misses() {
         "caustic mean: hybrid {hybrid_caustic} vs reference {reference_caustic}"
     );
 }
+
+/// Ray offsets, initial radii (pixel footprints), the radius floor and the aiming sphere are all
+/// relative to the scene: scaled by 1e3 or 1e-3 the hybrid renders the same image (same seed,
+/// so only float rounding differs; a photon near a radius boundary may land on the other side).
+#[test]
+fn hybrid_is_scale_invariant() {
+    let gpu = gpu();
+    let scene = load_scene(GLASS);
+    let reference = reference("cornell_glass_sphere");
+    let spp = 8;
+    let base = render_to(
+        &mut renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), 5),
+        spp,
+    );
+    let noise = relmse(&base, &reference);
+    for scale in [1e3f32, 1e-3] {
+        let image = render_to(
+            &mut renderer(
+                &gpu,
+                &scene.scaled(scale),
+                load_graph("graphs/hybrid.ron"),
+                5,
+            ),
+            spp,
+        );
+        let between = relmse(&image, &base);
+        eprintln!("hybrid, scale {scale}: relMSE vs unscaled {between:.2e}; noise {noise:.2e}");
+        assert!(
+            between < 0.05 * noise,
+            "scale {scale}: relMSE {between} vs noise level {noise}"
+        );
+    }
+}
+
+/// Degenerate input renders without NaN or Inf: a zero-area light, a light of radiance 0, a
+/// point light, and the camera inside a glass sphere (every camera path starts in glass).
+#[test]
+fn hybrid_survives_degenerate_scenes() {
+    let gpu = gpu();
+    let dir = std::env::temp_dir().join(format!("hppm-degenerate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("degenerate.ron");
+    std::fs::write(
+        &path,
+        r#"(
+            camera: (origin: (0, 0, 0.1), target: (0, 0, -1), up: (0, 1, 0), fov_x: 60, width: 24, height: 16),
+            integrator: (max_depth: Some(12)),
+            materials: {
+                "white": Diffuse(reflectance: (0.8, 0.8, 0.8)),
+                "black": Diffuse(reflectance: (0, 0, 0)),
+                "glass": Dielectric(int_ior: 2.4, ext_ior: 1.0),
+            },
+            shapes: [
+                (shape: Cube, material: "white", flip_normals: true, to_world: [Scale((3, 3, 3))]),
+                (shape: Sphere(center: (0, 0, 0), radius: 0.5), material: "glass"),
+                (shape: Rectangle, material: "black", emission: Some((5, 5, 5)), to_world: [Scale((0, 1, 1)), Translate((0, 2.9, 0))]),
+                (shape: Rectangle, material: "black", emission: Some((0, 0, 0)), to_world: [Translate((0, 0, -2.9))]),
+            ],
+            point_lights: [(position: (1, 2, 1), intensity: (3, 3, 3))],
+        )"#,
+    )
+    .expect("write scene");
+    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    for graph in [
+        "graphs/hybrid.ron",
+        "graphs/hybrid_all_depths.ron",
+        "graphs/ppm_only.ron",
+    ] {
+        let mut r = renderer(&gpu, &scene, load_graph(graph), 1);
+        let image = render_to(&mut r, 4);
+        let stats = r.stats().expect("stats");
+        let finite = image.pixels.iter().flatten().all(|v| v.is_finite());
+        eprintln!(
+            "{graph}: mean {:?}, {} samples discarded",
+            image.mean(),
+            stats.discarded_samples
+        );
+        assert!(finite, "{graph}: NaN or Inf in the image");
+        assert!(
+            image.mean()[0] > 0.0,
+            "{graph}: the point light lights the room"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
