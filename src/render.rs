@@ -103,26 +103,13 @@ impl<'a> Renderer<'a> {
     pub fn new(
         gpu: &'a GpuContext,
         scene: &Scene,
-        graph: ValidGraph,
+        mut graph: ValidGraph,
         width: u32,
         height: u32,
         seed: u64,
     ) -> Result<Self, Error> {
         let shaders =
             ShaderLibrary::new(gpu.has_float_atomics(), crate::shaders::scene_defs(scene));
-        Self::with_shaders(gpu, scene, graph, width, height, seed, &shaders)
-    }
-
-    /// As `new`, with a shader library chosen by the caller (tests force the CAS atomics path).
-    pub fn with_shaders(
-        gpu: &'a GpuContext,
-        scene: &Scene,
-        mut graph: ValidGraph,
-        width: u32,
-        height: u32,
-        seed: u64,
-        shaders: &ShaderLibrary,
-    ) -> Result<Self, Error> {
         let pruned = graph.prune(|need| scene.meets(need))?;
         let scene_resources = SceneResources::upload(gpu, &GpuScene::new(scene, width, height))?;
         let mut produced: HashMap<(usize, &'static str), Resource> = HashMap::new();
@@ -146,7 +133,7 @@ impl<'a> Renderer<'a> {
             let ctx = PrepareCtx {
                 gpu,
                 scene: &scene_resources,
-                shaders,
+                shaders: &shaders,
                 inputs,
                 consumed,
                 width,

@@ -201,8 +201,8 @@ pub struct ExecCtx<'a> {
 pub struct PassStats {
     pub rays: u64,
     pub discarded_samples: u64,
-    /// Photons emitted and the segments they were traced along.
-    pub photons: u64,
+    /// Segments photons were traced along (photons emitted: `Renderer::photons`, exact on the
+    /// CPU).
     pub photon_segments: u64,
 }
 
@@ -210,7 +210,6 @@ impl PassStats {
     pub fn add(&mut self, other: &PassStats) {
         self.rays += other.rays;
         self.discarded_samples += other.discarded_samples;
-        self.photons += other.photons;
         self.photon_segments += other.photon_segments;
     }
 }

@@ -59,8 +59,8 @@ impl Pass for HitPointBvhSah {
         let Some((hit_points, tree)) = &self.prepared else {
             return Ok(());
         };
-        // The camera pass of this iteration must finish before its hit points can be read.
-        recorder.flush()?;
+        // Submit this iteration's camera pass; the readback is queued after it and waits for both.
+        recorder.submit();
         let points = read_hit_points(ctx.gpu, &hit_points.buffer, hit_points.len)?;
         let nodes = build_tree(&points);
         // Ordered before the rest of the iteration, which is submitted after this write.

@@ -41,6 +41,22 @@ pub struct HitPointHeader {
     pub slots_per_pixel: u32,
 }
 
+impl HitPointHeader {
+    /// `initial_radius` in scene units (0: `radius_pixels` pixel footprints); the floor is
+    /// `MIN_RADIUS_FRACTION` of the scene's bounding radius.
+    pub fn new(initial_radius: f32, radius_pixels: f32, scene_radius: f32, slots: u32) -> Self {
+        Self {
+            initial_radius,
+            radius_pixels,
+            min_radius: MIN_RADIUS_FRACTION * scene_radius,
+            slots_per_pixel: slots,
+        }
+    }
+}
+
+/// Initial search radius in pixel footprints unless the estimator says otherwise.
+pub const DEFAULT_RADIUS_PIXELS: f32 = 1.0;
+
 /// Bytes before the first hit point in a `HitPoints` buffer.
 pub const HEADER_BYTES: u64 = std::mem::size_of::<HitPointHeader>() as u64;
 pub const HIT_POINT_BYTES: u64 = std::mem::size_of::<GpuHitPoint>() as u64;

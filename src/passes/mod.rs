@@ -23,6 +23,27 @@ pub fn registry() -> &'static [PassKind] {
     KINDS
 }
 
+/// Depth at which Russian roulette starts when a path's depth is unbounded and no other start is
+/// given (Mitsuba's default `rr_depth`).
+const DEFAULT_RR_DEPTH: u32 = 5;
+
+/// (max_depth, rr_depth) after a node's overrides are applied to the scene's integrator
+/// settings. With both unbounded, Russian roulette starts at `DEFAULT_RR_DEPTH`, so that every
+/// path ends.
+pub(crate) fn resolve_depths(
+    max_depth: Option<u32>,
+    rr_depth: Option<u32>,
+    scene: &crate::scene::gpu_layout::GpuSceneUniform,
+) -> (u32, u32) {
+    use crate::scene::gpu_layout::UNBOUNDED;
+    let max_depth = max_depth.unwrap_or(scene.max_depth);
+    let mut rr_depth = rr_depth.unwrap_or(scene.rr_depth);
+    if max_depth == UNBOUNDED && rr_depth == UNBOUNDED {
+        rr_depth = DEFAULT_RR_DEPTH;
+    }
+    (max_depth, rr_depth)
+}
+
 /// Splits a 64-bit seed into the 32 bits a kernel hashes, keeping both halves' entropy.
 pub(crate) fn seed32(seed: u64) -> u32 {
     (seed ^ (seed >> 32)) as u32

@@ -18,8 +18,9 @@ use crate::graph::pass::{
     parse_params,
 };
 use crate::passes::hit_points::{
-    HEADER_BYTES, HIT_POINT_BYTES, HitPointHeader, MIN_RADIUS_FRACTION,
+    DEFAULT_RADIUS_PIXELS, HEADER_BYTES, HIT_POINT_BYTES, HitPointHeader,
 };
+use crate::passes::resolve_depths;
 use crate::scene::gpu_layout::UNBOUNDED;
 
 const SHADER: &str = "shaders/passes/path_trace.wgsl";
@@ -40,10 +41,6 @@ pub const KIND: PassKind = PassKind {
 fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
     Ok(Box::new(PathTrace::new(parse_params(params)?)))
 }
-
-/// Depth at which Russian roulette starts when a path's depth is unbounded and no other start is
-/// given (Mitsuba's default `rr_depth`).
-const DEFAULT_RR_DEPTH: u32 = 5;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -158,16 +155,6 @@ impl PathTrace {
             prepared: None,
         }
     }
-
-    /// Depth limits after applying the graph's overrides to the scene's integrator settings.
-    fn depths(&self, scene_max_depth: u32, scene_rr_depth: u32) -> (u32, u32) {
-        let max_depth = self.params.max_depth.unwrap_or(scene_max_depth);
-        let mut rr_depth = self.params.rr_depth.unwrap_or(scene_rr_depth);
-        if max_depth == UNBOUNDED && rr_depth == UNBOUNDED {
-            rr_depth = DEFAULT_RR_DEPTH;
-        }
-        (max_depth, rr_depth)
-    }
 }
 
 impl Pass for PathTrace {
@@ -189,8 +176,11 @@ impl Pass for PathTrace {
             16,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let (max_depth, rr_depth) =
-            self.depths(ctx.scene.uniform.max_depth, ctx.scene.uniform.rr_depth);
+        let (max_depth, rr_depth) = resolve_depths(
+            self.params.max_depth,
+            self.params.rr_depth,
+            &ctx.scene.uniform,
+        );
         // No consumer, no hit points: the pass is then a plain path tracer that drops nothing.
         let merge_slots = if ctx.consumed.contains("hit_points") {
             self.params.merge_depth.slots(max_depth)
@@ -206,12 +196,12 @@ impl Pass for PathTrace {
                 | wgpu::BufferUsages::COPY_DST,
         )?;
         // A default the estimator overwrites when it is prepared.
-        let header = HitPointHeader {
-            initial_radius: 0.0,
-            radius_pixels: 1.0,
-            min_radius: MIN_RADIUS_FRACTION * ctx.scene.uniform.scene_radius,
-            slots_per_pixel: merge_slots,
-        };
+        let header = HitPointHeader::new(
+            0.0,
+            DEFAULT_RADIUS_PIXELS,
+            ctx.scene.uniform.scene_radius,
+            merge_slots,
+        );
         gpu.queue
             .write_buffer(&hit_points, 0, bytemuck::bytes_of(&header));
         let (layout, bind_group) = bind_buffers(

@@ -14,7 +14,7 @@ use crate::graph::pass::{
     SlotDecl, parse_params,
 };
 use crate::passes::hit_points::DEPOSIT_BYTES;
-use crate::scene::gpu_layout::UNBOUNDED;
+use crate::passes::resolve_depths;
 
 const SHADER: &str = "shaders/passes/photon_trace.wgsl";
 const WORKGROUP: u32 = 64;
@@ -112,7 +112,6 @@ struct Prepared {
 pub struct PhotonTrace {
     params: PhotonTraceParams,
     prepared: Option<Prepared>,
-    iterations: u64,
 }
 
 impl PhotonTrace {
@@ -120,7 +119,6 @@ impl PhotonTrace {
         Self {
             params,
             prepared: None,
-            iterations: 0,
         }
     }
 
@@ -188,12 +186,11 @@ impl Pass for PhotonTrace {
         let pipeline =
             ctx.shaders
                 .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
-        let scene = &ctx.scene.uniform;
-        let max_depth = self.params.max_depth.unwrap_or(scene.max_depth);
-        let mut rr_depth = self.params.rr_depth.unwrap_or(scene.rr_depth);
-        if max_depth == UNBOUNDED && rr_depth == UNBOUNDED {
-            rr_depth = 5;
-        }
+        let (max_depth, rr_depth) = resolve_depths(
+            self.params.max_depth,
+            self.params.rr_depth,
+            &ctx.scene.uniform,
+        );
         let deposits = Resource::new(ResourceKind::Deposits, deposits, hit_points.len);
         self.prepared = Some(Prepared {
             pipeline,
@@ -243,7 +240,6 @@ impl Pass for PhotonTrace {
                 [groups_per_row, groups.div_ceil(groups_per_row), 1],
             );
         }
-        self.iterations += 1;
         Ok(())
     }
 
@@ -265,7 +261,6 @@ impl Pass for PhotonTrace {
         };
         let c: Vec<u32> = gpu.read_pod(&p.counters, 2)?;
         Ok(PassStats {
-            photons: self.iterations * p.photons as u64,
             photon_segments: (c[1] as u64) << 32 | c[0] as u64,
             ..Default::default()
         })

@@ -16,7 +16,7 @@ use crate::graph::pass::{
     ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl,
     parse_params,
 };
-use crate::passes::hit_points::{HitPointHeader, MIN_RADIUS_FRACTION};
+use crate::passes::hit_points::{DEFAULT_RADIUS_PIXELS, HitPointHeader};
 
 const SHADER: &str = "shaders/passes/merge.wgsl";
 const WORKGROUP: u32 = 8;
@@ -85,7 +85,7 @@ impl Default for MergeParams {
         Self {
             alpha: 0.7,
             initial_radius: None,
-            radius_pixels: 1.0,
+            radius_pixels: DEFAULT_RADIUS_PIXELS,
         }
     }
 }
@@ -166,12 +166,12 @@ impl Pass for Merge {
         let deposits = ctx.input("deposits")?;
         let pixels = ctx.width as u64 * ctx.height as u64;
         let slots_per_pixel = (hit_points.len / pixels.max(1)) as u32;
-        let header = HitPointHeader {
-            initial_radius: self.params.initial_radius.unwrap_or(0.0),
-            radius_pixels: self.params.radius_pixels,
-            min_radius: MIN_RADIUS_FRACTION * ctx.scene.uniform.scene_radius,
+        let header = HitPointHeader::new(
+            self.params.initial_radius.unwrap_or(0.0),
+            self.params.radius_pixels,
+            ctx.scene.uniform.scene_radius,
             slots_per_pixel,
-        };
+        );
         gpu.queue
             .write_buffer(&hit_points.buffer, 0, bytemuck::bytes_of(&header));
         if self.keep_hit_points {
