@@ -154,6 +154,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron"));
     OutputFormat::of(&args.out)?;
     let scene = scene::load(&scene_path)?;
+    eprintln!("scene: {}", scene.features());
     if !scene.has_lights() {
         eprintln!(
             "warning: {} has no light (no emitting shape, no point light): the image will be black",
@@ -280,7 +281,9 @@ fn show_graph(file: &Path, dot: bool, scene_path: Option<&Path>) -> Result<(), E
     }
     if let Some(scene_path) = scene_path {
         let scene = scene::load(scene_path)?;
-        for pruned in graph.prune(|need| scene.meets(need))? {
+        let features = scene.features();
+        println!("scene: {features}");
+        for pruned in graph.prune(|need| features.meets(need))? {
             println!("{pruned}");
         }
     }

@@ -110,7 +110,8 @@ impl<'a> Renderer<'a> {
     ) -> Result<Self, Error> {
         let shaders =
             ShaderLibrary::new(gpu.has_float_atomics(), crate::shaders::scene_defs(scene));
-        let pruned = graph.prune(|need| scene.meets(need))?;
+        let features = scene.features();
+        let pruned = graph.prune(|need| features.meets(need))?;
         let scene_resources = SceneResources::upload(gpu, &GpuScene::new(scene, width, height))?;
         let mut produced: HashMap<(usize, &'static str), Resource> = HashMap::new();
         let order = graph.order.clone();

@@ -84,20 +84,16 @@ pub const SCENE_DEFS: &[&str] = &["DIELECTRIC", "SPHERES", "POINT_LIGHTS"];
 /// The shader defs a scene needs: `DIELECTRIC` when a shape has a dielectric BSDF, `SPHERES`
 /// when it has spheres, `POINT_LIGHTS` when it has a point light.
 pub fn scene_defs(scene: &crate::scene::Scene) -> HashMap<String, ShaderDefValue> {
-    let dielectric = scene
-        .materials
-        .iter()
-        .any(|m| matches!(m.bsdf, crate::scene::Bsdf::Dielectric { .. }));
-    let features = [
-        ("DIELECTRIC", dielectric),
-        ("SPHERES", !scene.spheres.is_empty()),
-        ("POINT_LIGHTS", !scene.point_lights.is_empty()),
-    ];
-    features
-        .into_iter()
-        .filter(|(_, present)| *present)
-        .map(|(name, _)| (name.to_string(), ShaderDefValue::Bool(true)))
-        .collect()
+    let features = scene.features();
+    [
+        ("DIELECTRIC", features.dielectric),
+        ("SPHERES", features.spheres),
+        ("POINT_LIGHTS", features.point_lights),
+    ]
+    .into_iter()
+    .filter(|(_, present)| *present)
+    .map(|(name, _)| (name.to_string(), ShaderDefValue::Bool(true)))
+    .collect()
 }
 
 /// Every scene def set: kernels composed this way contain all the code there is.

@@ -524,3 +524,40 @@ fn scene_helpers() {
     broken.camera.up = Vec3::ZERO;
     assert!(broken.validate().is_err());
 }
+
+/// The features the graph pruning and the shader defs read: only kinds some shape (or a point
+/// light) uses count, so an unused material or a zero-radiance emitter adds nothing.
+#[test]
+fn scene_features_list_what_the_scene_uses() {
+    use hppm::scene::SceneFeatures;
+    let diffuse = load("tests/refs/scenes/cornell_diffuse/scene.xml").features();
+    assert_eq!(
+        diffuse,
+        SceneFeatures {
+            diffuse: true,
+            area_lights: true,
+            triangles: true,
+            ..SceneFeatures::default()
+        }
+    );
+    assert!(!diffuse.has_specular_surface());
+    assert_eq!(
+        diffuse.to_string(),
+        "materials diffuse, lights area, shapes triangles"
+    );
+    let glass = load("tests/refs/scenes/cornell_glass_sphere/scene.xml").features();
+    assert!(glass.dielectric && glass.mirror && glass.spheres && glass.has_specular_surface());
+    assert!(!glass.point_lights);
+    let point = load("tests/refs/scenes/point_light_caustic/scene.xml").features();
+    assert!(point.point_lights && point.has_lights());
+
+    let unused = xml(r#"
+        <bsdf type="dielectric" id="unused"/>
+        <shape type="rectangle">
+            <bsdf type="diffuse"/>
+            <emitter type="area"><rgb name="radiance" value="0, 0, 0"/></emitter>
+        </shape>"#)
+    .features();
+    assert!(!unused.dielectric, "an unreferenced BSDF is not a feature");
+    assert!(!unused.has_lights(), "a zero-radiance emitter is no light");
+}

@@ -92,6 +92,61 @@ impl Default for Integrator {
     }
 }
 
+/// Which material, light and shape kinds a scene uses (only those some shape references).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SceneFeatures {
+    pub diffuse: bool,
+    pub dielectric: bool,
+    pub mirror: bool,
+    /// Some shape emits (an area light).
+    pub area_lights: bool,
+    pub point_lights: bool,
+    pub triangles: bool,
+    pub spheres: bool,
+}
+
+impl SceneFeatures {
+    /// Delta surfaces are the S vertices of caustic paths: without one there are no caustics.
+    pub fn has_specular_surface(&self) -> bool {
+        self.dielectric || self.mirror
+    }
+
+    pub fn has_lights(&self) -> bool {
+        self.area_lights || self.point_lights
+    }
+
+    pub fn meets(&self, need: crate::graph::pass::SceneNeed) -> bool {
+        match need {
+            crate::graph::pass::SceneNeed::SpecularSurface => self.has_specular_surface(),
+        }
+    }
+}
+
+impl std::fmt::Display for SceneFeatures {
+    /// One line for the CLI, e.g. "materials diffuse+dielectric, lights area, shapes triangles".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let list = |items: &[(&str, bool)]| {
+            let present: Vec<&str> = items.iter().filter(|i| i.1).map(|i| i.0).collect();
+            if present.is_empty() {
+                "none".to_string()
+            } else {
+                present.join("+")
+            }
+        };
+        write!(
+            f,
+            "materials {}, lights {}, shapes {}",
+            list(&[
+                ("diffuse", self.diffuse),
+                ("dielectric", self.dielectric),
+                ("mirror", self.mirror)
+            ]),
+            list(&[("area", self.area_lights), ("point", self.point_lights)]),
+            list(&[("triangles", self.triangles), ("spheres", self.spheres)]),
+        )
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
     /// The file the scene was loaded from (for messages).
@@ -169,30 +224,44 @@ impl Scene {
             .extend(place_triangles(triangles, to_world, material, flip_normals));
     }
 
+    /// What kinds of material, light and shape occur: what the graph and the shaders may leave
+    /// out. O(shapes); the renderer computes it once when it is built.
+    pub fn features(&self) -> SceneFeatures {
+        let mut f = SceneFeatures {
+            triangles: !self.triangles.is_empty(),
+            spheres: !self.spheres.is_empty(),
+            point_lights: !self.point_lights.is_empty(),
+            ..SceneFeatures::default()
+        };
+        let shape_materials = self
+            .triangles
+            .iter()
+            .map(|t| t.material)
+            .chain(self.spheres.iter().map(|s| s.material));
+        for m in shape_materials.filter_map(|m| self.materials.get(m as usize)) {
+            match m.bsdf {
+                Bsdf::Diffuse { .. } => f.diffuse = true,
+                Bsdf::Dielectric { .. } => f.dielectric = true,
+                Bsdf::Mirror => f.mirror = true,
+            }
+            f.area_lights |= m.emission.max_element() > 0.0;
+        }
+        f
+    }
+
     /// Whether some shape has a delta (mirror or dielectric) BSDF.
     pub fn has_specular_surface(&self) -> bool {
-        let is_delta = |m: u32| {
-            self.materials
-                .get(m as usize)
-                .is_some_and(|mat| mat.bsdf.is_delta())
-        };
-        self.triangles.iter().any(|t| is_delta(t.material))
-            || self.spheres.iter().any(|s| is_delta(s.material))
+        self.features().has_specular_surface()
     }
 
     /// Whether the scene meets a pass's need (graph pruning).
     pub fn meets(&self, need: crate::graph::pass::SceneNeed) -> bool {
-        match need {
-            crate::graph::pass::SceneNeed::SpecularSurface => self.has_specular_surface(),
-        }
+        self.features().meets(need)
     }
 
+    /// Some shape emits or a point light exists (either may still have zero power).
     pub fn has_lights(&self) -> bool {
-        !self.point_lights.is_empty()
-            || self
-                .materials
-                .iter()
-                .any(|m| m.emission.max_element() > 0.0)
+        self.features().has_lights()
     }
 
     /// Checks what every loader must guarantee: finite numbers, valid material indices, a
