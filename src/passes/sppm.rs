@@ -16,7 +16,7 @@ use crate::graph::pass::{
     ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl,
     parse_params,
 };
-use crate::passes::hit_points::{DEFAULT_RADIUS_PIXELS, HitPointHeader};
+use crate::passes::hit_points::{DEFAULT_RADIUS_PIXELS, HitPointHeader, read_hit_points};
 
 const SHADER: &str = "shaders/passes/merge.wgsl";
 const WORKGROUP: u32 = 8;
@@ -106,6 +106,7 @@ struct Prepared {
     bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
     stats: wgpu::Buffer,
+    hit_points: Resource,
     slots: u64,
     slots_per_pixel: u32,
     width: u32,
@@ -134,17 +135,19 @@ impl Merge {
             return Ok(Vec::new());
         };
         let words: Vec<[u32; 8]> = gpu.read_pod(&p.stats, p.slots as usize)?;
+        let hit_points = read_hit_points(gpu, &p.hit_points.buffer, p.slots)?;
         Ok(words
             .iter()
-            .map(|w| SlotStats {
-                tau: [
-                    f32::from_bits(w[0]),
-                    f32::from_bits(w[1]),
-                    f32::from_bits(w[2]),
-                ],
-                n: f32::from_bits(w[3]),
-                photons: (w[5] as u64) << 32 | w[4] as u64,
-                discarded: w[6],
+            .zip(&hit_points)
+            .map(|(w, hp)| {
+                // The kernel keeps tau / R^2 (merge.wgsl says why).
+                let r2 = hp.radius * hp.radius;
+                SlotStats {
+                    tau: [0, 1, 2].map(|c| f32::from_bits(w[c]) * r2),
+                    n: f32::from_bits(w[3]),
+                    photons: (w[5] as u64) << 32 | w[4] as u64,
+                    discarded: w[6],
+                }
             })
             .collect())
     }
@@ -211,6 +214,7 @@ impl Pass for Merge {
             bind_group,
             params,
             stats,
+            hit_points: hit_points.clone(),
             slots: hit_points.len,
             slots_per_pixel,
             width: ctx.width,
