@@ -267,6 +267,18 @@ fn a_sensor_that_mirrors_or_looks_nowhere_is_refused() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("n.xml:3:") && err.contains("lookat"), "{err}");
+    // Found by tests/fuzz.rs: so far from 0 that origin + view direction rounds to the origin.
+    let far = r#"<scene version="3.0.0">
+<sensor type="perspective">
+<transform name="to_world"><lookat origin="0, 0, 3.5e38" target="0, 0, 0" up="0, 1, 0"/></transform>
+</sensor></scene>"#;
+    let err = mitsuba::parse(Path::new("f.xml"), far)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("f.xml:3:") && err.contains("no view direction"),
+        "{err}"
+    );
     let no_sensor = "<scene version=\"3.0.0\">\n</scene>";
     let err = mitsuba::parse(Path::new("s.xml"), no_sensor)
         .unwrap_err()

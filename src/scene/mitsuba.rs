@@ -673,9 +673,19 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "a mirroring sensor to_world (negative determinant) is not supported",
             ));
         }
-        self.scene.camera.origin = m.transform_point3(Vec3::ZERO);
-        self.scene.camera.target = m.transform_point3(Vec3::Z);
-        self.scene.camera.up = m.transform_vector3(Vec3::Y);
+        let camera = &mut self.scene.camera;
+        camera.origin = m.transform_point3(Vec3::ZERO);
+        camera.target = m.transform_point3(Vec3::Z);
+        camera.up = m.transform_vector3(Vec3::Y);
+        // Far from the origin a unit step rounds away in f32 and the view direction vanishes.
+        let view = camera.target - camera.origin;
+        if !(view.is_finite() && view.cross(camera.up).length_squared() > 0.0) {
+            return Err(self.error(
+                node,
+                "the sensor's to_world gives no view direction in f32 (an origin too far from 0, \
+                 or a zero scale)",
+            ));
+        }
         Ok(())
     }
 

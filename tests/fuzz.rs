@@ -1,0 +1,284 @@
+//! Seeded fuzzing of the two user-written inputs, graph files and scene files (issue 7): each
+//! bundled file is mutated (truncated, two tokens swapped, a value of the wrong type, a huge or
+//! non-finite number, a token dropped) and written to disk under its own extension. Every
+//! mutant must either load, or fail with an error that names the mutant's file and a line
+//! (`file:line:col`); a panic fails the test. A sample of the mutants that load is rendered
+//! (tiny image, one iteration) and must give a finite image or a clear error.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::*;
+use hppm::render::Renderer;
+
+/// Mutants per kind of input; the issue asks for at least 200 in all.
+const MUTANTS_PER_FILE: usize = 40;
+/// Every how many loadable mutants one is rendered (rendering compiles pipelines). Rendering all
+/// of 600 mutants per file (1,425 renders) ran clean once; CI renders a spread sample.
+const RENDER_EVERY: usize = 3;
+
+const GRAPHS: &[&str] = &[
+    "graphs/pt.ron",
+    "graphs/hybrid.ron",
+    "graphs/hybrid_ppm.ron",
+    "graphs/hybrid_all_depths.ron",
+    "graphs/ppm_only.ron",
+];
+
+const SCENES: &[&str] = &[
+    "scenes/cornell_box.ron",
+    "scenes/furnace.ron",
+    "tests/data/scenes/glass_furnace.ron",
+    "tests/refs/scenes/cornell_glass_sphere/scene.xml",
+    "tests/refs/scenes/point_light_caustic/scene.xml",
+    "tests/refs/scenes/cornell_diffuse_obj/scene.xml",
+];
+
+/// A deterministic pseudo-random stream (no extra dependency).
+struct Lcg(u64);
+
+impl Lcg {
+    fn below(&mut self, n: usize) -> usize {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 33) as usize % n.max(1)
+    }
+
+    fn pick<'a>(&mut self, items: &[&'a str]) -> &'a str {
+        items[self.below(items.len())]
+    }
+}
+
+/// Splits text into tokens that concatenate back to it: runs of word characters (numbers,
+/// names), runs of whitespace, and single punctuation characters.
+fn tokens(text: &str) -> Vec<&str> {
+    let class = |c: char| {
+        if c.is_alphanumeric() || matches!(c, '_' | '.' | '-' | '+') {
+            0
+        } else if c.is_whitespace() {
+            1
+        } else {
+            2
+        }
+    };
+    let mut out = Vec::new();
+    let mut start = 0;
+    let mut previous = None;
+    for (i, c) in text.char_indices() {
+        let k = class(c);
+        if i > start && (previous != Some(k) || k == 2) {
+            out.push(&text[start..i]);
+            start = i;
+        }
+        previous = Some(k);
+    }
+    if start < text.len() {
+        out.push(&text[start..]);
+    }
+    out
+}
+
+fn is_number(token: &str) -> bool {
+    token.parse::<f64>().is_ok()
+}
+
+const HUGE: &[&str] = &[
+    "1e39",
+    "-1e39",
+    "3.5e38",
+    "1e-45",
+    "4294967296",
+    "18446744073709551616",
+    "99999999999",
+    "2000000000",
+    "65536",
+    "-0",
+    "NaN",
+    "inf",
+    "-inf",
+    "0",
+];
+const WRONG_TYPE: &[&str] = &[
+    "\"text\"", "true", "(1, 2)", "[]", "Some(1)", "None", "x", "1.5", "'", "<",
+];
+
+/// One mutant of `text`; the name says what was done, for the failure message.
+fn mutate(text: &str, rng: &mut Lcg) -> (String, &'static str) {
+    let t = tokens(text);
+    let numbers: Vec<usize> = (0..t.len()).filter(|&i| is_number(t[i])).collect();
+    let words: Vec<usize> = (0..t.len()).filter(|&i| !t[i].trim().is_empty()).collect();
+    let mut t: Vec<String> = t.iter().map(|s| s.to_string()).collect();
+    match rng.below(5) {
+        0 => {
+            let cut = text.floor_char_boundary(rng.below(text.len()));
+            (text[..cut].to_string(), "truncated")
+        }
+        1 => {
+            let (i, j) = (words[rng.below(words.len())], words[rng.below(words.len())]);
+            t.swap(i, j);
+            (t.concat(), "tokens swapped")
+        }
+        2 => {
+            let i = words[rng.below(words.len())];
+            t[i] = rng.pick(WRONG_TYPE).to_string();
+            (t.concat(), "wrong type")
+        }
+        3 if !numbers.is_empty() => {
+            let i = numbers[rng.below(numbers.len())];
+            t[i] = rng.pick(HUGE).to_string();
+            (t.concat(), "huge number")
+        }
+        _ => {
+            let i = words[rng.below(words.len())];
+            t[i].clear();
+            (t.concat(), "token dropped")
+        }
+    }
+}
+
+/// `message` names `file` followed by `:line:` (a positive line number).
+fn names_file_and_line(message: &str, file: &Path) -> bool {
+    let name = file.display().to_string();
+    message.match_indices(&name).any(|(at, _)| {
+        let rest = &message[at + name.len()..];
+        let Some(rest) = rest.strip_prefix(':') else {
+            return false;
+        };
+        let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+        !digits.is_empty() && digits != "0" && rest[digits.len()..].starts_with(':')
+    })
+}
+
+struct Dir(PathBuf);
+
+impl Dir {
+    fn new(label: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("hppm-fuzz-{label}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        Dir(dir)
+    }
+}
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Writes `MUTANTS_PER_FILE` mutants of each file into `dir` (with the original's extension)
+/// and returns (path, what was done) for each.
+fn mutants(files: &[&str], dir: &Path, seed: u64) -> Vec<(PathBuf, String)> {
+    let mut rng = Lcg(seed);
+    let mut out = Vec::new();
+    for file in files {
+        let original = repo_path(file);
+        let text = std::fs::read_to_string(&original).expect("read input");
+        let ext = original.extension().and_then(|e| e.to_str()).unwrap_or("");
+        for k in 0..MUTANTS_PER_FILE {
+            let (mutant, how) = mutate(&text, &mut rng);
+            let path = dir.join(format!("{}_{k}.{ext}", file.replace(['/', '.'], "_")));
+            std::fs::write(&path, mutant).expect("write mutant");
+            out.push((path, format!("{file} {how}")));
+        }
+    }
+    out
+}
+
+#[test]
+fn mutated_graph_files_load_or_name_their_file_and_line() {
+    let gpu = gpu();
+    let dir = Dir::new("graphs");
+    let scene = load_scene("tests/refs/scenes/cornell_glass_sphere/scene.xml");
+    let (mut loaded, mut failed, mut rendered) = (0, 0, 0);
+    for (path, how) in mutants(GRAPHS, &dir.0, 7) {
+        match hppm::graph::load_graph(&path, hppm::passes::registry()) {
+            Err(errors) => {
+                failed += 1;
+                let message = errors.to_string();
+                assert!(
+                    names_file_and_line(&message, &path),
+                    "{how}: error without file and line:\n{message}"
+                );
+            }
+            Ok(graph) => {
+                loaded += 1;
+                if loaded % RENDER_EVERY == 1 {
+                    rendered += 1;
+                    render_tiny(&gpu, &scene, graph, &how);
+                }
+            }
+        }
+    }
+    eprintln!("graph mutants: {loaded} loaded ({rendered} rendered), {failed} refused");
+    assert!(loaded + failed >= 200 && failed > 100 && loaded > 0);
+}
+
+#[test]
+fn mutated_scene_files_load_or_name_their_file_and_line() {
+    let gpu = gpu();
+    let dir = Dir::new("scenes");
+    // The OBJ scene refers to its meshes by relative path.
+    for mesh in ["unit_cube.obj", "short_box.obj"] {
+        std::fs::copy(
+            repo_path(&format!("tests/refs/scenes/cornell_diffuse_obj/{mesh}")),
+            dir.0.join(mesh),
+        )
+        .expect("copy mesh");
+    }
+    let (mut loaded, mut failed, mut rendered) = (0, 0, 0);
+    for (path, how) in mutants(SCENES, &dir.0, 11) {
+        match hppm::scene::load(&path) {
+            Err(error) => {
+                failed += 1;
+                let message = error.to_string();
+                assert!(
+                    names_file_and_line(&message, &path),
+                    "{how}: error without file and line:\n{message}"
+                );
+            }
+            Ok(scene) => {
+                loaded += 1;
+                if loaded % RENDER_EVERY == 1 {
+                    rendered += 1;
+                    render_tiny(&gpu, &scene, load_graph("graphs/hybrid.ron"), &how);
+                }
+            }
+        }
+    }
+    eprintln!("scene mutants: {loaded} loaded ({rendered} rendered), {failed} refused");
+    assert!(loaded + failed >= 200 && failed > 100 && loaded > 0);
+}
+
+/// One iteration at 8x8: a finite image, or an error (never a panic).
+fn render_tiny(
+    gpu: &hppm::gpu::GpuContext,
+    scene: &hppm::scene::Scene,
+    graph: hppm::graph::ValidGraph,
+    how: &str,
+) {
+    match Renderer::new(gpu, scene, graph, 8, 8, 1) {
+        Err(e) => eprintln!("{how}: renderer refused: {e}"),
+        Ok(mut r) => {
+            let image = render_to(&mut r, 1);
+            assert!(
+                image.pixels.iter().flatten().all(|v| v.is_finite()),
+                "{how}: NaN or Inf in the image"
+            );
+        }
+    }
+}
+
+#[test]
+fn tokens_concatenate_back_and_the_line_check_needs_a_line() {
+    let text = "(a: 1.5e3, b: \"x y\")\n";
+    assert_eq!(tokens(text).concat(), text);
+    assert!(tokens(text).contains(&"1.5e3"));
+    let file = Path::new("/tmp/g.ron");
+    assert!(names_file_and_line("/tmp/g.ron:3:7: unknown field", file));
+    assert!(!names_file_and_line("/tmp/g.ron: unknown field", file));
+    assert!(!names_file_and_line("/tmp/g.ron:0:1: x", file));
+    assert!(!names_file_and_line("other.ron:3:7: x", file));
+}
