@@ -270,7 +270,7 @@ fn a_sensor_that_mirrors_or_looks_nowhere_is_refused() {
     // Found by tests/fuzz.rs: so far from 0 that origin + view direction rounds to the origin.
     let far = r#"<scene version="3.0.0">
 <sensor type="perspective">
-<transform name="to_world"><lookat origin="0, 0, 3e38" target="0, 0, 0" up="0, 1, 0"/></transform>
+<transform name="to_world"><lookat origin="0, 0, 1" target="0, 0, 0" up="0, 1, 0"/><translate z="3e38"/></transform>
 </sensor></scene>"#;
     let err = mitsuba::parse(Path::new("f.xml"), far)
         .unwrap_err()
