@@ -64,20 +64,23 @@ fn node_table(gpu: &GpuContext, locate: fn(&str) -> PathBuf) -> Result<String, E
             let mut r = Renderer::new(gpu, &scene, graph, w, h, 1)?;
             run_iterations(&mut r, 2)?;
             let before = r.stats()?;
-            r.enable_profiling();
+            r.enable_profiling()?;
             let iterations = 8;
             run_iterations(&mut r, iterations)?;
             let after = r.stats()?;
             let times = r.node_times();
             let photon_seconds: f64 = times
                 .iter()
-                .filter(|(_, kind, _)| *kind == "photon_trace")
-                .map(|t| t.2)
+                .filter(|t| t.kind == "photon_trace")
+                .map(|t| t.wall_seconds)
                 .sum();
             let segments = after.photon_segments - before.photon_segments;
             let nodes: Vec<String> = times
                 .iter()
-                .map(|(name, _, s)| format!("{name} {:.1}", s / iterations as f64 * 1e3))
+                .map(|t| {
+                    let ms = t.wall_seconds / iterations as f64 * 1e3;
+                    format!("{} {ms:.1}", t.name)
+                })
                 .collect();
             out.push_str(&format!(
                 "| {} | {} | {} | {} | {:.2} |\n",
@@ -154,12 +157,12 @@ fn workload_table(
         let mut r = Renderer::new(gpu, &scene, graph, 512, 512, 1)?;
         run_iterations(&mut r, 1)?;
         let seconds = run_iterations(&mut r, iterations)? / iterations as f64;
-        r.enable_profiling();
+        r.enable_profiling()?;
         run_iterations(&mut r, 2)?;
         let nodes: Vec<String> = r
             .node_times()
             .iter()
-            .map(|(name, _, s)| format!("{name} {:.0}", s / 2.0 * 1e3))
+            .map(|t| format!("{} {:.0}", t.name, t.wall_seconds / 2.0 * 1e3))
             .collect();
         out.push_str(&format!(
             "| {graph_path} | {iterations} | {seconds:.2} | {} | {:.0} |\n",

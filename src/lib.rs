@@ -3,11 +3,13 @@
 
 pub mod bench;
 pub mod bench_hybrid;
+pub mod compare;
 pub mod error;
 pub mod gpu;
 pub mod graph;
 pub mod image;
 pub mod passes;
+pub mod plot;
 pub mod render;
 pub mod scene;
 pub mod shaders;

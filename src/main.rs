@@ -35,6 +35,8 @@ enum Command {
         #[arg(long)]
         scene: Option<PathBuf>,
     },
+    /// Render several graphs for the same time and plot their error against time.
+    Compare(CompareArgs),
     /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes; with
     /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error).
     Bench(BenchArgs),
@@ -69,6 +71,48 @@ struct RenderArgs {
     /// Output image: .exr (linear float) or .png (sRGB).
     #[arg(long, default_value = "render.exr")]
     out: PathBuf,
+    /// Adapter index (see `hppm info`) or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Time every node (GPU timestamps where the adapter has them, CPU wall clock always) and
+    /// print a table; nodes then run one at a time, so the render is slower.
+    #[arg(long)]
+    profile: bool,
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// Scene file (.xml Mitsuba 3, .ron, .obj).
+    scene: PathBuf,
+    /// Reference image (EXR) the same size as the renders.
+    #[arg(long)]
+    reference: PathBuf,
+    /// A graph to render (repeat for each).
+    #[arg(long = "graph", required = true)]
+    graphs: Vec<PathBuf>,
+    /// Seconds of rendering per graph (readback for the snapshots is not counted).
+    #[arg(long)]
+    time: f64,
+    /// Snapshots per graph, log-spaced from 1% of --time to --time.
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    snapshots: u64,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// CSV of another renderer's measurements (columns seconds,relmse,label) to plot too.
+    #[arg(long)]
+    peer: Option<PathBuf>,
+    /// Measure only the pixels where this EXR image is zero.
+    #[arg(long)]
+    mask: Option<PathBuf>,
+    /// Output folder: errors.csv, errors.png, one EXR per graph (and profile.csv).
+    #[arg(long)]
+    out: PathBuf,
+    /// Time every node (see `render --profile`); store the table in DIR/profile.csv.
+    #[arg(long)]
+    profile: bool,
+    /// Image size WxH (default: the scene's film).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
     /// Adapter index (see `hppm info`) or part of its name.
     #[arg(long)]
     adapter: Option<String>,
@@ -187,6 +231,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     for pruned in renderer.pruned() {
         eprintln!("{pruned}");
     }
+    if args.profile {
+        renderer.enable_profiling()?;
+    }
     let cancel = cancel_flag();
     let bar = progress_bar(budget);
     let summary = renderer.run(budget, &cancel, |r, seconds| {
@@ -220,6 +267,16 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     }
     if summary.cancelled {
         eprintln!("interrupted: wrote what was rendered so far");
+    }
+    if args.profile {
+        print!(
+            "{}",
+            hppm::compare::profile_table(
+                &renderer.node_times(),
+                summary.iterations,
+                &gpu.adapter_label()
+            )
+        );
     }
     println!(
         "{}: {}x{}, {} spp and {} photons in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
@@ -295,6 +352,59 @@ fn show_graph(file: &Path, dot: bool, scene_path: Option<&Path>) -> Result<(), E
     Ok(())
 }
 
+fn compare(args: CompareArgs) -> Result<(), Error> {
+    let gpu = GpuContext::new(args.adapter.as_deref())?;
+    eprintln!("adapter: {}", gpu.adapter_label());
+    let options = hppm::compare::CompareOptions {
+        scene: args.scene,
+        reference: args.reference,
+        graphs: args.graphs,
+        seconds: args.time,
+        snapshots: args.snapshots as usize,
+        seed: args.seed,
+        peer: args.peer,
+        mask: args.mask,
+        out: args.out,
+        profile: args.profile,
+        size: args.size,
+    };
+    let cancel = cancel_flag();
+    let report = hppm::compare::compare(&gpu, &options, &cancel, |line| eprintln!("{line}"))?;
+    for run in &report.runs {
+        let last = run.snapshots.last();
+        println!(
+            "{:<20} relMSE {:.3e} after {:.1} s ({} spp); slope {}",
+            run.label,
+            last.map_or(f64::NAN, |s| s.metrics.relmse),
+            last.map_or(0.0, |s| s.seconds),
+            last.map_or(0, |s| s.spp),
+            run.slope
+                .map_or("n/a (fewer than 2 snapshots)".into(), |s| format!("{s:.2}"))
+        );
+        if options.profile {
+            print!(
+                "{}",
+                hppm::compare::profile_table(
+                    &run.node_times,
+                    run.profiled_iterations,
+                    &gpu.adapter_label()
+                )
+            );
+        }
+    }
+    for (label, points) in hppm::compare::peer_groups(&report.peers) {
+        let slope =
+            hppm::compare::log_log_slope(&points).map_or("n/a".into(), |s| format!("{s:.2}"));
+        println!("{label:<20} (peer) slope {slope}");
+    }
+    println!("{}", report.errors_csv.display());
+    println!("{}", report.plot.display());
+    if let Some(profile) = &report.profile_csv {
+        println!("{}", profile.display());
+    }
+    Ok(())
+}
+
 fn bench_hybrid(args: &BenchArgs) -> Result<(), Error> {
     let options = hppm::bench_hybrid::HybridBenchOptions {
         adapter: args.adapter.as_deref(),
@@ -313,6 +423,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),
+        Command::Compare(args) => compare(args),
         Command::Info => info(),
         Command::Graph { file, dot, scene } => show_graph(&file, dot, scene.as_deref()),
         Command::Bench(args) if args.hybrid => bench_hybrid(&args),

@@ -9,6 +9,7 @@ use std::time::Instant;
 use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu::timer::NodeTimer;
 use crate::graph::ValidGraph;
 use crate::graph::pass::{ExecCtx, PassStats, PrepareCtx, Recorder, Resource, ResourceKind};
 use crate::image::Image;
@@ -79,6 +80,25 @@ pub struct Budget {
     pub photons: Option<u64>,
 }
 
+/// Per-node time summed over the profiled iterations.
+#[derive(Debug, Clone)]
+pub struct NodeTime {
+    pub name: String,
+    pub kind: &'static str,
+    /// CPU wall clock from the node's start until the GPU finished its work.
+    pub wall_seconds: f64,
+    /// GPU clock between timestamps before and after the node's commands, where the adapter
+    /// writes timestamps inside encoders. A node that waits on the CPU (the SAH builder) counts
+    /// that wait too.
+    pub gpu_seconds: Option<f64>,
+}
+
+struct Profile {
+    timer: Option<NodeTimer>,
+    wall_seconds: Vec<f64>,
+    gpu_seconds: Vec<f64>,
+}
+
 /// A graph prepared on a device for one scene, ready to iterate.
 pub struct Renderer<'a> {
     gpu: &'a GpuContext,
@@ -93,8 +113,8 @@ pub struct Renderer<'a> {
     iteration: u64,
     spp_per_iteration: u64,
     photons_per_iteration: u64,
-    /// Seconds spent in each node (schedule order) when profiling; `None` otherwise.
-    node_seconds: Option<Vec<f64>>,
+    /// Per-node timers when profiling; `None` otherwise.
+    profile: Option<Profile>,
     /// Nodes the scene had no use for, removed before preparing.
     pruned: Vec<crate::graph::Pruned>,
 }
@@ -189,7 +209,7 @@ impl<'a> Renderer<'a> {
             iteration: 0,
             spp_per_iteration,
             photons_per_iteration,
-            node_seconds: None,
+            profile: None,
             pruned,
         })
     }
@@ -205,12 +225,29 @@ impl<'a> Renderer<'a> {
         };
         for &node in &self.graph.order {
             let start = Instant::now();
+            let timer = self.profile.as_ref().and_then(|p| p.timer.as_ref());
+            if let Some(timer) = timer {
+                timer.begin(recorder.encoder(), node);
+            }
             self.graph.nodes[node].pass.execute(&ctx, &mut recorder)?;
-            if let Some(seconds) = &mut self.node_seconds {
+            if let Some(timer) = timer {
+                timer.end(recorder.encoder(), node);
+            }
+            if let Some(profile) = &mut self.profile {
                 // Each node's work is submitted and waited for on its own: wall time per node,
                 // at the cost of the overlap a real render has.
                 recorder.flush()?;
-                seconds[node] += start.elapsed().as_secs_f64();
+                profile.wall_seconds[node] += start.elapsed().as_secs_f64();
+            }
+        }
+        if let Some(profile) = &mut self.profile
+            && let Some(timer) = &profile.timer
+        {
+            timer.resolve(recorder.encoder());
+            recorder.flush()?;
+            let seconds = timer.read(self.gpu)?;
+            for &node in &self.graph.order {
+                profile.gpu_seconds[node] += seconds[node];
             }
         }
         recorder.submit();
@@ -223,14 +260,27 @@ impl<'a> Renderer<'a> {
         &self.pruned
     }
 
-    /// Times every node from now on (CPU wall clock, GPU waited for after each node).
-    pub fn enable_profiling(&mut self) {
-        self.node_seconds = Some(vec![0.0; self.graph.nodes.len()]);
+    /// Times every node from now on: GPU time from timestamp queries where the adapter can
+    /// write them inside encoders, and CPU wall time (each node waited for on its own) always.
+    /// Profiling serialises the nodes, so an iteration is slower than without it.
+    pub fn enable_profiling(&mut self) -> Result<(), Error> {
+        let nodes = self.graph.nodes.len();
+        self.profile = Some(Profile {
+            timer: NodeTimer::new(self.gpu, nodes)?,
+            wall_seconds: vec![0.0; nodes],
+            gpu_seconds: vec![0.0; nodes],
+        });
+        Ok(())
     }
 
-    /// (node name, pass kind, seconds) in schedule order, when profiling.
-    pub fn node_times(&self) -> Vec<(String, &'static str, f64)> {
-        let Some(seconds) = &self.node_seconds else {
+    /// Whether node times include GPU timestamps (else they are CPU wall times only).
+    pub fn has_gpu_timer(&self) -> bool {
+        self.profile.as_ref().is_some_and(|p| p.timer.is_some())
+    }
+
+    /// Per-node times summed since profiling began, in schedule order.
+    pub fn node_times(&self) -> Vec<NodeTime> {
+        let Some(profile) = &self.profile else {
             return Vec::new();
         };
         self.graph
@@ -238,7 +288,12 @@ impl<'a> Renderer<'a> {
             .iter()
             .map(|&n| {
                 let node = &self.graph.nodes[n];
-                (node.name.clone(), node.kind.name, seconds[n])
+                NodeTime {
+                    name: node.name.clone(),
+                    kind: node.kind.name,
+                    wall_seconds: profile.wall_seconds[n],
+                    gpu_seconds: profile.timer.as_ref().map(|_| profile.gpu_seconds[n]),
+                }
             })
             .collect()
     }

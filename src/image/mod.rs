@@ -25,6 +25,19 @@ impl Provenance {
     }
 }
 
+/// Errors of an image against a reference (`Image::metrics_where`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErrorMetrics {
+    /// Mean of (x - r)^2 / (r^2 + 0.01): the reference set's metric (tests/refs/README.md).
+    pub relmse: f64,
+    /// Root of the mean of (x - r)^2.
+    pub rmse: f64,
+    /// Mean of |x - r|.
+    pub mae: f64,
+    /// Pixels the means ran over.
+    pub pixels: usize,
+}
+
 fn io_error(path: &Path, message: impl ToString) -> Error {
     Error::Io {
         path: path.to_path_buf(),
@@ -75,8 +88,18 @@ impl Image {
         reference: &Image,
         keep: impl Fn(usize) -> bool,
     ) -> Result<f64, Error> {
+        Ok(self.metrics_where(reference, keep)?.relmse)
+    }
+
+    /// relMSE, RMSE and mean absolute error against `reference`, each a mean over the kept
+    /// pixels and their RGB channels.
+    pub fn metrics_where(
+        &self,
+        reference: &Image,
+        keep: impl Fn(usize) -> bool,
+    ) -> Result<ErrorMetrics, Error> {
         self.check_same_size(reference)?;
-        let mut sum = 0.0f64;
+        let (mut relative, mut squared, mut absolute) = (0.0f64, 0.0f64, 0.0f64);
         let mut count = 0usize;
         for (i, (x, r)) in self.pixels.iter().zip(&reference.pixels).enumerate() {
             if !keep(i) {
@@ -85,10 +108,18 @@ impl Image {
             count += 1;
             for c in 0..3 {
                 let (x, r) = (x[c] as f64, r[c] as f64);
-                sum += (x - r) * (x - r) / (r * r + 0.01);
+                relative += (x - r) * (x - r) / (r * r + 0.01);
+                squared += (x - r) * (x - r);
+                absolute += (x - r).abs();
             }
         }
-        Ok(sum / (3 * count.max(1)) as f64)
+        let n = (3 * count.max(1)) as f64;
+        Ok(ErrorMetrics {
+            relmse: relative / n,
+            rmse: (squared / n).sqrt(),
+            mae: absolute / n,
+            pixels: count,
+        })
     }
 
     fn check_same_size(&self, other: &Image) -> Result<(), Error> {

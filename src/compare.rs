@@ -1,0 +1,467 @@
+//! `hppm compare`: error against run time for several graphs on one scene and one adapter.
+//! Each graph renders for the same wall budget; at log-spaced moments the clock stops, the image
+//! is read back and compared with the reference (relMSE, RMSE, MAE), then the clock resumes.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::image::{ErrorMetrics, Image, Provenance};
+use crate::plot::{self, Series};
+use crate::render::{Budget, NodeTime, Renderer};
+use crate::{graph, passes, scene};
+
+/// What to compare (the command line's arguments).
+pub struct CompareOptions {
+    pub scene: PathBuf,
+    pub reference: PathBuf,
+    pub graphs: Vec<PathBuf>,
+    pub seconds: f64,
+    pub snapshots: usize,
+    pub seed: u64,
+    /// CSV of another renderer's (seconds, relmse, label) rows to plot beside ours.
+    pub peer: Option<PathBuf>,
+    /// Image whose zero pixels are the ones measured.
+    pub mask: Option<PathBuf>,
+    pub out: PathBuf,
+    pub profile: bool,
+    /// Render size; default: the scene's film.
+    pub size: Option<(u32, u32)>,
+}
+
+/// One row of `errors.csv`.
+#[derive(Debug, Clone)]
+pub struct Snapshot {
+    pub index: usize,
+    pub seconds: f64,
+    pub iterations: u64,
+    pub spp: u64,
+    pub photons: u64,
+    pub metrics: ErrorMetrics,
+}
+
+/// One graph's run.
+pub struct GraphRun {
+    /// The graph file's stem (made unique).
+    pub label: String,
+    pub snapshots: Vec<Snapshot>,
+    /// Least-squares slope of log relMSE against log seconds (-1 is an unbiased estimator's rate).
+    pub slope: Option<f64>,
+    pub node_times: Vec<NodeTime>,
+    pub profiled_iterations: u64,
+}
+
+/// A peer renderer's measurement (`--peer`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeerPoint {
+    pub seconds: f64,
+    pub relmse: f64,
+    pub label: String,
+}
+
+pub struct CompareReport {
+    pub runs: Vec<GraphRun>,
+    pub peers: Vec<PeerPoint>,
+    pub errors_csv: PathBuf,
+    pub plot: PathBuf,
+    pub profile_csv: Option<PathBuf>,
+}
+
+/// `n` moments from `total / 100` to `total`, evenly spaced in log time.
+pub fn snapshot_times(total: f64, n: usize) -> Vec<f64> {
+    if n <= 1 {
+        return vec![total];
+    }
+    (0..n)
+        .map(|k| total * 10f64.powf(-2.0 * (n - 1 - k) as f64 / (n - 1) as f64))
+        .collect()
+}
+
+/// Least-squares slope of ln y against ln x over the points where both are positive; `None`
+/// with fewer than two such points or no spread in x.
+pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let logs: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    let n = logs.len() as f64;
+    if logs.len() < 2 {
+        return None;
+    }
+    let mx = logs.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = logs.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = logs.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = logs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 1e-12).then(|| sxy / sxx)
+}
+
+/// Reads `seconds,relmse,label` rows; a header line, blank lines and `#` comments are skipped.
+pub fn read_peer_csv(path: &Path) -> Result<Vec<PeerPoint>, Error> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_peer_csv(path, &text)
+}
+
+pub fn parse_peer_csv(path: &Path, text: &str) -> Result<Vec<PeerPoint>, Error> {
+    let mut points = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') || (i == 0 && line.starts_with("seconds")) {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        let number = |k: usize| {
+            fields
+                .get(k)
+                .and_then(|f| f.parse::<f64>().ok())
+                .filter(|v| v.is_finite() && *v > 0.0)
+        };
+        let (Some(seconds), Some(relmse)) = (number(0), number(1)) else {
+            return Err(Error::Other(format!(
+                "{}:{}:1: expected `seconds,relmse,label` with positive numbers, got {line:?}",
+                path.display(),
+                i + 1
+            )));
+        };
+        let label = fields.get(2).filter(|l| !l.is_empty()).unwrap_or(&"peer");
+        points.push(PeerPoint {
+            seconds,
+            relmse,
+            label: label.to_string(),
+        });
+    }
+    Ok(points)
+}
+
+/// Which pixels count: all, or those where the mask image is zero in every channel.
+fn mask_keep(mask: Option<&Path>, width: u32, height: u32) -> Result<Option<Vec<bool>>, Error> {
+    let Some(path) = mask else {
+        return Ok(None);
+    };
+    let image = Image::read_exr(path)?;
+    if (image.width, image.height) != (width, height) {
+        return Err(Error::Other(format!(
+            "{}: the mask is {}x{} but the renders are {width}x{height}",
+            path.display(),
+            image.width,
+            image.height
+        )));
+    }
+    let keep: Vec<bool> = image.pixels.iter().map(|p| *p == [0.0; 3]).collect();
+    if !keep.iter().any(|&k| k) {
+        return Err(Error::Other(format!(
+            "{}: no pixel of the mask is zero, so nothing would be measured",
+            path.display()
+        )));
+    }
+    Ok(Some(keep))
+}
+
+/// Graph file stems, with `-2`, `-3` ... appended where two files share one.
+fn labels(graphs: &[PathBuf]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for g in graphs {
+        let stem = g
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "graph".into());
+        let mut label = stem.clone();
+        let mut k = 2;
+        while out.contains(&label) {
+            label = format!("{stem}-{k}");
+            k += 1;
+        }
+        out.push(label);
+    }
+    out
+}
+
+/// Runs the comparison and writes `errors.csv`, each graph's final image, `errors.png` and,
+/// with profiling, `profile.csv` into `options.out`.
+pub fn compare(
+    gpu: &GpuContext,
+    options: &CompareOptions,
+    cancel: &AtomicBool,
+    mut progress: impl FnMut(&str),
+) -> Result<CompareReport, Error> {
+    if !(options.seconds.is_finite() && options.seconds > 0.0) {
+        return Err(Error::Other(format!(
+            "--time must be a positive number of seconds, got {}",
+            options.seconds
+        )));
+    }
+    if options.graphs.is_empty() {
+        return Err(Error::Other("give at least one --graph".into()));
+    }
+    let scene = scene::load(&options.scene)?;
+    let reference = Image::read_exr(&options.reference)?;
+    let (width, height) = options
+        .size
+        .unwrap_or((scene.camera.width, scene.camera.height));
+    if (reference.width, reference.height) != (width, height) {
+        return Err(Error::Other(format!(
+            "{}: the reference is {}x{} but the renders are {width}x{height} (set --size)",
+            options.reference.display(),
+            reference.width,
+            reference.height
+        )));
+    }
+    let keep = mask_keep(options.mask.as_deref(), width, height)?;
+    let peers = match &options.peer {
+        Some(path) => read_peer_csv(path)?,
+        None => Vec::new(),
+    };
+    // Load every graph before rendering any, so a typo fails in a second, not after minutes.
+    let graphs = options
+        .graphs
+        .iter()
+        .map(|path| graph::load_graph(path, passes::registry()))
+        .collect::<Result<Vec<_>, _>>()?;
+    std::fs::create_dir_all(&options.out).map_err(|source| Error::Io {
+        path: options.out.clone(),
+        source,
+    })?;
+
+    let times = snapshot_times(options.seconds, options.snapshots.max(1));
+    let mut runs = Vec::new();
+    for ((graph, path), label) in graphs
+        .into_iter()
+        .zip(&options.graphs)
+        .zip(labels(&options.graphs))
+    {
+        progress(&format!("{label}: preparing {}", path.display()));
+        let mut renderer = Renderer::new(gpu, &scene, graph, width, height, options.seed)?;
+        if options.profile {
+            renderer.enable_profiling()?;
+        }
+        let mut snapshots = Vec::new();
+        let mut clock = 0.0;
+        for (index, &at) in times.iter().enumerate() {
+            // At least one iteration per snapshot, so seconds strictly increase.
+            let budget = if at > clock {
+                Budget {
+                    spp: None,
+                    seconds: Some(at - clock),
+                    photons: None,
+                }
+            } else {
+                Budget {
+                    spp: Some(renderer.samples_per_pixel() + renderer.spp_per_iteration()),
+                    seconds: None,
+                    photons: None,
+                }
+            };
+            let summary = renderer.run(budget, cancel, |_, _| {})?;
+            clock += summary.seconds;
+            let image = renderer.image()?;
+            let metrics = match &keep {
+                Some(keep) => image.metrics_where(&reference, |i| keep[i])?,
+                None => image.metrics_where(&reference, |_| true)?,
+            };
+            progress(&format!(
+                "{label}: {clock:.2} s, {} iterations, relMSE {:.3e}",
+                renderer.iterations(),
+                metrics.relmse
+            ));
+            snapshots.push(Snapshot {
+                index,
+                seconds: clock,
+                iterations: renderer.iterations(),
+                spp: renderer.samples_per_pixel(),
+                photons: renderer.photons(),
+                metrics,
+            });
+            if summary.cancelled {
+                break;
+            }
+        }
+        let final_image = renderer.image()?;
+        let provenance = Provenance::default()
+            .with("hppm_adapter", gpu.adapter_label())
+            .with("hppm_scene", options.scene.display())
+            .with("hppm_graph", path.display())
+            .with("hppm_spp", renderer.samples_per_pixel())
+            .with("hppm_seed", options.seed)
+            .with("hppm_seconds", format!("{clock:.3}"));
+        final_image.write(&options.out.join(format!("{label}.exr")), &provenance)?;
+        let points: Vec<(f64, f64)> = snapshots
+            .iter()
+            .map(|s| (s.seconds, s.metrics.relmse))
+            .collect();
+        runs.push(GraphRun {
+            slope: log_log_slope(&points),
+            label,
+            snapshots,
+            node_times: renderer.node_times(),
+            profiled_iterations: renderer.iterations(),
+        });
+        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            break;
+        }
+    }
+
+    let errors_csv = options.out.join("errors.csv");
+    write_file(&errors_csv, &errors_csv_text(&runs))?;
+    let profile_csv = if options.profile {
+        let path = options.out.join("profile.csv");
+        write_file(&path, &profile_csv_text(&runs))?;
+        Some(path)
+    } else {
+        None
+    };
+    let plot_path = options.out.join("errors.png");
+    let title = format!("{} on {}", scene_label(&options.scene), gpu.info.name);
+    plot::error_vs_time(&plot_path, &title, &plot_series(&runs, &peers))?;
+    Ok(CompareReport {
+        runs,
+        peers,
+        errors_csv,
+        plot: plot_path,
+        profile_csv,
+    })
+}
+
+/// `refs/scenes/x/scene.xml` -> `x`; `scenes/furnace.ron` -> `furnace`.
+fn scene_label(path: &Path) -> String {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
+    match (stem.as_deref(), path.parent().and_then(|p| p.file_name())) {
+        (Some("scene"), Some(dir)) => dir.to_string_lossy().into_owned(),
+        (Some(stem), _) => stem.to_string(),
+        (None, _) => "scene".into(),
+    }
+}
+
+fn write_file(path: &Path, text: &str) -> Result<(), Error> {
+    std::fs::write(path, text).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+pub fn errors_csv_text(runs: &[GraphRun]) -> String {
+    let mut out = String::from("graph,snapshot,seconds,iterations,spp,photons,relmse,rmse,mae\n");
+    for run in runs {
+        for s in &run.snapshots {
+            let _ = writeln!(
+                out,
+                "{},{},{:.6},{},{},{},{:.6e},{:.6e},{:.6e}",
+                run.label,
+                s.index,
+                s.seconds,
+                s.iterations,
+                s.spp,
+                s.photons,
+                s.metrics.relmse,
+                s.metrics.rmse,
+                s.metrics.mae
+            );
+        }
+    }
+    out
+}
+
+/// One row per (graph, node): milliseconds per iteration on the GPU clock (empty where the
+/// adapter has no encoder timestamps) and on the CPU wall clock.
+pub fn profile_csv_text(runs: &[GraphRun]) -> String {
+    let mut out =
+        String::from("graph,node,pass,iterations,gpu_ms_per_iteration,wall_ms_per_iteration\n");
+    for run in runs {
+        let per = |s: f64| s / run.profiled_iterations.max(1) as f64 * 1e3;
+        for t in &run.node_times {
+            let gpu = t
+                .gpu_seconds
+                .map(|s| format!("{:.4}", per(s)))
+                .unwrap_or_default();
+            let _ = writeln!(
+                out,
+                "{},{},{},{},{gpu},{:.4}",
+                run.label,
+                t.name,
+                t.kind,
+                run.profiled_iterations,
+                per(t.wall_seconds)
+            );
+        }
+    }
+    out
+}
+
+fn plot_series(runs: &[GraphRun], peers: &[PeerPoint]) -> Vec<Series> {
+    let mut series: Vec<Series> = runs
+        .iter()
+        .map(|run| Series {
+            label: match run.slope {
+                Some(slope) => format!("{} (slope {slope:.2})", run.label),
+                None => run.label.clone(),
+            },
+            points: run
+                .snapshots
+                .iter()
+                .map(|s| (s.seconds, s.metrics.relmse))
+                .collect(),
+            peer: false,
+        })
+        .collect();
+    for (label, points) in peer_groups(peers) {
+        series.push(Series {
+            label: format!("{label} (peer)"),
+            points,
+            peer: true,
+        });
+    }
+    series
+}
+
+/// Peer points grouped by label, in first-seen order.
+pub fn peer_groups(peers: &[PeerPoint]) -> Vec<(String, Vec<(f64, f64)>)> {
+    let mut groups: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for p in peers {
+        match groups.iter_mut().find(|g| g.0 == p.label) {
+            Some(g) => g.1.push((p.seconds, p.relmse)),
+            None => groups.push((p.label.clone(), vec![(p.seconds, p.relmse)])),
+        }
+    }
+    groups
+}
+
+/// The per-node table `--profile` prints.
+pub fn profile_table(times: &[NodeTime], iterations: u64, adapter: &str) -> String {
+    let gpu_timed = times.iter().any(|t| t.gpu_seconds.is_some());
+    let mut out = if gpu_timed {
+        format!(
+            "per-node time per iteration over {iterations} iterations on {adapter} \
+             (GPU: timestamp queries; wall: CPU clock, each node waited for on its own)\n"
+        )
+    } else {
+        format!(
+            "per-node time per iteration over {iterations} iterations on {adapter} \
+             (CPU wall clock only: this adapter cannot write timestamps inside encoders)\n"
+        )
+    };
+    let _ = writeln!(
+        out,
+        "  {:<16} {:<20} {:>10} {:>10}",
+        "node", "pass", "GPU ms", "wall ms"
+    );
+    let per = |s: f64| s / iterations.max(1) as f64 * 1e3;
+    for t in times {
+        let gpu = t
+            .gpu_seconds
+            .map(|s| format!("{:.3}", per(s)))
+            .unwrap_or_else(|| "-".into());
+        let _ = writeln!(
+            out,
+            "  {:<16} {:<20} {:>10} {:>10.3}",
+            t.name,
+            t.kind,
+            gpu,
+            per(t.wall_seconds)
+        );
+    }
+    out
+}
