@@ -138,11 +138,9 @@ pub fn parse_peer_csv(path: &Path, text: &str) -> Result<Vec<PeerPoint>, Error> 
     Ok(points)
 }
 
-/// Which pixels count: all, or those where the mask image is zero in every channel.
-fn mask_keep(mask: Option<&Path>, width: u32, height: u32) -> Result<Option<Vec<bool>>, Error> {
-    let Some(path) = mask else {
-        return Ok(None);
-    };
+/// Which pixels a mask EXR keeps: those zero in every channel. An error when its size differs
+/// from the renders' or it keeps nothing.
+pub fn read_mask(path: &Path, width: u32, height: u32) -> Result<Vec<bool>, Error> {
     let image = Image::read_exr(path)?;
     if (image.width, image.height) != (width, height) {
         return Err(Error::Other(format!(
@@ -159,7 +157,7 @@ fn mask_keep(mask: Option<&Path>, width: u32, height: u32) -> Result<Option<Vec<
             path.display()
         )));
     }
-    Ok(Some(keep))
+    Ok(keep)
 }
 
 /// Graph file stems, with `-2`, `-3` ... appended where two files share one.
@@ -211,7 +209,10 @@ pub fn compare(
             reference.height
         )));
     }
-    let keep = mask_keep(options.mask.as_deref(), width, height)?;
+    let keep = match &options.mask {
+        Some(path) => Some(read_mask(path, width, height)?),
+        None => None,
+    };
     let peers = match &options.peer {
         Some(path) => read_peer_csv(path)?,
         None => Vec::new(),
