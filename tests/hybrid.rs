@@ -198,8 +198,9 @@ fn hybrid_is_scale_invariant() {
     }
 }
 
-/// Degenerate input renders without NaN or Inf: a zero-area light, a light of radiance 0, a
-/// point light, and the camera inside a glass sphere (every camera path starts in glass).
+/// Degenerate input renders without NaN or Inf: a zero-area light, a light of radiance 0,
+/// zero-area diffuse and glass rectangles, a point light, and the camera inside a glass sphere
+/// (every camera path starts in glass).
 #[test]
 fn hybrid_survives_degenerate_scenes() {
     let gpu = gpu();
@@ -221,6 +222,8 @@ fn hybrid_survives_degenerate_scenes() {
                 (shape: Sphere(center: (0, 0, 0), radius: 0.5), material: "glass"),
                 (shape: Rectangle, material: "black", emission: Some((5, 5, 5)), to_world: [Scale((0, 1, 1)), Translate((0, 2.9, 0))]),
                 (shape: Rectangle, material: "black", emission: Some((0, 0, 0)), to_world: [Translate((0, 0, -2.9))]),
+                (shape: Rectangle, material: "white", to_world: [Scale((1, 0, 1)), Translate((0, -1, -1))]),
+                (shape: Rectangle, material: "glass", to_world: [Scale((0, 0, 1)), Translate((0.5, 0, -1))]),
             ],
             point_lights: [(position: (1, 2, 1), intensity: (3, 3, 3))],
         )"#,
