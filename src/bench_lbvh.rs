@@ -8,9 +8,8 @@ use std::path::PathBuf;
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
-use glam::Vec3;
-
 use crate::gpu::GpuContext;
+use crate::gpu::radix_sort::RadixSort;
 use crate::graph::pass::{ExecCtx, Pass, PrepareCtx, Recorder, Resource, ResourceKind};
 use crate::passes::hit_point_bvh_lbvh::{HitPointBvhLbvh, LbvhParams};
 use crate::passes::hit_point_bvh_sah::HitPointBvhSah;
@@ -23,7 +22,7 @@ use crate::shaders::ShaderLibrary;
 use crate::{Error, scene};
 
 const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
-const SIZES: &[u32] = &[1_000_000, 10_000_000];
+const SIZES: &[u32] = &[1_000_000, 2_000_000, 10_000_000];
 const PHOTONS: u32 = 1 << 16;
 const REPEATS: usize = 3;
 
@@ -167,6 +166,32 @@ fn row(bench: &Bench<'_>, scene: &Scene, count: u32) -> Result<String, Error> {
     ))
 }
 
+/// Median milliseconds of the radix sort alone on `count` pseudo-random pairs, waited for.
+fn sort_ms(bench: &Bench<'_>, count: u32) -> Result<f64, Error> {
+    let gpu = bench.gpu;
+    let keys: Vec<u32> = (0..count)
+        .map(|i| i.wrapping_mul(2_654_435_761) >> 2)
+        .collect();
+    let storage = wgpu::BufferUsages::STORAGE;
+    let key_buffer = gpu.create_buffer_init("bench keys", bytemuck::cast_slice(&keys), storage)?;
+    let value_buffer =
+        gpu.create_buffer_init("bench values", bytemuck::cast_slice(&keys), storage)?;
+    let mut sort = RadixSort::new(gpu, &bench.shaders)?;
+    let mut times = Vec::with_capacity(REPEATS + 1);
+    for _ in 0..=REPEATS {
+        let start = Instant::now();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        sort.record(gpu, &mut encoder, &key_buffer, &value_buffer, count)?;
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait()?;
+        times.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    // The first sort compiles the pipelines.
+    times.remove(0);
+    times.sort_by(f64::total_cmp);
+    Ok(times[REPEATS / 2])
+}
+
 /// Runs the hit-point BVH benchmark and returns it as Markdown.
 pub fn run(adapter: Option<&str>, locate: fn(&str) -> PathBuf) -> Result<String, Error> {
     let gpu = GpuContext::new(adapter)?;
@@ -186,12 +211,23 @@ pub fn run(adapter: Option<&str>, locate: fn(&str) -> PathBuf) -> Result<String,
          |---|---|---|---|---|---|\n",
         gpu.adapter_label()
     );
+    let mut not_run = String::new();
     for &count in SIZES {
         match row(&bench, &scene, count) {
             Ok(line) => out.push_str(&line),
-            Err(e) => out.push_str(&format!("| {count} | not run: {e} | | | | |\n")),
+            Err(e) => not_run.push_str(&format!("\n{count} hit points not run: {e}\n")),
         }
         // A failed allocation leaves its error for the next check; start the next size clean.
+        let _ = gpu.check_errors();
+    }
+    out.push_str(&not_run);
+    out.push_str("\nThe radix sort alone (8 passes of 4 bits, u32 keys and values):\n\n");
+    out.push_str("| pairs | GPU radix sort (ms) |\n|---|---|\n");
+    for &count in SIZES {
+        match sort_ms(&bench, count) {
+            Ok(ms) => out.push_str(&format!("| {count} | {ms:.0} |\n")),
+            Err(e) => out.push_str(&format!("| {count} | not run: {e} |\n")),
+        }
         let _ = gpu.check_errors();
     }
     Ok(out)

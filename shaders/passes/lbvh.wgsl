@@ -230,6 +230,12 @@ fn load_box(slot: u32) -> Box {
 // One invocation per leaf: writes the leaf's box, then climbs. At each internal node the first
 // child to arrive stops and the second, whose sibling's box is then written, stores the union,
 // so every node is computed once, after both its children (Karras 2012, section 4).
+// Caveat: Karras orders the sibling's box before the counter with a device-wide fence; WGSL has
+// none outside control barriers, and its atomics are relaxed. Here boxes and counters are all
+// atomics (coherent, never served stale from a non-coherent cache), and the ordering between a
+// box's stores and the counter's increment rests on the device not reordering one invocation's
+// atomics to different words: true on lavapipe, where the tests run, but not promised by the
+// WGSL memory model.
 @compute @workgroup_size(256)
 fn refit(
     @builtin(workgroup_id) group: vec3<u32>,

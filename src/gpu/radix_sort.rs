@@ -72,9 +72,8 @@ impl RadixSort {
     /// Records into `encoder` the sort of the first `count` pairs (`keys[i]`, `values[i]`) by
     /// key, stable, in place: the sorted pairs end up in `keys` and `values` (both need STORAGE
     /// usage and room for `count` u32s). Scratch buffers are kept for later sorts of at most as
-    /// many pairs. Several sorts may be recorded into one submission only in separate encoders
-    /// or one after another with the same `count`: the params are uploaded through a copy
-    /// recorded here, but they live in one buffer.
+    /// many pairs. Several sorts may follow one another in one encoder: each uploads its params
+    /// through a copy recorded in the encoder, so each sees its own `count`.
     pub fn record(
         &mut self,
         gpu: &GpuContext,
