@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod bench_hybrid;
+pub mod bench_lbvh;
 pub mod compare;
 pub mod error;
 pub mod gpu;

@@ -38,7 +38,8 @@ enum Command {
     /// Render several graphs for the same time and plot their error against time.
     Compare(CompareArgs),
     /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes; with
-    /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error).
+    /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error);
+    /// with --lbvh, the hit-point BVH builders (CPU SAH against GPU LBVH).
     Bench(BenchArgs),
 }
 
@@ -132,6 +133,9 @@ struct BenchArgs {
     /// Benchmark the hybrid instead (needs tests/refs from the source tree).
     #[arg(long)]
     hybrid: bool,
+    /// Benchmark the hit-point BVH builders instead (CPU SAH vs GPU LBVH, 1M and 10M points).
+    #[arg(long, conflicts_with = "hybrid")]
+    lbvh: bool,
     /// Wall-clock budgets for the equal-time error table, comma-separated (with --hybrid).
     #[arg(long, value_delimiter = ',', default_value = "10,60")]
     seconds: Vec<f64>,
@@ -419,6 +423,15 @@ fn bench_hybrid(args: &BenchArgs) -> Result<(), Error> {
     Ok(())
 }
 
+fn bench_lbvh(args: &BenchArgs) -> Result<(), Error> {
+    let text = hppm::bench_lbvh::run(args.adapter.as_deref(), bundled)?;
+    print!("{text}");
+    if let Some(path) = &args.write {
+        bench::append_markdown(path, &text)?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -427,6 +440,7 @@ fn main() -> ExitCode {
         Command::Info => info(),
         Command::Graph { file, dot, scene } => show_graph(&file, dot, scene.as_deref()),
         Command::Bench(args) if args.hybrid => bench_hybrid(&args),
+        Command::Bench(args) if args.lbvh => bench_lbvh(&args),
         Command::Bench(args) => bench::run(
             args.adapter.as_deref(),
             args.spp,

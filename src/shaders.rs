@@ -39,6 +39,10 @@ pub const COMMON_MODULES: &[(&str, &str)] = &[
         "shaders/common/hit_points.wgsl",
         include_str!("../shaders/common/hit_points.wgsl"),
     ),
+    (
+        "shaders/common/dispatch.wgsl",
+        include_str!("../shaders/common/dispatch.wgsl"),
+    ),
 ];
 
 /// Entry-point files, one per pass kind that runs a kernel.
@@ -58,6 +62,14 @@ pub const PASS_SHADERS: &[(&str, &str)] = &[
     (
         "shaders/passes/resolve.wgsl",
         include_str!("../shaders/passes/resolve.wgsl"),
+    ),
+    (
+        "shaders/passes/radix_sort.wgsl",
+        include_str!("../shaders/passes/radix_sort.wgsl"),
+    ),
+    (
+        "shaders/passes/lbvh.wgsl",
+        include_str!("../shaders/passes/lbvh.wgsl"),
     ),
 ];
 

@@ -44,7 +44,8 @@ const NO_PIXEL: u32 = 0xffffffffu;
 
 // BVH over hit-point spheres. Every leaf holds exactly one hit point: `count` == 1 and
 // `left_or_first` is its index. Interior nodes have `count` == 0 and their right child follows
-// the left one.
+// the left one. The GPU builder (passes/lbvh.wgsl) gives every slot a leaf and slots without a
+// hit point an empty box (min > max), which no point is inside.
 struct HitPointNode {
     min: vec3<f32>,
     left_or_first: u32,

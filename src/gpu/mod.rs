@@ -10,6 +10,7 @@ use wgpu::util::DeviceExt;
 
 mod adapter;
 pub mod binding;
+pub mod radix_sort;
 pub mod timer;
 
 pub use adapter::{adapter_label, list_adapters};

@@ -1,5 +1,6 @@
 //! The registry of pass kinds: every kind a graph file may name.
 
+pub mod hit_point_bvh_lbvh;
 pub mod hit_point_bvh_sah;
 pub mod hit_points;
 pub mod path_trace;
@@ -15,6 +16,7 @@ pub fn registry() -> &'static [PassKind] {
     static KINDS: &[PassKind] = &[
         path_trace::KIND,
         hit_point_bvh_sah::KIND,
+        hit_point_bvh_lbvh::KIND,
         photon_trace::KIND,
         sppm::KIND,
         ppm::KIND,

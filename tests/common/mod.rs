@@ -71,3 +71,4 @@ pub fn render_to(renderer: &mut Renderer<'_>, spp: u64) -> Image {
 pub fn relmse(image: &Image, reference: &Image) -> f64 {
     image.relmse(reference).unwrap_or_else(|e| panic!("{e}"))
 }
+pub mod pass_harness;

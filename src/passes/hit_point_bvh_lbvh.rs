@@ -1,0 +1,228 @@
+//! `hit_point_bvh_lbvh`: the hit-point BVH built on the GPU every iteration, with no readback: a
+//! linear BVH (Morton codes, GPU radix sort, Karras 2012 hierarchy, bottom-up refit; see
+//! shaders/passes/lbvh.wgsl) in the same layout as `hit_point_bvh_sah`'s, so the two nodes are
+//! interchangeable in a graph. Every hit-point slot gets a leaf; slots without a hit point get
+//! empty boxes, which traversal never enters.
+//!
+//! While the hit points keep their positions (their `frozen` flag, raised by the `ppm`
+//! estimator, which then only shrinks radii), the tree's shape stays valid, so after the first
+//! build only the refit runs, with the current radii.
+
+use std::collections::HashMap;
+use std::sync::atomic::Ordering;
+
+use serde::Deserialize;
+
+use crate::Error;
+use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu::radix_sort::{RadixSort, workgroup_grid};
+use crate::graph::pass::{
+    ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl, parse_params,
+};
+use crate::passes::hit_points::tree_bytes;
+
+const SHADER: &str = "shaders/passes/lbvh.wgsl";
+/// `WORKGROUP_SIZE` in shaders/common/dispatch.wgsl.
+const WORKGROUP: u32 = 256;
+
+static SLOTS: &[SlotDecl] = &[
+    SlotDecl::input("hit_points", ResourceKind::HitPoints),
+    SlotDecl::output("tree", ResourceKind::HitPointTree),
+];
+
+pub const KIND: PassKind = PassKind {
+    name: "hit_point_bvh_lbvh",
+    description: "hit-point BVH built on the GPU (Morton codes, radix sort, Karras hierarchy)",
+    slots: SLOTS,
+    construct,
+};
+
+fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
+    let params: LbvhParams = parse_params(params)?;
+    Ok(Box::new(HitPointBvhLbvh::new(params)))
+}
+
+/// When to skip the sort and hierarchy and only recompute bounds.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+pub enum RefitOnly {
+    /// After the first build, whenever the hit points are frozen.
+    #[default]
+    Auto,
+    /// Rebuild every iteration.
+    Never,
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LbvhParams {
+    pub refit_only: RefitOnly,
+}
+
+/// How many times the pass built the tree from scratch and how many times it only refit it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BuildCounts {
+    pub full: u64,
+    pub refit: u64,
+}
+
+struct Pipelines {
+    morton_codes: wgpu::ComputePipeline,
+    emit_hierarchy: wgpu::ComputePipeline,
+    refit: wgpu::ComputePipeline,
+}
+
+struct Prepared {
+    hit_points: Resource,
+    /// Leaves (hit-point slots).
+    count: u32,
+    keys: wgpu::Buffer,
+    values: wgpu::Buffer,
+    visits: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    pipelines: Pipelines,
+    sort: RadixSort,
+}
+
+pub struct HitPointBvhLbvh {
+    params: LbvhParams,
+    prepared: Option<Prepared>,
+    builds: BuildCounts,
+}
+
+impl HitPointBvhLbvh {
+    pub fn new(params: LbvhParams) -> Self {
+        Self {
+            params,
+            prepared: None,
+            builds: BuildCounts::default(),
+        }
+    }
+
+    pub fn builds(&self) -> BuildCounts {
+        self.builds
+    }
+
+    /// A full build is needed first, and whenever the hit points may have moved.
+    fn needs_full_build(&self, hit_points: &Resource) -> bool {
+        self.builds.full == 0
+            || self.params.refit_only == RefitOnly::Never
+            || !hit_points.frozen.load(Ordering::Relaxed)
+    }
+}
+
+/// Leaf count as the kernels index it (i32 sorted positions in the hierarchy kernel).
+fn leaf_count(len: u64) -> Result<u32, Error> {
+    u32::try_from(len)
+        .ok()
+        .filter(|&n| n < i32::MAX as u32 / 2)
+        .ok_or_else(|| {
+            Error::Other(format!(
+                "hit_point_bvh_lbvh: {len} hit-point slots are more than the builder indexes"
+            ))
+        })
+}
+
+fn create_pipelines(
+    ctx: &PrepareCtx<'_>,
+    layout: &wgpu::BindGroupLayout,
+) -> Result<Pipelines, Error> {
+    let pipeline = |entry| {
+        ctx.shaders
+            .compute_pipeline(ctx.gpu, SHADER, entry, &[&ctx.scene.layout, layout])
+    };
+    Ok(Pipelines {
+        morton_codes: pipeline("morton_codes")?,
+        emit_hierarchy: pipeline("emit_hierarchy")?,
+        refit: pipeline("refit")?,
+    })
+}
+
+impl Pass for HitPointBvhLbvh {
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+        let gpu = ctx.gpu;
+        let hit_points = ctx.input("hit_points")?.clone();
+        let count = leaf_count(hit_points.len)?;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let tree = gpu.create_buffer(
+            "hit_point_bvh_lbvh tree",
+            tree_bytes(hit_points.len),
+            storage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        // The shape, and so the node count, depends only on the number of slots.
+        let node_count = (2 * count).saturating_sub(1);
+        gpu.queue
+            .write_buffer(&tree, 0, bytemuck::cast_slice(&[node_count, 0, 0, 0]));
+        let words = |n: u64| n.max(1) * 4;
+        let keys = gpu.create_buffer("lbvh keys", words(count as u64), storage)?;
+        let values = gpu.create_buffer("lbvh values", words(count as u64), storage)?;
+        let node_slots = gpu.create_buffer("lbvh node slots", words(2 * count as u64), storage)?;
+        let parents = gpu.create_buffer("lbvh parents", words(2 * count as u64), storage)?;
+        let visits = gpu.create_buffer(
+            "lbvh visits",
+            words(count as u64),
+            storage | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let params = gpu.create_buffer_init(
+            "lbvh params",
+            bytemuck::cast_slice(&[count, 0, 0, 0]),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let (layout, bind_group) = bind_buffers(
+            &gpu.device,
+            "hit_point_bvh_lbvh",
+            &[
+                (Access::Uniform, &params),
+                (Access::Read, &hit_points.buffer),
+                (Access::ReadWrite, &keys),
+                (Access::ReadWrite, &values),
+                (Access::ReadWrite, &tree),
+                (Access::ReadWrite, &node_slots),
+                (Access::ReadWrite, &parents),
+                (Access::ReadWrite, &visits),
+            ],
+        );
+        let pipelines = create_pipelines(&ctx, &layout)?;
+        let sort = RadixSort::new(gpu, ctx.shaders)?;
+        let tree = Resource::new(ResourceKind::HitPointTree, tree, hit_points.len);
+        self.prepared = Some(Prepared {
+            hit_points,
+            count,
+            keys,
+            values,
+            visits,
+            bind_group,
+            pipelines,
+            sort,
+        });
+        self.builds = BuildCounts::default();
+        Ok(HashMap::from([("tree", tree)]))
+    }
+
+    fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
+        let full = match &self.prepared {
+            Some(p) if p.count > 0 => self.needs_full_build(&p.hit_points),
+            _ => return Ok(()),
+        };
+        let Some(p) = &mut self.prepared else {
+            return Ok(());
+        };
+        let scene = &ctx.scene.bind_group;
+        let per_leaf = workgroup_grid(p.count.div_ceil(WORKGROUP));
+        if full {
+            let codes = &p.pipelines.morton_codes;
+            recorder.dispatch("lbvh morton codes", codes, scene, &p.bind_group, per_leaf);
+            p.sort
+                .record(ctx.gpu, recorder.encoder(), &p.keys, &p.values, p.count)?;
+            let per_internal = workgroup_grid((p.count - 1).div_ceil(WORKGROUP));
+            let emit = &p.pipelines.emit_hierarchy;
+            recorder.dispatch("lbvh hierarchy", emit, scene, &p.bind_group, per_internal);
+            self.builds.full += 1;
+        } else {
+            self.builds.refit += 1;
+        }
+        recorder.encoder().clear_buffer(&p.visits, 0, None);
+        let refit = &p.pipelines.refit;
+        recorder.dispatch("lbvh refit", refit, scene, &p.bind_group, per_leaf);
+        Ok(())
+    }
+}
