@@ -98,7 +98,8 @@ pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 1e-12).then(|| sxy / sxx)
 }
 
-/// Reads `seconds,relmse,label` rows; a header line, blank lines and `#` comments are skipped.
+/// Reads `seconds,relmse,label` rows; a header before the first row, blank lines and `#`
+/// comments are skipped.
 pub fn read_peer_csv(path: &Path) -> Result<Vec<PeerPoint>, Error> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
@@ -111,7 +112,8 @@ pub fn parse_peer_csv(path: &Path, text: &str) -> Result<Vec<PeerPoint>, Error> 
     let mut points = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || (i == 0 && line.starts_with("seconds")) {
+        let header = points.is_empty() && line.starts_with("seconds");
+        if line.is_empty() || line.starts_with('#') || header {
             continue;
         }
         let fields: Vec<&str> = line.split(',').map(str::trim).collect();

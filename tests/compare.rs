@@ -75,7 +75,7 @@ fn peer_csv_rows_and_errors_with_their_line() {
     let path = Path::new("peer.csv");
     let rows = parse_peer_csv(
         path,
-        "seconds,relmse,label\n0.5, 0.1, Mitsuba\n# a comment\n\n2,0.03\n",
+        "# measured elsewhere\nseconds,relmse,label\n0.5, 0.1, Mitsuba\n# a comment\n\n2,0.03\n",
     )
     .expect("valid");
     assert_eq!(rows.len(), 2);

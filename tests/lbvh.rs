@@ -93,8 +93,9 @@ fn radix_sort_matches_a_stable_cpu_sort() {
     check_sort(&gpu, &mut sort, "empty", &[]);
     check_sort(&gpu, &mut sort, "one", &[42]);
     check_sort(&gpu, &mut sort, "two, reversed", &[u32::MAX, 3]);
-    // Around one block of 1024 pairs: a partial last block, and a block of one pair.
-    for n in [1023, 1024, 1025] {
+    // Around one invocation's 16 pairs and one block's 4096: partial invocations, a partial
+    // last block, and a block of one pair.
+    for n in [15, 16, 17, 1023, 4095, 4096, 4097] {
         check_sort(&gpu, &mut sort, "random", &random(n, u32::MAX));
     }
     check_sort(&gpu, &mut sort, "all equal", &[0xdead_beef; 5000]);
@@ -106,7 +107,7 @@ fn radix_sort_matches_a_stable_cpu_sort() {
     // Keys that differ in one digit only (the others' passes must keep the order).
     let one_digit: Vec<u32> = random(20_000, 16).iter().map(|k| k << 20).collect();
     check_sort(&gpu, &mut sort, "one digit", &one_digit);
-    // 2^20: 1024 blocks, and the scratch grows from the sizes above.
+    // 2^20: 256 blocks, and the scratch grows from the sizes above.
     check_sort(
         &gpu,
         &mut sort,

@@ -1,25 +1,28 @@
 // Least-significant-digit radix sort of (key, value) u32 pairs, 4 bits per pass (driven by
-// src/gpu/radix_sort.rs). Each pass runs three kernels over blocks of BLOCK pairs:
+// src/gpu/radix_sort.rs). Each pass runs three kernels over blocks of BLOCK pairs, each
+// invocation owning KEYS_PER_INVOCATION consecutive pairs of its block:
 //   count_digits:   per-block digit histogram, stored digit-major (all blocks of digit 0, then
 //                   digit 1, ...), so that one exclusive scan of it gives every block the first
 //                   output position of each digit;
 //   scan_histogram: that exclusive scan, by one workgroup looping over the histogram, which is
-//                   short (16 words per 1024 pairs, 156k words for 10M pairs);
-//   scatter:        writes each pair to its digit's position plus its rank among the pairs of
-//                   the same digit before it in the block. Ranks come from one bit per
-//                   invocation in a per-digit mask and a population count of the bits below,
-//                   which keeps the pass stable without subgroup operations.
-// Only 32-bit workgroup atomics and barriers are used, so it runs on every backend.
+//                   short (16 words per 4096 pairs);
+//   scatter:        each invocation counts the digits of its own pairs, a workgroup scan of those
+//                   counts gives it, per digit, how many pairs of the block come before its own,
+//                   and it writes its pairs in order: stable without subgroup operations.
+// Only 32-bit atomics and workgroup barriers are used, so it runs on every backend. Many pairs per
+// invocation keep barriers few: on CPU drivers (lavapipe) each barrier switches through every
+// invocation of the workgroup, and with one pair per invocation barriers dominated (4x slower).
 
 #import common::dispatch::{WORKGROUP_SIZE, flat_workgroup}
 
 const RADIX: u32 = 16u;
-// Pairs per block: each invocation handles one pair per round.
+const KEYS_PER_INVOCATION: u32 = 16u;
+const BLOCK: u32 = 4096u;
+// Two digits' counts share a word (16 bits each: a block has at most 4096 pairs of a digit).
+const PACKED_WORDS: u32 = 8u;
+// Histogram words the scan handles per round: ROUNDS per invocation.
 const ROUNDS: u32 = 4u;
-const BLOCK: u32 = 1024u;
-// 32-bit words in one digit's mask of the WORKGROUP_SIZE invocations.
-const MASK_WORDS: u32 = 8u;
-const NO_DIGIT: u32 = 16u;
+const SCAN_CHUNK: u32 = 1024u;
 
 struct SortParams {
     // Pairs to sort.
@@ -40,16 +43,16 @@ struct SortParams {
 
 var<workgroup> digit_counts: array<atomic<u32>, RADIX>;
 var<workgroup> scan_partial: array<u32, WORKGROUP_SIZE>;
-var<workgroup> digit_base: array<u32, RADIX>;
-var<workgroup> digit_masks: array<atomic<u32>, 128>;
+// Per invocation, its digit counts packed two to a word; scanned in place.
+var<workgroup> packed_counts: array<array<u32, PACKED_WORDS>, WORKGROUP_SIZE>;
 
 fn digit_of(key: u32) -> u32 {
     return (key >> params.shift) & (RADIX - 1u);
 }
 
-// Index of the pair that invocation `local` handles in `round` of `block`.
-fn pair_index(block: u32, round: u32, local: u32) -> u32 {
-    return block * BLOCK + round * WORKGROUP_SIZE + local;
+// Index of the first pair invocation `local` owns in `block`.
+fn first_pair(block: u32, local: u32) -> u32 {
+    return block * BLOCK + local * KEYS_PER_INVOCATION;
 }
 
 @compute @workgroup_size(256)
@@ -66,11 +69,10 @@ fn count_digits(
         atomicStore(&digit_counts[local], 0u);
     }
     workgroupBarrier();
-    for (var round = 0u; round < ROUNDS; round++) {
-        let index = pair_index(block, round, local);
-        if index < params.count {
-            atomicAdd(&digit_counts[digit_of(src_keys[index])], 1u);
-        }
+    let first = first_pair(block, local);
+    let end = min(first + KEYS_PER_INVOCATION, params.count);
+    for (var index = first; index < end; index++) {
+        atomicAdd(&digit_counts[digit_of(src_keys[index])], 1u);
     }
     workgroupBarrier();
     if local < RADIX {
@@ -91,13 +93,13 @@ fn scan_workgroup(local: u32) {
     }
 }
 
-// Dispatched as a single workgroup: chunks of BLOCK words, each invocation owning ROUNDS
+// Dispatched as a single workgroup: chunks of SCAN_CHUNK words, each invocation owning ROUNDS
 // consecutive words, with the running total carried from chunk to chunk.
 @compute @workgroup_size(256)
 fn scan_histogram(@builtin(local_invocation_index) local: u32) {
     let total = params.blocks * RADIX;
     var carried = 0u;
-    for (var start = 0u; start < total; start += BLOCK) {
+    for (var start = 0u; start < total; start += SCAN_CHUNK) {
         let first = start + local * ROUNDS;
         var words: array<u32, ROUNDS>;
         var own_sum = 0u;
@@ -123,23 +125,24 @@ fn scan_histogram(@builtin(local_invocation_index) local: u32) {
     }
 }
 
-// How many invocations before `local` set their bit in digit `digit`'s mask.
-fn rank_in_round(digit: u32, local: u32) -> u32 {
-    let word = local / 32u;
-    var rank = 0u;
-    for (var w = 0u; w < word; w++) {
-        rank += countOneBits(atomicLoad(&digit_masks[digit * MASK_WORDS + w]));
+// Inclusive prefix sum of every invocation's packed counts (Hillis & Steele). Packed lanes
+// never carry into each other: a digit's count in a block is at most BLOCK < 2^16.
+fn scan_packed_counts(local: u32) {
+    for (var offset = 1u; offset < WORKGROUP_SIZE; offset <<= 1u) {
+        var added: array<u32, PACKED_WORDS>;
+        if local >= offset {
+            added = packed_counts[local - offset];
+        }
+        workgroupBarrier();
+        for (var w = 0u; w < PACKED_WORDS; w++) {
+            packed_counts[local][w] += added[w];
+        }
+        workgroupBarrier();
     }
-    let below = (1u << (local % 32u)) - 1u;
-    return rank + countOneBits(atomicLoad(&digit_masks[digit * MASK_WORDS + word]) & below);
 }
 
-fn count_in_round(digit: u32) -> u32 {
-    var total = 0u;
-    for (var w = 0u; w < MASK_WORDS; w++) {
-        total += countOneBits(atomicLoad(&digit_masks[digit * MASK_WORDS + w]));
-    }
-    return total;
+fn unpack_count(words: array<u32, PACKED_WORDS>, digit: u32) -> u32 {
+    return (words[digit / 2u] >> (16u * (digit % 2u))) & 0xffffu;
 }
 
 @compute @workgroup_size(256)
@@ -152,32 +155,29 @@ fn scatter(
     if block >= params.blocks {
         return;
     }
-    if local < RADIX {
-        digit_base[local] = histogram[local * params.blocks + block];
+    let first = first_pair(block, local);
+    let end = min(first + KEYS_PER_INVOCATION, params.count);
+    var own: array<u32, PACKED_WORDS>;
+    for (var index = first; index < end; index++) {
+        let digit = digit_of(src_keys[index]);
+        own[digit / 2u] += 1u << (16u * (digit % 2u));
     }
-    for (var round = 0u; round < ROUNDS; round++) {
-        if local < RADIX * MASK_WORDS {
-            atomicStore(&digit_masks[local], 0u);
-        }
-        workgroupBarrier();
-        let index = pair_index(block, round, local);
-        var key = 0u;
-        var digit = NO_DIGIT;
-        if index < params.count {
-            key = src_keys[index];
-            digit = digit_of(key);
-            atomicOr(&digit_masks[digit * MASK_WORDS + local / 32u], 1u << (local % 32u));
-        }
-        workgroupBarrier();
-        if digit != NO_DIGIT {
-            let position = digit_base[digit] + rank_in_round(digit, local);
-            dst_keys[position] = key;
-            dst_values[position] = src_values[index];
-        }
-        workgroupBarrier();
-        if local < RADIX {
-            digit_base[local] += count_in_round(local);
-        }
-        workgroupBarrier();
+    packed_counts[local] = own;
+    workgroupBarrier();
+    scan_packed_counts(local);
+    // Exclusive: the pairs of each digit owned by earlier invocations of the block.
+    var before = packed_counts[local];
+    for (var w = 0u; w < PACKED_WORDS; w++) {
+        before[w] -= own[w];
+    }
+    var written: array<u32, RADIX>;
+    for (var index = first; index < end; index++) {
+        let key = src_keys[index];
+        let digit = digit_of(key);
+        let position = histogram[digit * params.blocks + block] + unpack_count(before, digit)
+            + written[digit];
+        written[digit] += 1u;
+        dst_keys[position] = key;
+        dst_values[position] = src_values[index];
     }
 }

@@ -14,7 +14,7 @@ const RADIX_BITS: u32 = 4;
 const PASSES: u32 = u32::BITS / RADIX_BITS;
 const RADIX: u64 = 1 << RADIX_BITS;
 /// Pairs per workgroup (`BLOCK` in the shader).
-const BLOCK: u32 = 1024;
+const BLOCK: u32 = 4096;
 /// `SortParams` in the shader.
 const PARAMS_BYTES: u64 = 16;
 /// Most workgroups a dispatch may have in one dimension (WebGPU's default limit).
