@@ -9,16 +9,16 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::atomic::Ordering;
 
-use common::pass_harness::{PassHarness, hit_point_resource, write_hit_points};
+use common::pass_harness::{
+    PassHarness, check_range_queries, hit_point, hit_point_resource, write_hit_points,
+};
 use common::*;
 use glam::Vec3;
 use hppm::gpu::GpuContext;
 use hppm::gpu::radix_sort::RadixSort;
 use hppm::graph::pass::Resource;
 use hppm::passes::hit_point_bvh_lbvh::{BuildCounts, HitPointBvhLbvh, LbvhParams, RefitOnly};
-use hppm::passes::hit_points::{
-    GpuHitPoint, NO_PIXEL, TREE_HEADER_BYTES, sphere_box, tree_bytes, tree_range_query,
-};
+use hppm::passes::hit_points::{GpuHitPoint, NO_PIXEL, TREE_HEADER_BYTES, sphere_box, tree_bytes};
 use hppm::scene::Scene;
 use hppm::scene::bvh::BvhNode;
 use hppm::shaders::ShaderLibrary;
@@ -128,19 +128,6 @@ fn radix_sort_matches_a_stable_cpu_sort() {
 
 const SCENE: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 
-fn hit_point(position: Vec3, radius: f32) -> GpuHitPoint {
-    GpuHitPoint {
-        position: position.to_array(),
-        pixel: 0,
-        normal: [0.0, 1.0, 0.0],
-        radius,
-        wo: [0.0, 1.0, 0.0],
-        depth: 1,
-        weight: [1.0; 3],
-        footprint: radius,
-    }
-}
-
 fn read_tree(gpu: &GpuContext, tree: &Resource) -> Vec<BvhNode> {
     let bytes = gpu
         .read_buffer(&tree.buffer, 0, tree_bytes(tree.len))
@@ -219,42 +206,16 @@ fn check_structure(name: &str, nodes: &[BvhNode], points: &[GpuHitPoint]) -> usi
     deepest
 }
 
-fn brute_force(points: &[GpuHitPoint], p: Vec3) -> Vec<u32> {
-    (0u32..)
-        .zip(points)
-        .filter(|(_, hp)| {
-            hp.is_valid() && Vec3::from(hp.position).distance_squared(p) <= hp.radius * hp.radius
-        })
-        .map(|(i, _)| i)
-        .collect()
-}
-
-fn check_queries(name: &str, nodes: &[BvhNode], points: &[GpuHitPoint], queries: &[Vec3]) {
-    let mut pairs = 0;
-    for &q in queries {
-        let mut found = tree_range_query(nodes, points, q);
-        found.sort_unstable();
-        let expected = brute_force(points, q);
-        assert_eq!(found, expected, "{name}: query at {q}");
-        pairs += expected.len();
-    }
-    eprintln!(
-        "{name}: {} slots, {} queries, {pairs} pairs found",
-        points.len(),
-        queries.len()
-    );
-}
-
 /// The photon pass's traversal stack (TREE_STACK_SIZE) holds one entry per level plus two.
 const MAX_TRAVERSABLE_DEPTH: usize = 62;
 
 fn check_tree(name: &str, nodes: &[BvhNode], points: &[GpuHitPoint], queries: &[Vec3]) {
     let depth = check_structure(name, nodes, points);
     assert!(depth <= MAX_TRAVERSABLE_DEPTH, "{name}: depth {depth}");
-    check_queries(name, nodes, points, queries);
+    check_range_queries(name, nodes, points, queries);
     // Queries at the centres: every valid hit point must find at least itself.
     let centres: Vec<Vec3> = points.iter().map(|h| Vec3::from(h.position)).collect();
-    check_queries(&format!("{name}, at centres"), nodes, points, &centres);
+    check_range_queries(&format!("{name}, at centres"), nodes, points, &centres);
 }
 
 fn build_on_gpu(h: &PassHarness<'_>, points: &[GpuHitPoint]) -> Vec<BvhNode> {
@@ -275,7 +236,7 @@ fn scene_and_bounds() -> (Scene, Vec3, Vec3) {
 fn lbvh_trees_are_well_formed_and_queries_match_brute_force() {
     let gpu = gpu();
     let (scene, lo, hi) = scene_and_bounds();
-    let h = PassHarness::new(&gpu, &scene, (32, 32));
+    let h = PassHarness::new(&gpu, &scene, (32, 32), gpu.has_float_atomics());
     let extent = (hi - lo).max_element();
     let mut rng = Rng(3);
     let queries: Vec<Vec3> = (0..2000).map(|_| rng.in_box(lo, hi)).collect();
@@ -369,7 +330,7 @@ fn lbvh_trees_are_well_formed_and_queries_match_brute_force() {
     let depth = check_structure("150k slots", &nodes, &large);
     eprintln!("150k slots: depth {depth}");
     assert!(depth <= MAX_TRAVERSABLE_DEPTH);
-    check_queries("150k slots", &nodes, &large, &queries);
+    check_range_queries("150k slots", &nodes, &large, &queries);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -393,7 +354,7 @@ fn topology(nodes: &[BvhNode]) -> Vec<(u32, u32)> {
 fn refit_only_keeps_the_shape_and_follows_shrinking_radii() {
     let gpu = gpu();
     let (scene, lo, hi) = scene_and_bounds();
-    let h = PassHarness::new(&gpu, &scene, (32, 32));
+    let h = PassHarness::new(&gpu, &scene, (32, 32), gpu.has_float_atomics());
     let extent = (hi - lo).max_element();
     let mut rng = Rng(11);
     let queries: Vec<Vec3> = (0..2000).map(|_| rng.in_box(lo, hi)).collect();

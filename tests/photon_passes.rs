@@ -5,91 +5,20 @@
 
 mod common;
 
-use std::collections::{HashMap, HashSet};
-
+use common::pass_harness::{
+    PassHarness, brute_force, check_range_queries, hit_point, hit_point_resource_with,
+};
 use common::*;
 use glam::Vec3;
 use hppm::gpu::GpuContext;
-use hppm::graph::pass::{ExecCtx, Pass, PrepareCtx, Recorder, Resource, ResourceKind};
+use hppm::graph::pass::{ExecCtx, Pass, Recorder, Resource, ResourceKind};
 use hppm::passes::hit_point_bvh_sah::HitPointBvhSah;
-use hppm::passes::hit_points::{
-    GpuHitPoint, HitPointHeader, NO_PIXEL, build_tree, tree_range_query,
-};
+use hppm::passes::hit_points::{GpuHitPoint, HitPointHeader, NO_PIXEL, build_tree};
 use hppm::passes::photon_trace::{PhotonMode, PhotonTrace, PhotonTraceParams};
 use hppm::passes::sppm::{Merge, MergeParams};
-use hppm::render::SceneResources;
 use hppm::scene::Scene;
 use hppm::scene::bvh::{build_sah, closest_hit, scene_boxes};
 use hppm::scene::gpu_layout::GpuScene;
-use hppm::shaders::ShaderLibrary;
-
-// ---------------------------------------------------------------------------------------------
-// Running one pass alone.
-
-struct Harness<'a> {
-    gpu: &'a GpuContext,
-    scene: SceneResources,
-    shaders: ShaderLibrary,
-    width: u32,
-    height: u32,
-}
-
-impl<'a> Harness<'a> {
-    fn new(gpu: &'a GpuContext, scene: &Scene, size: (u32, u32), float_atomics: bool) -> Self {
-        let gpu_scene = GpuScene::new(scene, size.0, size.1);
-        Self {
-            gpu,
-            scene: SceneResources::upload(gpu, &gpu_scene).expect("scene upload"),
-            shaders: ShaderLibrary::new(float_atomics, hppm::shaders::scene_defs(scene)),
-            width: size.0,
-            height: size.1,
-        }
-    }
-
-    fn prepare(
-        &self,
-        pass: &mut dyn Pass,
-        inputs: &[(&'static str, &Resource)],
-    ) -> HashMap<&'static str, Resource> {
-        let ctx = PrepareCtx {
-            gpu: self.gpu,
-            scene: &self.scene,
-            shaders: &self.shaders,
-            inputs: inputs.iter().map(|(s, r)| (*s, (*r).clone())).collect(),
-            consumed: HashSet::new(),
-            width: self.width,
-            height: self.height,
-        };
-        pass.prepare(ctx).expect("prepare")
-    }
-
-    fn run(&self, pass: &mut dyn Pass, iteration: u64, seed: u64) {
-        let ctx = ExecCtx {
-            gpu: self.gpu,
-            scene: &self.scene,
-            iteration,
-            seed,
-        };
-        let mut recorder = Recorder::new(self.gpu);
-        pass.execute(&ctx, &mut recorder).expect("execute");
-        recorder.flush().expect("flush");
-    }
-}
-
-fn hit_point_resource(
-    gpu: &GpuContext,
-    header: HitPointHeader,
-    points: &[GpuHitPoint],
-) -> Resource {
-    let mut bytes = bytemuck::bytes_of(&header).to_vec();
-    bytes.extend_from_slice(bytemuck::cast_slice(points));
-    let usage =
-        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-    let buffer = gpu
-        .create_buffer_init("test hit points", &bytes, usage)
-        .expect("buffer");
-    Resource::new(ResourceKind::HitPoints, buffer, points.len() as u64)
-}
 
 /// (count, RGB flux) per hit point from a deposits buffer; the bytes are the same for both
 /// atomics paths (a u32 count, then the f32 bits of each channel).
@@ -121,44 +50,8 @@ impl Lcg {
     }
 }
 
-fn hit_point(position: Vec3, radius: f32) -> GpuHitPoint {
-    GpuHitPoint {
-        position: position.to_array(),
-        pixel: 0,
-        normal: [0.0, 1.0, 0.0],
-        radius,
-        wo: [0.0, 1.0, 0.0],
-        depth: 1,
-        weight: [1.0; 3],
-        footprint: radius,
-    }
-}
-
-fn brute_force(points: &[GpuHitPoint], p: Vec3) -> Vec<u32> {
-    (0u32..)
-        .zip(points)
-        .filter(|(_, hp)| {
-            hp.is_valid() && Vec3::from(hp.position).distance_squared(p) <= hp.radius * hp.radius
-        })
-        .map(|(i, _)| i)
-        .collect()
-}
-
 fn check_queries(name: &str, points: &[GpuHitPoint], queries: &[Vec3]) {
-    let nodes = build_tree(points);
-    let mut total = 0;
-    for &q in queries {
-        let mut found = tree_range_query(&nodes, points, q);
-        found.sort_unstable();
-        let expected = brute_force(points, q);
-        assert_eq!(found, expected, "{name}: query at {q}");
-        total += expected.len();
-    }
-    eprintln!(
-        "{name}: {} hit points, {} queries, {total} pairs found",
-        points.len(),
-        queries.len()
-    );
+    check_range_queries(name, &build_tree(points), points, queries);
 }
 
 #[test]
@@ -360,14 +253,14 @@ fn gpu_caustic_deposits(
     float_atomics: bool,
     aim: bool,
 ) -> Vec<(u32, [f32; 3])> {
-    let h = Harness::new(gpu, scene, (32, 32), float_atomics);
+    let h = PassHarness::new(gpu, scene, (32, 32), float_atomics);
     let header = HitPointHeader {
         initial_radius: 0.0,
         radius_pixels: 1.0,
         min_radius: 0.0,
         slots_per_pixel: 1,
     };
-    let hit_points = hit_point_resource(gpu, header, points);
+    let hit_points = hit_point_resource_with(gpu, header, points);
     let mut bvh = HitPointBvhSah::default();
     let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
     h.run(&mut bvh, 0, PHOTON_SEED);
@@ -539,14 +432,14 @@ fn photons_carry_the_lights_power() {
         pi * 2.0 * 0.5 + 4.0 * pi * 0.2,
     ];
     for float_atomics in [gpu.has_float_atomics(), false] {
-        let h = Harness::new(&gpu, &scene, (16, 16), float_atomics);
+        let h = PassHarness::new(&gpu, &scene, (16, 16), float_atomics);
         let header = HitPointHeader {
             initial_radius: 0.0,
             radius_pixels: 1.0,
             min_radius: 0.0,
             slots_per_pixel: 1,
         };
-        let hit_points = hit_point_resource(&gpu, header, &[hit_point(Vec3::ZERO, 0.0)]);
+        let hit_points = hit_point_resource_with(&gpu, header, &[hit_point(Vec3::ZERO, 0.0)]);
         let mut bvh = HitPointBvhSah::default();
         let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
         let mut photons = PhotonTrace::new(PhotonTraceParams {
@@ -623,14 +516,14 @@ fn merge_matches_the_progressive_update_in_f64() {
 
     let mut results = Vec::new();
     for float_atomics in [gpu.has_float_atomics(), false] {
-        let h = Harness::new(&gpu, &scene, (width, height), float_atomics);
+        let h = PassHarness::new(&gpu, &scene, (width, height), float_atomics);
         let header = HitPointHeader {
             initial_radius: 0.0,
             radius_pixels: 1.0,
             min_radius: 0.0,
             slots_per_pixel: slots,
         };
-        let hit_points = hit_point_resource(&gpu, header, &points);
+        let hit_points = hit_point_resource_with(&gpu, header, &points);
         let deposits_buffer = gpu
             .create_buffer(
                 "test deposits",
@@ -785,9 +678,9 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
     let flux: Vec<[f32; 3]> = (0..count)
         .map(|i| [0.5, 1.0, 2.0].map(|c| c * counts[i] as f32 * 1e-3))
         .collect();
-    let h = Harness::new(&gpu, &scene, (width, height), gpu.has_float_atomics());
+    let h = PassHarness::new(&gpu, &scene, (width, height), gpu.has_float_atomics());
     let header = HitPointHeader::new(0.0, 1.0, 0.0, 1);
-    let hit_points = hit_point_resource(&gpu, header, &points);
+    let hit_points = hit_point_resource_with(&gpu, header, &points);
     let words: Vec<[u32; 4]> = (0..count)
         .map(|i| {
             [
