@@ -19,6 +19,7 @@ use hppm::passes::sppm::{Merge, MergeParams};
 use hppm::scene::Scene;
 use hppm::scene::bvh::{build_sah, closest_hit, scene_boxes};
 use hppm::scene::gpu_layout::GpuScene;
+use std::collections::HashMap;
 
 /// (count, RGB flux) per hit point from a deposits buffer; the bytes are the same for both
 /// atomics paths (a u32 count, then the f32 bits of each channel).
@@ -479,6 +480,60 @@ struct CpuSlot {
     photons: u64,
 }
 
+impl CpuSlot {
+    fn new(radius: f32) -> Self {
+        CpuSlot {
+            n: 0.0,
+            r: radius as f64,
+            tau: [0.0; 3],
+            photons: 0,
+        }
+    }
+
+    /// The literal progressive update of one iteration's `m` photons of total flux `flux`.
+    fn merge(&mut self, m: u32, flux: [f32; 3], alpha: f64, min_radius: f64) {
+        if m == 0 || self.r <= 0.0 {
+            return;
+        }
+        let mf = m as f64;
+        let r_new = (self.r * ((self.n + alpha * mf) / (self.n + mf)).sqrt()).max(min_radius);
+        for (tau, f) in self.tau.iter_mut().zip(flux) {
+            *tau = (*tau + f as f64) * (r_new / self.r).powi(2);
+        }
+        self.n += alpha * mf;
+        self.r = r_new;
+        self.photons += m as u64;
+    }
+}
+
+/// Deposit cells as the photon pass leaves them: a count, then the f32 bits of each channel.
+fn deposit_words(deposits: impl Iterator<Item = (u32, [f32; 3])>) -> Vec<[u32; 4]> {
+    deposits
+        .map(|(m, f)| [m, f[0].to_bits(), f[1].to_bits(), f[2].to_bits()])
+        .collect()
+}
+
+/// A `Merge` (sppm) prepared on `hit_points` and `deposits`, and its outputs.
+fn prepared_merge(
+    h: &PassHarness<'_>,
+    alpha: f64,
+    hit_points: &Resource,
+    deposits: &Resource,
+) -> (Merge, HashMap<&'static str, Resource>) {
+    let mut merge = Merge::new(
+        MergeParams {
+            alpha: alpha as f32,
+            ..Default::default()
+        },
+        false,
+    );
+    let out = h.prepare(
+        &mut merge,
+        &[("hit_points", hit_points), ("deposits", deposits)],
+    );
+    (merge, out)
+}
+
 #[test]
 fn merge_matches_the_progressive_update_in_f64() {
     let gpu = gpu();
@@ -532,22 +587,9 @@ fn merge_matches_the_progressive_update_in_f64() {
             )
             .expect("buffer");
         let deposits = Resource::new(ResourceKind::Deposits, deposits_buffer, count as u64);
-        let mut merge = Merge::new(
-            MergeParams {
-                alpha: alpha as f32,
-                ..Default::default()
-            },
-            false,
-        );
-        let out = h.prepare(
-            &mut merge,
-            &[("hit_points", &hit_points), ("deposits", &deposits)],
-        );
+        let (mut merge, out) = prepared_merge(&h, alpha, &hit_points, &deposits);
         for (it, deposit) in iterations.iter().enumerate() {
-            let words: Vec<[u32; 4]> = deposit
-                .iter()
-                .map(|(m, f)| [*m, f[0].to_bits(), f[1].to_bits(), f[2].to_bits()])
-                .collect();
+            let words = deposit_words(deposit.iter().copied());
             gpu.queue
                 .write_buffer(&deposits.buffer, 0, bytemuck::cast_slice(&words));
             h.run(&mut merge, it as u64, 0);
@@ -566,28 +608,10 @@ fn merge_matches_the_progressive_update_in_f64() {
     }
 
     // The same update on the CPU in f64.
-    let mut cpu: Vec<CpuSlot> = points
-        .iter()
-        .map(|p| CpuSlot {
-            n: 0.0,
-            r: p.radius as f64,
-            tau: [0.0; 3],
-            photons: 0,
-        })
-        .collect();
+    let mut cpu: Vec<CpuSlot> = points.iter().map(|p| CpuSlot::new(p.radius)).collect();
     for deposit in &iterations {
-        for (s, (m, f)) in cpu.iter_mut().zip(deposit) {
-            if *m == 0 || s.r <= 0.0 {
-                continue;
-            }
-            let m = *m as f64;
-            let r_new = (s.r * ((s.n + alpha * m) / (s.n + m)).sqrt()).max(min_radius);
-            for (tau, flux) in s.tau.iter_mut().zip(f) {
-                *tau = (*tau + *flux as f64) * (r_new / s.r).powi(2);
-            }
-            s.n += alpha * m;
-            s.r = r_new;
-            s.photons += m as u64;
+        for (s, &(m, f)) in cpu.iter_mut().zip(deposit) {
+            s.merge(m, f, alpha, min_radius);
         }
     }
     let close = |a: f64, b: f64| (a - b).abs() <= 2e-5 * b.abs().max(1e-12);
@@ -681,16 +705,7 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
     let h = PassHarness::new(&gpu, &scene, (width, height), gpu.has_float_atomics());
     let header = HitPointHeader::new(0.0, 1.0, 0.0, 1);
     let hit_points = hit_point_resource_with(&gpu, header, &points);
-    let words: Vec<[u32; 4]> = (0..count)
-        .map(|i| {
-            [
-                counts[i],
-                flux[i][0].to_bits(),
-                flux[i][1].to_bits(),
-                flux[i][2].to_bits(),
-            ]
-        })
-        .collect();
+    let words = deposit_words(counts.iter().copied().zip(flux.iter().copied()));
     let deposits_buffer = gpu
         .create_buffer_init(
             "constant deposits",
@@ -699,17 +714,7 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
         )
         .expect("buffer");
     let deposits = Resource::new(ResourceKind::Deposits, deposits_buffer, count as u64);
-    let mut merge = Merge::new(
-        MergeParams {
-            alpha: alpha as f32,
-            ..Default::default()
-        },
-        false,
-    );
-    let out = h.prepare(
-        &mut merge,
-        &[("hit_points", &hit_points), ("deposits", &deposits)],
-    );
+    let (mut merge, out) = prepared_merge(&h, alpha, &hit_points, &deposits);
     // The merge never clears deposits (the photon pass does), so each dispatch merges them again.
     let mut iteration = 0;
     while iteration < ITERATIONS {
@@ -740,24 +745,9 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
     let mut worst = 0.0f64;
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-30);
     for i in 0..count {
-        let mut cpu = CpuSlot {
-            n: 0.0,
-            r: radii[i] as f64,
-            tau: [0.0; 3],
-            photons: 0,
-        };
+        let mut cpu = CpuSlot::new(radii[i]);
         for _ in 0..ITERATIONS {
-            if counts[i] == 0 {
-                break;
-            }
-            let m = counts[i] as f64;
-            let r_new = (cpu.r * ((cpu.n + alpha * m) / (cpu.n + m)).sqrt()).max(min_radius);
-            for (tau, f) in cpu.tau.iter_mut().zip(flux[i]) {
-                *tau = (*tau + f as f64) * (r_new / cpu.r).powi(2);
-            }
-            cpu.n += alpha * m;
-            cpu.r = r_new;
-            cpu.photons += counts[i] as u64;
+            cpu.merge(counts[i], flux[i], alpha, min_radius);
         }
         let s = stats[i];
         assert_eq!(s.photons, cpu.photons, "slot {i}: exact photon total");
