@@ -204,11 +204,8 @@ fn hybrid_is_scale_invariant() {
 #[test]
 fn hybrid_survives_degenerate_scenes() {
     let gpu = gpu();
-    let dir = std::env::temp_dir().join(format!("hppm-degenerate-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("degenerate.ron");
-    std::fs::write(
-        &path,
+    let scene = ron_scene(
+        "degenerate.ron",
         r#"(
             camera: (origin: (0, 0, 0.1), target: (0, 0, -1), up: (0, 1, 0), fov_x: 60, width: 24, height: 16),
             integrator: (max_depth: Some(12)),
@@ -227,9 +224,7 @@ fn hybrid_survives_degenerate_scenes() {
             ],
             point_lights: [(position: (1, 2, 1), intensity: (3, 3, 3))],
         )"#,
-    )
-    .expect("write scene");
-    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    );
     for graph in [
         "graphs/hybrid.ron",
         "graphs/hybrid_all_depths.ron",
@@ -250,5 +245,4 @@ fn hybrid_survives_degenerate_scenes() {
             "{graph}: the point light lights the room"
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }

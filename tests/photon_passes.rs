@@ -409,12 +409,9 @@ fn aimed_caustic_photons_gather_the_same_flux() {
 #[test]
 fn photons_carry_the_lights_power() {
     let gpu = gpu();
-    let dir = std::env::temp_dir().join(format!("hppm-power-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("two_lights.ron");
     // A point light (power 4 pi I) and a one-sided area light 2 x 1 (power pi A L).
-    std::fs::write(
-        &path,
+    let scene = ron_scene(
+        "two_lights.ron",
         r#"(
             camera: (origin: (0, 0, 5), target: (0, 0, 0), up: (0, 1, 0), fov_x: 40, width: 16, height: 16),
             materials: { "black": Diffuse(reflectance: (0, 0, 0)) },
@@ -423,9 +420,7 @@ fn photons_carry_the_lights_power() {
             ],
             point_lights: [(position: (0, 0, 2), intensity: (0.3, 0.1, 0.2))],
         )"#,
-    )
-    .expect("write scene");
-    let scene = hppm::scene::load(&path).expect("scene");
+    );
     let pi = std::f64::consts::PI;
     let expected = [
         pi * 2.0 * 1.5 + 4.0 * pi * 0.3,
@@ -467,7 +462,6 @@ fn photons_carry_the_lights_power() {
             );
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -98,11 +98,8 @@ fn tiny_light_hybrid_converges() {
 #[test]
 fn a_scene_without_lights_renders_black() {
     let gpu = gpu();
-    let dir = std::env::temp_dir().join(format!("hppm-dark-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("dark.ron");
-    std::fs::write(
-        &path,
+    let scene = ron_scene(
+        "dark.ron",
         r#"(
             camera: (origin: (0, 0, 0.5), target: (0, 0, -1), up: (0, 1, 0), fov_x: 60, width: 16, height: 12),
             materials: {
@@ -114,9 +111,7 @@ fn a_scene_without_lights_renders_black() {
                 (shape: Sphere(center: (0, 0, -0.3), radius: 0.3), material: "glass"),
             ],
         )"#,
-    )
-    .expect("write scene");
-    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    );
     assert!(!scene.has_lights());
     for graph in [
         "graphs/pt.ron",
@@ -136,5 +131,4 @@ fn a_scene_without_lights_renders_black() {
             "{graph}: a dark scene must be black"
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -34,6 +34,11 @@ pub fn load_scene(relative: &str) -> Scene {
     hppm::scene::load(&repo_path(relative)).unwrap_or_else(|e| panic!("{relative}: {e}"))
 }
 
+/// A scene written inline in our RON format (`name` stands for its file in errors).
+pub fn ron_scene(name: &str, text: &str) -> Scene {
+    hppm::scene::ron_format::parse(Path::new(name), text).unwrap_or_else(|e| panic!("{e}"))
+}
+
 pub fn reference(name: &str) -> Image {
     Image::read_exr(&repo_path(&format!("tests/refs/images/{name}.exr")))
         .unwrap_or_else(|e| panic!("reference {name}: {e}"))
