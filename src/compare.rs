@@ -243,6 +243,7 @@ pub fn compare(
             renderer.enable_profiling()?;
         }
         let mut snapshots = Vec::new();
+        let mut last_image = None;
         let mut clock = 0.0;
         for (index, &at) in times.iter().enumerate() {
             // At least one iteration per snapshot, so seconds strictly increase.
@@ -262,10 +263,8 @@ pub fn compare(
             let summary = renderer.run(budget, cancel, |_, _| {})?;
             clock += summary.seconds;
             let image = renderer.image()?;
-            let metrics = match &keep {
-                Some(keep) => image.metrics_where(&reference, |i| keep[i])?,
-                None => image.metrics_where(&reference, |_| true)?,
-            };
+            let metrics =
+                image.metrics_where(&reference, |i| keep.as_ref().is_none_or(|k| k[i]))?;
             progress(&format!(
                 "{label}: {clock:.2} s, {} iterations, relMSE {:.3e}",
                 renderer.iterations(),
@@ -279,11 +278,16 @@ pub fn compare(
                 photons: renderer.photons(),
                 metrics,
             });
+            last_image = Some(image);
             if summary.cancelled {
                 break;
             }
         }
-        let final_image = renderer.image()?;
+        // The last snapshot's image is the final one.
+        let final_image = match last_image {
+            Some(image) => image,
+            None => renderer.image()?,
+        };
         let provenance = Provenance::default()
             .with("hppm_adapter", gpu.adapter_label())
             .with("hppm_scene", options.scene.display())

@@ -202,8 +202,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron"));
     OutputFormat::of(&args.out)?;
     let scene = scene::load(&scene_path)?;
-    eprintln!("scene: {}", scene.features());
-    if !scene.has_lights() {
+    let features = scene.features();
+    eprintln!("scene: {features}");
+    if !features.has_lights() {
         eprintln!(
             "warning: {} has no light (no emitting shape, no point light): the image will be black",
             scene_path.display()

@@ -249,16 +249,6 @@ impl Scene {
         f
     }
 
-    /// Whether some shape has a delta (mirror or dielectric) BSDF.
-    pub fn has_specular_surface(&self) -> bool {
-        self.features().has_specular_surface()
-    }
-
-    /// Whether the scene meets a pass's need (graph pruning).
-    pub fn meets(&self, need: crate::graph::pass::SceneNeed) -> bool {
-        self.features().meets(need)
-    }
-
     /// Some shape emits or a point light exists (either may still have zero power).
     pub fn has_lights(&self) -> bool {
         self.features().has_lights()
