@@ -273,11 +273,6 @@ impl<'a> Renderer<'a> {
         Ok(())
     }
 
-    /// Whether node times include GPU timestamps (else they are CPU wall times only).
-    pub fn has_gpu_timer(&self) -> bool {
-        self.profile.as_ref().is_some_and(|p| p.timer.is_some())
-    }
-
     /// Per-node times summed since profiling began, in schedule order.
     pub fn node_times(&self) -> Vec<NodeTime> {
         let Some(profile) = &self.profile else {
