@@ -1,19 +1,19 @@
 //! hppm: a GPU renderer that combines path tracing with progressive photon mapping, built as a
 //! render graph of wgpu compute passes described in RON.
 
-pub mod bench;
-pub mod bench_hybrid;
-pub mod bench_lbvh;
-pub mod compare;
+//!
+//! Layers point one way: `gpu` (device, buffers, shader composition, radix sort) knows nothing
+//! above it; `graph` (schema, validation, pruning, schedule, allocation, execution) knows `gpu`
+//! only; `scene` knows neither graph nor passes; `passes` knows all three; `app` (render loop,
+//! compare, bench, plots) is one client of them.
+
+pub mod app;
 pub mod error;
 pub mod gpu;
 pub mod graph;
 pub mod image;
 pub mod passes;
-pub mod plot;
-pub mod render;
 pub mod scene;
-pub mod shaders;
 
 pub use error::Location;
 

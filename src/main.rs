@@ -6,10 +6,11 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Args, Parser, Subcommand};
+use hppm::app::bench;
+use hppm::app::render::{Budget, Renderer};
 use hppm::gpu::{GpuContext, GpuError};
 use hppm::image::{OutputFormat, Provenance};
-use hppm::render::{Budget, Renderer};
-use hppm::{Error, bench, graph, passes, scene};
+use hppm::{Error, graph, passes, scene};
 
 /// hppm: path tracing + progressive photon mapping on the GPU, as a render graph.
 #[derive(Parser)]
@@ -39,7 +40,7 @@ enum Command {
     Compare(CompareArgs),
     /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes; with
     /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error);
-    /// with --lbvh, the hit-point BVH builders (CPU SAH against GPU LBVH).
+    /// with --gather, the hit-point structures (CPU SAH BVH, GPU LBVH, hash grid: build + gather).
     Bench(BenchArgs),
 }
 
@@ -133,9 +134,10 @@ struct BenchArgs {
     /// Benchmark the hybrid instead (needs tests/refs from the source tree).
     #[arg(long)]
     hybrid: bool,
-    /// Benchmark the hit-point BVH builders instead (CPU SAH vs GPU LBVH, 1M and 10M points).
-    #[arg(long, conflicts_with = "hybrid")]
-    lbvh: bool,
+    /// Benchmark the hit-point structures instead (CPU SAH BVH, GPU LBVH, hash grid; build +
+    /// gather at 16K, 262K and 1M hit points).
+    #[arg(long, alias = "lbvh", conflicts_with = "hybrid")]
+    gather: bool,
     /// Wall-clock budgets for the equal-time error table, comma-separated (with --hybrid).
     #[arg(long, value_delimiter = ',', default_value = "10,60")]
     seconds: Vec<f64>,
@@ -250,7 +252,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         bar.set_message(format!("{:.1} spp/s", spp as f64 / seconds.max(1e-9)));
     })?;
     bar.finish_and_clear();
-    let stats = renderer.stats()?;
+    let counters = renderer.counters()?;
     let image = renderer.image()?;
     let provenance = Provenance::default()
         .with("hppm_adapter", gpu.adapter_label())
@@ -267,6 +269,13 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             println!("{}: {slot}", path.display());
         }
     }
+    let dropped = counters.get("photon_hits_dropped");
+    if dropped > 0 {
+        eprintln!(
+            "warning: {dropped} photon hits did not fit their buffer and were left out (caustics too dark); \
+             lower photons_per_iteration"
+        );
+    }
     if budget.photons.is_some() && renderer.photons_per_iteration() == 0 {
         eprintln!("warning: --photons ignored: the graph emits no photons");
     }
@@ -276,7 +285,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     if args.profile {
         print!(
             "{}",
-            hppm::compare::profile_table(
+            hppm::app::compare::profile_table(
                 &renderer.node_times(),
                 summary.iterations,
                 &gpu.adapter_label()
@@ -291,8 +300,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         summary.samples_per_pixel,
         summary.photons,
         summary.seconds,
-        stats.rays as f64 / summary.seconds.max(1e-9) / 1e6,
-        stats.discarded_samples,
+        counters.get("rays") as f64 / summary.seconds.max(1e-9) / 1e6,
+        counters.get("discarded_samples"),
         gpu.adapter_label()
     );
     Ok(())
@@ -345,7 +354,7 @@ fn show_graph(file: &Path, dot: bool, scene_path: Option<&Path>) -> Result<(), E
         let scene = scene::load(scene_path)?;
         let features = scene.features();
         println!("scene: {features}");
-        for pruned in graph.prune(|need| features.meets(need))? {
+        for pruned in graph.prune(|need| passes::scene_meets(&features, need))? {
             println!("{pruned}");
         }
     }
@@ -360,7 +369,7 @@ fn show_graph(file: &Path, dot: bool, scene_path: Option<&Path>) -> Result<(), E
 fn compare(args: CompareArgs) -> Result<(), Error> {
     let gpu = GpuContext::new(args.adapter.as_deref())?;
     eprintln!("adapter: {}", gpu.adapter_label());
-    let options = hppm::compare::CompareOptions {
+    let options = hppm::app::compare::CompareOptions {
         scene: args.scene,
         reference: args.reference,
         graphs: args.graphs,
@@ -374,7 +383,7 @@ fn compare(args: CompareArgs) -> Result<(), Error> {
         size: args.size,
     };
     let cancel = cancel_flag();
-    let report = hppm::compare::compare(&gpu, &options, &cancel, |line| eprintln!("{line}"))?;
+    let report = hppm::app::compare::compare(&gpu, &options, &cancel, |line| eprintln!("{line}"))?;
     for run in &report.runs {
         let last = run.snapshots.last();
         println!(
@@ -389,7 +398,7 @@ fn compare(args: CompareArgs) -> Result<(), Error> {
         if options.profile {
             print!(
                 "{}",
-                hppm::compare::profile_table(
+                hppm::app::compare::profile_table(
                     &run.node_times,
                     run.profiled_iterations,
                     &gpu.adapter_label()
@@ -397,9 +406,9 @@ fn compare(args: CompareArgs) -> Result<(), Error> {
             );
         }
     }
-    for (label, points) in hppm::compare::peer_groups(&report.peers) {
+    for (label, points) in hppm::app::compare::peer_groups(&report.peers) {
         let slope =
-            hppm::compare::log_log_slope(&points).map_or("n/a".into(), |s| format!("{s:.2}"));
+            hppm::app::compare::log_log_slope(&points).map_or("n/a".into(), |s| format!("{s:.2}"));
         println!("{label:<20} (peer) slope {slope}");
     }
     println!("{}", report.errors_csv.display());
@@ -411,12 +420,12 @@ fn compare(args: CompareArgs) -> Result<(), Error> {
 }
 
 fn bench_hybrid(args: &BenchArgs) -> Result<(), Error> {
-    let options = hppm::bench_hybrid::HybridBenchOptions {
+    let options = hppm::app::bench_hybrid::HybridBenchOptions {
         adapter: args.adapter.as_deref(),
         seconds: args.seconds.clone(),
         workload_iterations: args.workload_iterations.max(1),
     };
-    let text = hppm::bench_hybrid::run(&options, bundled)?;
+    let text = hppm::app::bench_hybrid::run(&options, bundled)?;
     print!("{text}");
     if let Some(path) = &args.write {
         bench::append_markdown(path, &text)?;
@@ -424,8 +433,8 @@ fn bench_hybrid(args: &BenchArgs) -> Result<(), Error> {
     Ok(())
 }
 
-fn bench_lbvh(args: &BenchArgs) -> Result<(), Error> {
-    let text = hppm::bench_lbvh::run(args.adapter.as_deref(), bundled)?;
+fn bench_gather(args: &BenchArgs) -> Result<(), Error> {
+    let text = hppm::app::bench_gather::run(args.adapter.as_deref(), bundled)?;
     print!("{text}");
     if let Some(path) = &args.write {
         bench::append_markdown(path, &text)?;
@@ -441,7 +450,7 @@ fn main() -> ExitCode {
         Command::Info => info(),
         Command::Graph { file, dot, scene } => show_graph(&file, dot, scene.as_deref()),
         Command::Bench(args) if args.hybrid => bench_hybrid(&args),
-        Command::Bench(args) if args.lbvh => bench_lbvh(&args),
+        Command::Bench(args) if args.gather => bench_gather(&args),
         Command::Bench(args) => bench::run(
             args.adapter.as_deref(),
             args.spp,

@@ -1,7 +1,8 @@
 #define_import_path common::hit_points
 
-// Hit points (camera-path vertices where photon mapping takes over), the BVH over them, and the
-// per-iteration photon deposits. Layouts mirror src/passes/hit_points.rs.
+// Hit points (camera-path vertices where photon mapping takes over), their radii, the photons
+// arriving at diffuse surfaces, the BVH over hit points, and the per-iteration photon deposits.
+// Layouts mirror src/passes/hit_points.rs (tests/layouts.rs checks every offset).
 
 struct HitPoint {
     position: vec3<f32>,
@@ -9,8 +10,8 @@ struct HitPoint {
     pixel: u32,
     // Front normal of the (one-sided) diffuse surface.
     normal: vec3<f32>,
-    // Search radius. Set once from `HitPointHeader` when the slot is first used, then owned by
-    // the estimator, which shrinks it after each merge.
+    // Search radius for this iteration's gather: the estimator's radius for this slot (its
+    // `radii` output), or the `RadiusRule`'s first radius while the estimator has none.
     radius: f32,
     // Unit direction towards where the camera path came from.
     wo: vec3<f32>,
@@ -24,20 +25,65 @@ struct HitPoint {
     footprint: f32,
 }
 
+// Written by the camera pass.
+struct HitPointsHeader {
+    // Hit-point slots per pixel (merge depth).
+    slots_per_pixel: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
+}
+
+struct HitPointBuffer {
+    header: HitPointsHeader,
+    points: array<HitPoint>,
+}
+
 // Written by the estimator when it is prepared: how the camera pass sets a slot's first radius.
-struct HitPointHeader {
+struct RadiusRule {
     // Absolute initial radius in scene units; 0 means `radius_pixels` footprints.
     initial_radius: f32,
     radius_pixels: f32,
     // Floor relative to the scene's size, so radii never underflow.
     min_radius: f32,
-    // Hit-point slots per pixel (merge depth).
-    slots_per_pixel: u32,
+    pad: u32,
 }
 
-struct HitPointBuffer {
-    header: HitPointHeader,
-    points: array<HitPoint>,
+// The estimator's radius per hit-point slot; 0 while the slot has none yet.
+struct RadiusBuffer {
+    rule: RadiusRule,
+    radii: array<f32>,
+}
+
+// A photon arriving at a diffuse surface where it deposits.
+struct PhotonHit {
+    position: vec3<f32>,
+    // Camera segments the full path may still have (UNBOUNDED when the depth is unbounded).
+    remaining: u32,
+    // Unit direction towards where the photon came from.
+    wi: vec3<f32>,
+    pad_a: u32,
+    // Flux per photon of this iteration.
+    flux: vec3<f32>,
+    pad_b: u32,
+}
+
+// As photon_trace writes them: `count` hits were stored, `dropped` did not fit.
+struct PhotonHitsOut {
+    count: atomic<u32>,
+    dropped: atomic<u32>,
+    pad_a: u32,
+    pad_b: u32,
+    hits: array<PhotonHit>,
+}
+
+// The same buffer as the gathers read it.
+struct PhotonHitsIn {
+    count: u32,
+    dropped: u32,
+    pad_a: u32,
+    pad_b: u32,
+    hits: array<PhotonHit>,
 }
 
 const NO_PIXEL: u32 = 0xffffffffu;
@@ -78,12 +124,12 @@ struct DepositCell {
 #endif
 
 // Radius of a slot used for the first time.
-fn initial_radius(header: HitPointHeader, footprint: f32) -> f32 {
-    var r = header.initial_radius;
+fn initial_radius(rule: RadiusRule, footprint: f32) -> f32 {
+    var r = rule.initial_radius;
     if r <= 0.0 {
-        r = header.radius_pixels * footprint;
+        r = rule.radius_pixels * footprint;
     }
-    return max(r, header.min_radius);
+    return max(r, rule.min_radius);
 }
 
 fn point_in_box(p: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> bool {

@@ -22,7 +22,7 @@
 #import common::scene::scene_info
 #import common::hit_points::NO_PIXEL
 #import common::hit_points::HitPointBuffer
-#import common::dispatch::{WORKGROUP_SIZE, flat_invocation}
+#import gpu::dispatch::{WORKGROUP_SIZE, flat_invocation}
 
 const INVALID_KEY: u32 = 0xffffffffu;
 const FAR: f32 = 3.0e38;

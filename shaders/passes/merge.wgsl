@@ -11,7 +11,7 @@
 // R (1 - sqrt(1 - x)) computed as R x / (1 + sqrt(1 - x)), which has no cancellation.
 
 #import common::sampling::{PI, any_not_finite}
-#import common::hit_points::{HitPointBuffer, DepositCell}
+#import common::hit_points::{HitPointBuffer, RadiusBuffer, DepositCell, NO_PIXEL}
 
 struct MergeParams {
     alpha: f32,
@@ -39,10 +39,13 @@ struct SlotStats {
 }
 
 @group(1) @binding(0) var<uniform> params: MergeParams;
-@group(1) @binding(1) var<storage, read_write> hit_points: HitPointBuffer;
+@group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
 @group(1) @binding(2) var<storage, read_write> deposits: array<DepositCell>;
 @group(1) @binding(3) var<storage, read_write> stats: array<SlotStats>;
 @group(1) @binding(4) var<storage, read_write> radiance: array<vec4<f32>>;
+// This estimator's state: each slot's radius (0 until the slot first holds a hit point), read
+// by the camera pass in the next iteration.
+@group(1) @binding(5) var<storage, read_write> radii: RadiusBuffer;
 
 fn deposited_flux(cell: u32) -> vec3<f32> {
 #ifdef FLOAT_ATOMICS
@@ -55,9 +58,14 @@ fn deposited_flux(cell: u32) -> vec3<f32> {
 // Applies this iteration's deposit to slot `index`; returns its current radiance estimate times
 // the iteration count.
 fn merge_slot(index: u32) -> vec3<f32> {
-    let radius = hit_points.points[index].radius;
+    var radius = radii.radii[index];
     if radius <= 0.0 {
-        return vec3<f32>(0.0);
+        // A slot's first hit point brings the first radius the camera chose by the rule.
+        if hit_points.points[index].pixel == NO_PIXEL || hit_points.points[index].radius <= 0.0 {
+            return vec3<f32>(0.0);
+        }
+        radius = hit_points.points[index].radius;
+        radii.radii[index] = radius;
     }
     var s = stats[index];
     let m = atomicLoad(&deposits[index].count);
@@ -71,7 +79,7 @@ fn merge_slot(index: u32) -> vec3<f32> {
             // 1 - (N + alpha M) / (N + M), accurate when N >> M.
             let x = (1.0 - params.alpha) * mf / (n + mf);
             let shrink = radius * x / (1.0 + sqrt(1.0 - x));
-            hit_points.points[index].radius = max(radius - shrink, hit_points.header.min_radius);
+            radii.radii[index] = max(radius - shrink, radii.rule.min_radius);
             s.tau_per_r2 += phi / (radius * radius);
             let low = s.photons_low + m;
             s.photons_high += select(0u, 1u, low < m);

@@ -16,7 +16,7 @@
 #ifdef DIELECTRIC
 #import common::bsdf::sample_dielectric
 #endif
-#import common::hit_points::{HitPoint, HitPointBuffer, NO_PIXEL, initial_radius}
+#import common::hit_points::{HitPoint, HitPointBuffer, RadiusBuffer, NO_PIXEL, initial_radius}
 
 struct PathTraceParams {
     sample_base: u32,
@@ -26,7 +26,8 @@ struct PathTraceParams {
     rr_depth: u32,
     // Photon-mapped diffuse vertices per path (hit-point slots per pixel); 0 = none.
     merge_depth: u32,
-    // 1: write this iteration's hit points; 0: keep the ones stored (ppm).
+    // 1: write this iteration's hit points; 0: keep the ones stored (ppm) and only refresh their
+    // radii from the estimator's.
     record: u32,
     // 1: continue paths past photon-mapped vertices (hybrid); 0: stop there (photon mapping only).
     trace_beyond: u32,
@@ -37,6 +38,8 @@ struct PathTraceParams {
 // [rays low, rays high, discarded low, discarded high]: 64-bit totals from 32-bit atomics.
 @group(1) @binding(2) var<storage, read_write> counters: array<atomic<u32>, 4>;
 @group(1) @binding(3) var<storage, read_write> hit_points: HitPointBuffer;
+// The estimator's radii as of the previous iteration (0: none yet, take the rule's first).
+@group(1) @binding(4) var<storage, read> radii: RadiusBuffer;
 
 const COUNTER_RAYS: u32 = 0u;
 const COUNTER_DISCARDED: u32 = 2u;
@@ -80,9 +83,9 @@ struct HitPointSink {
 fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f32>, depth: u32, weight: vec3<f32>, travelled: f32) {
     let index = sink.pixel * params.merge_depth + slot;
     let footprint = travelled * 2.0 * scene_info.tan_half_x / f32(scene_info.width);
-    var radius = hit_points.points[index].radius;
+    var radius = radii.radii[index];
     if radius <= 0.0 {
-        radius = initial_radius(hit_points.header, footprint);
+        radius = initial_radius(radii.rule, footprint);
     }
     hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight, footprint);
 }
@@ -203,9 +206,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pixel_index = id.y * scene_info.width + id.x;
     let recording = params.merge_depth > 0u && params.record != 0u;
-    if recording {
-        for (var slot = 0u; slot < params.merge_depth; slot++) {
-            hit_points.points[pixel_index * params.merge_depth + slot].pixel = NO_PIXEL;
+    for (var slot = 0u; slot < params.merge_depth; slot++) {
+        let index = pixel_index * params.merge_depth + slot;
+        if recording {
+            hit_points.points[index].pixel = NO_PIXEL;
+        } else if hit_points.points[index].pixel != NO_PIXEL && radii.radii[index] > 0.0 {
+            hit_points.points[index].radius = radii.radii[index];
         }
     }
     var sum = vec3<f32>(0.0);

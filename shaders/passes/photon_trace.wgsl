@@ -1,7 +1,7 @@
 // Photon tracing. Each invocation emits one photon from a light chosen in proportion to its power
 // (area lights: uniform position, cosine direction; point lights: uniform direction), traces it
-// through mirrors and dielectrics, and deposits it into every hit point whose sphere contains
-// the deposit (a range query over the hit-point BVH), skipping hit points it reaches from behind.
+// through mirrors and dielectrics, and writes a photon hit where it deposits. Which hit points
+// receive it is the gather's business (the hit-point structure nodes), not this pass's.
 //
 // Mode CAUSTIC deposits only at the first diffuse vertex after at least one specular vertex and
 // stops there (L S+ D: what the hybrid's path tracer leaves out). Mode ALL deposits at every
@@ -20,7 +20,7 @@
 #ifdef DIELECTRIC
 #import common::bsdf::sample_dielectric
 #endif
-#import common::hit_points::{HitPointBuffer, HitPointTree, DepositCell, TREE_STACK_SIZE, point_in_box}
+#import common::hit_points::{PhotonHitsOut, PhotonHit}
 
 struct PhotonParams {
     photons: u32,
@@ -41,17 +41,15 @@ struct PhotonParams {
 }
 
 @group(1) @binding(0) var<uniform> params: PhotonParams;
-@group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
-@group(1) @binding(2) var<storage, read> tree: HitPointTree;
-@group(1) @binding(3) var<storage, read_write> deposits: array<DepositCell>;
-// [segments low, segments high]: a 64-bit total from 32-bit atomics. (Photon counts are exact on
-// the CPU: every iteration emits `photons`.)
-@group(1) @binding(4) var<storage, read_write> counters: array<atomic<u32>, 2>;
+@group(1) @binding(1) var<storage, read_write> photon_hits: PhotonHitsOut;
+// [segments low, segments high, hits dropped low, high]: 64-bit totals from 32-bit atomics.
+// (Photon counts are exact on the CPU: every iteration emits `photons`.)
+@group(1) @binding(2) var<storage, read_write> counters: array<atomic<u32>, 4>;
 // RGB flux emitted so far (already scaled by flux_scale): the light's power per iteration.
 #ifdef FLOAT_ATOMICS
-@group(1) @binding(5) var<storage, read_write> emitted: array<atomic<f32>, 3>;
+@group(1) @binding(3) var<storage, read_write> emitted: array<atomic<f32>, 3>;
 #else
-@group(1) @binding(5) var<storage, read_write> emitted: array<atomic<u32>, 3>;
+@group(1) @binding(3) var<storage, read_write> emitted: array<atomic<u32>, 3>;
 #endif
 
 const MODE_CAUSTIC: u32 = 0u;
@@ -62,30 +60,17 @@ const SAFETY_MAX_DEPTH: u32 = 1024u;
 var<workgroup> group_flux: array<vec3<f32>, WORKGROUP>;
 var<workgroup> group_segments: atomic<u32>;
 
-fn add_segments(value: u32) {
+const COUNTER_SEGMENTS: u32 = 0u;
+const COUNTER_DROPPED: u32 = 2u;
+
+fn add_u64(index: u32, value: u32) {
     if value == 0u {
         return;
     }
-    let old = atomicAdd(&counters[0], value);
+    let old = atomicAdd(&counters[index], value);
     if old > 0xffffffffu - value {
-        atomicAdd(&counters[1], 1u);
+        atomicAdd(&counters[index + 1u], 1u);
     }
-}
-
-fn add_deposit_flux(cell: u32, channel: u32, value: f32) {
-#ifdef FLOAT_ATOMICS
-    atomicAdd(&deposits[cell].flux[channel], value);
-#else
-    var old = atomicLoad(&deposits[cell].flux[channel]);
-    loop {
-        let updated = bitcast<u32>(bitcast<f32>(old) + value);
-        let r = atomicCompareExchangeWeak(&deposits[cell].flux[channel], old, updated);
-        if r.exchanged {
-            break;
-        }
-        old = r.old_value;
-    }
-#endif
 }
 
 fn add_emitted(channel: u32, value: f32) {
@@ -200,48 +185,19 @@ fn emit_photon(rng: ptr<function, u32>) -> Photon {
     return normalised(photon);
 }
 
-// Adds the photon to every hit point whose sphere contains `position`.
+// Stores a photon hit for the gather; one that does not fit is counted, never lost silently.
 fn deposit(position: vec3<f32>, wi: vec3<f32>, flux: vec3<f32>, segments: u32) {
-    if tree.node_count == 0u {
+    let slot = atomicAdd(&photon_hits.count, 1u);
+    if slot >= arrayLength(&photon_hits.hits) {
+        atomicAdd(&photon_hits.dropped, 1u);
+        add_u64(COUNTER_DROPPED, 1u);
         return;
     }
-    var stack: array<u32, TREE_STACK_SIZE>;
-    var top = 1u;
-    stack[0] = 0u;
-    while top > 0u {
-        top -= 1u;
-        let index = stack[top];
-        let node_min = tree.nodes[index].min;
-        let node_max = tree.nodes[index].max;
-        if !point_in_box(position, node_min, node_max) {
-            continue;
-        }
-        let first = tree.nodes[index].left_or_first;
-        if tree.nodes[index].count > 0u {
-            let hp = hit_points.points[first];
-            let d = position - hp.position;
-            if dot(d, d) > hp.radius * hp.radius {
-                continue;
-            }
-            // One-sided diffuse: light arriving from behind the hit point's surface adds nothing.
-            if dot(hp.normal, wi) <= 0.0 {
-                continue;
-            }
-            // The whole path (camera part + photon part) obeys max_depth, as in path tracing.
-            if params.max_depth != UNBOUNDED && hp.depth + segments > params.max_depth {
-                continue;
-            }
-            atomicAdd(&deposits[first].count, 1u);
-            let added = flux * hp.weight;
-            add_deposit_flux(first, 0u, added.x);
-            add_deposit_flux(first, 1u, added.y);
-            add_deposit_flux(first, 2u, added.z);
-        } else if top + 2u <= TREE_STACK_SIZE {
-            stack[top] = first;
-            stack[top + 1u] = first + 1u;
-            top += 2u;
-        }
+    var remaining = UNBOUNDED;
+    if params.max_depth != UNBOUNDED {
+        remaining = params.max_depth - segments;
     }
+    photon_hits.hits[slot] = PhotonHit(position, remaining, wi, 0u, flux, 0u);
 }
 
 // Traces one photon; returns the segments traced.
@@ -336,6 +292,6 @@ fn main(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index
         add_emitted(0u, group_flux[0].x);
         add_emitted(1u, group_flux[0].y);
         add_emitted(2u, group_flux[0].z);
-        add_segments(atomicLoad(&group_segments));
+        add_u64(COUNTER_SEGMENTS, atomicLoad(&group_segments));
     }
 }

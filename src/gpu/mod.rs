@@ -11,6 +11,7 @@ use wgpu::util::DeviceExt;
 mod adapter;
 pub mod binding;
 pub mod radix_sort;
+pub mod shaders;
 pub mod timer;
 
 pub use adapter::{adapter_label, list_adapters};
@@ -55,6 +56,9 @@ pub enum GpuError {
     },
     #[error("GPU error on {adapter}: {message}")]
     Runtime { adapter: String, message: String },
+    /// A shader that does not compose or validate, with naga_oil's report.
+    #[error("{0}")]
+    Shader(String),
 }
 
 /// An open device on the chosen adapter.

@@ -1,15 +1,15 @@
 //! A stable least-significant-digit radix sort of (u32 key, u32 value) pairs on the GPU, 4 bits
 //! per pass (8 passes), recorded into a caller's command encoder: per-block digit histograms, one
-//! exclusive scan of them, and a stable scatter (shaders/passes/radix_sort.wgsl). It needs no
+//! exclusive scan of them, and a stable scatter (shaders/gpu/radix_sort.wgsl). It needs no
 //! subgroup operations and no 64-bit atomics, so it runs wherever compute shaders do.
 
 use std::num::NonZeroU64;
 
-use crate::Error;
-use crate::gpu::GpuContext;
-use crate::shaders::ShaderLibrary;
+use super::shaders::{ShaderFile, ShaderLibrary};
+use super::{GpuContext, GpuError};
 
-const SHADER: &str = "shaders/passes/radix_sort.wgsl";
+/// The sort's kernels.
+pub const SHADER: ShaderFile = crate::shader_file!("shaders/gpu/radix_sort.wgsl");
 const RADIX_BITS: u32 = 4;
 const PASSES: u32 = u32::BITS / RADIX_BITS;
 const RADIX: u64 = 1 << RADIX_BITS;
@@ -55,9 +55,9 @@ pub struct RadixSort {
 }
 
 impl RadixSort {
-    pub fn new(gpu: &GpuContext, shaders: &ShaderLibrary) -> Result<Self, Error> {
+    pub fn new(gpu: &GpuContext, shaders: &ShaderLibrary) -> Result<Self, GpuError> {
         let layout = sort_layout(&gpu.device);
-        let pipeline = |entry| shaders.compute_pipeline(gpu, SHADER, entry, &[&layout]);
+        let pipeline = |entry| shaders.compute_pipeline(gpu, &SHADER, entry, &[&layout]);
         Ok(Self {
             count_digits: pipeline("count_digits")?,
             scan_histogram: pipeline("scan_histogram")?,
@@ -81,7 +81,7 @@ impl RadixSort {
         keys: &wgpu::Buffer,
         values: &wgpu::Buffer,
         count: u32,
-    ) -> Result<(), Error> {
+    ) -> Result<(), GpuError> {
         if count == 0 {
             return Ok(());
         }
@@ -132,7 +132,7 @@ impl RadixSort {
     }
 
     /// Makes sure the scratch buffers hold `count` pairs.
-    fn reserve(&mut self, gpu: &GpuContext, count: u32) -> Result<(), Error> {
+    fn reserve(&mut self, gpu: &GpuContext, count: u32) -> Result<(), GpuError> {
         if self.scratch.as_ref().is_some_and(|s| s.capacity >= count) {
             return Ok(());
         }

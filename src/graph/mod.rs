@@ -2,6 +2,7 @@
 //! validated as a whole (every problem reported at once, each with `file:line:col`) and
 //! scheduled in topological order with petgraph.
 
+pub mod exec;
 pub mod pass;
 mod prune;
 mod source_map;
@@ -58,6 +59,9 @@ pub struct Edge {
     pub from_slot: &'static str,
     pub to_node: usize,
     pub to_slot: &'static str,
+    /// The input reads what the output held at the end of the previous iteration, so the edge
+    /// does not order its two nodes.
+    pub previous_iteration: bool,
 }
 
 /// A graph whose every node, edge and slot checked out, with its schedule.
@@ -108,7 +112,12 @@ impl ValidGraph {
                             .map_or("(unconnected)".to_string(), |e| {
                                 self.slot_name(e.from_node, e.from_slot)
                             });
-                        format!("in  {} <- {from}", slot.name)
+                        let previous = if slot.previous_iteration {
+                            " (previous iteration)"
+                        } else {
+                            ""
+                        };
+                        format!("in  {} <- {from}{previous}", slot.name)
                     }
                     SlotDir::Out => format!("out {}", slot.name),
                 };
@@ -138,8 +147,14 @@ impl ValidGraph {
             ));
         }
         for e in &self.edges {
+            // State carried to the next iteration is drawn dashed and does not constrain rank.
+            let style = if e.previous_iteration {
+                ", style=dashed, constraint=false"
+            } else {
+                ""
+            };
             out.push_str(&format!(
-                "    n{} -> n{} [label=\"{} -> {}\"];\n",
+                "    n{} -> n{} [label=\"{} -> {}\"{style}];\n",
                 e.from_node, e.to_node, e.from_slot, e.to_slot
             ));
         }

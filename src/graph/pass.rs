@@ -3,41 +3,72 @@
 //! declarations before any GPU work, then asks each node to `prepare` (create pipelines and its
 //! output resources) and, per iteration, to `execute` (record its GPU work).
 
-use std::collections::{HashMap, HashSet};
+use std::any::{Any, TypeId};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 
 use crate::gpu::GpuContext;
+use crate::gpu::shaders::{ShaderFile, ShaderLibrary};
 
-/// What flows along an edge. Edges must connect slots of the same kind.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum ResourceKind {
-    /// Per-pixel `vec4<f32>`: RGB radiance sum in xyz, sample count in w. Sums and counts, never
-    /// averages, so that images from several runs merge exactly.
-    Radiance,
-    /// Hit points recorded by the camera pass at photon-mapped vertices.
-    HitPoints,
-    /// A BVH over hit points, in the layout the photon pass traverses.
-    HitPointTree,
-    /// Per-hit-point photon count and flux gathered in one iteration.
-    Deposits,
+/// What flows along an edge. Kinds are declared by the passes that produce and consume them
+/// (the graph defines only [`IMAGE`], because its output is one); edges must connect slots of
+/// the same kind, compared by name. The byte sizes let the graph allocate outputs.
+#[derive(Debug, Clone, Copy)]
+pub struct ResourceKind {
+    pub name: &'static str,
+    /// Bytes before the first element (a header its producer writes).
+    pub header_bytes: u64,
+    /// Bytes of one element.
+    pub element_bytes: u64,
 }
 
 impl ResourceKind {
-    pub fn name(self) -> &'static str {
-        match self {
-            ResourceKind::Radiance => "radiance",
-            ResourceKind::HitPoints => "hit_points",
-            ResourceKind::HitPointTree => "hit_point_tree",
-            ResourceKind::Deposits => "deposits",
+    pub const fn new(name: &'static str, header_bytes: u64, element_bytes: u64) -> Self {
+        Self {
+            name,
+            header_bytes,
+            element_bytes,
         }
     }
+
+    pub fn name(self) -> &'static str {
+        self.name
+    }
 }
+
+impl PartialEq for ResourceKind {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+impl Eq for ResourceKind {}
+
+impl std::hash::Hash for ResourceKind {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.name.hash(state);
+    }
+}
+
+/// Per-pixel `vec4<f32>`: RGB radiance sum in xyz, sample count in w. Sums and counts, never
+/// averages, so that images from several runs merge exactly. The graph's output has this kind.
+pub const IMAGE: ResourceKind = ResourceKind::new("radiance", 0, 16);
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SlotDir {
     In,
     Out,
+}
+
+/// How many elements the graph allocates for an output slot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Size {
+    /// One per image pixel.
+    Pixels,
+    /// As many as the resource connected to the named input of the same node.
+    LikeInput(&'static str),
+    /// As many as the pass computes from its params and inputs ([`Pass::output_len`]).
+    Computed,
 }
 
 /// One named input or output of a pass kind.
@@ -46,10 +77,21 @@ pub struct SlotDecl {
     pub name: &'static str,
     pub kind: ResourceKind,
     pub dir: SlotDir,
-    /// The contents survive from one iteration to the next (accumulators, per-pixel statistics).
+    /// Outputs: how many elements the graph allocates.
+    pub size: Size,
+    /// Outputs: the contents survive from one iteration to the next (accumulators, per-pixel
+    /// statistics); allocated zeroed once. Other outputs are zeroed before every iteration.
     pub persistent: bool,
-    /// An input that may stay unconnected; the pass then does without it.
+    /// Inputs: may stay unconnected; the pass then does without it.
     pub optional: bool,
+    /// Inputs: reads what its producer wrote in the previous iteration (zeros before the
+    /// first), so the edge does not order the two nodes; the producer's slot must persist.
+    /// This is how state flows back (an estimator's radii to the camera pass).
+    pub previous_iteration: bool,
+    /// Inputs: this consumer needs the resource written once, in the first iteration, and kept
+    /// (`ppm` keeps one camera pass's hit points). Its producer is told through
+    /// [`PrepareCtx::kept`]; values may still be updated in place, the layout may not.
+    pub kept: bool,
 }
 
 impl SlotDecl {
@@ -58,17 +100,23 @@ impl SlotDecl {
             name,
             kind,
             dir: SlotDir::In,
+            size: Size::Computed,
             persistent: false,
             optional: false,
+            previous_iteration: false,
+            kept: false,
         }
     }
-    pub const fn output(name: &'static str, kind: ResourceKind) -> Self {
+    pub const fn output(name: &'static str, kind: ResourceKind, size: Size) -> Self {
         Self {
             name,
             kind,
             dir: SlotDir::Out,
+            size,
             persistent: false,
             optional: false,
+            previous_iteration: false,
+            kept: false,
         }
     }
     pub const fn persistent(mut self) -> Self {
@@ -79,6 +127,14 @@ impl SlotDecl {
         self.optional = true;
         self
     }
+    pub const fn previous_iteration(mut self) -> Self {
+        self.previous_iteration = true;
+        self
+    }
+    pub const fn kept(mut self) -> Self {
+        self.kept = true;
+        self
+    }
 }
 
 /// A GPU resource bound to a slot.
@@ -86,11 +142,8 @@ impl SlotDecl {
 pub struct Resource {
     pub kind: ResourceKind,
     pub buffer: Arc<wgpu::Buffer>,
-    /// Number of elements (pixels for `Radiance`, hit-point slots for `HitPoints`).
+    /// Number of elements (pixels for images, hit-point slots for hit points).
     pub len: u64,
-    /// Raised by a consumer that wants the producer to stop rewriting the contents after the
-    /// first iteration (`ppm` keeps the hit points of one camera pass). Shared by every clone.
-    pub frozen: Arc<AtomicBool>,
 }
 
 impl Resource {
@@ -99,21 +152,81 @@ impl Resource {
             kind,
             buffer: Arc::new(buffer),
             len,
-            frozen: Arc::new(AtomicBool::new(false)),
         }
+    }
+
+    /// Bytes a resource of `len` elements of `kind` takes (at least one element, so that an
+    /// empty resource can still be bound); `None` on overflow.
+    pub fn bytes(kind: ResourceKind, len: u64) -> Option<u64> {
+        len.max(1)
+            .checked_mul(kind.element_bytes)?
+            .checked_add(kind.header_bytes)
+    }
+
+    /// A zeroed resource of `len` elements, usable as storage and as copy source and target.
+    pub fn allocate(
+        gpu: &GpuContext,
+        label: &str,
+        kind: ResourceKind,
+        len: u64,
+    ) -> Result<Self, crate::Error> {
+        let bytes = Self::bytes(kind, len).ok_or_else(|| {
+            crate::Error::Other(format!(
+                "{label}: {len} elements of {} overflow a buffer size",
+                kind.name
+            ))
+        })?;
+        let usage = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
+        let buffer = gpu.create_buffer(label, bytes, usage)?;
+        Ok(Self::new(kind, buffer, len))
     }
 }
 
-/// What a pass sees when it is prepared: the device, the scene's shared resources, the resources
-/// its inputs are connected to, and the render's size and seed.
+/// What the render shares with every pass (the scene on the GPU, say), keyed by type, so that
+/// the graph carries it without naming it.
+#[derive(Default)]
+pub struct Shared {
+    items: HashMap<TypeId, Box<dyn Any>>,
+}
+
+impl Shared {
+    pub fn insert<T: Any>(&mut self, item: T) {
+        self.items.insert(TypeId::of::<T>(), Box::new(item));
+    }
+
+    pub fn get<T: Any>(&self) -> Result<&T, crate::Error> {
+        self.items
+            .get(&TypeId::of::<T>())
+            .and_then(|item| item.downcast_ref())
+            .ok_or_else(|| {
+                crate::Error::Other(format!(
+                    "the render shares no {} with its passes",
+                    std::any::type_name::<T>()
+                ))
+            })
+    }
+}
+
+/// What a pass sees when it is prepared: the device, the shader library, what the render
+/// shares, its connected inputs and the outputs the graph allocated for it.
 pub struct PrepareCtx<'a> {
     pub gpu: &'a GpuContext,
-    pub scene: &'a crate::render::SceneResources,
-    pub shaders: &'a crate::shaders::ShaderLibrary,
+    pub shaders: &'a ShaderLibrary,
+    pub shared: &'a Shared,
     pub inputs: HashMap<&'static str, Resource>,
+    /// Empty while the graph asks [`Pass::output_len`]; every output slot when preparing.
+    pub outputs: HashMap<&'static str, Resource>,
     /// Output slots that feed another node or are the graph's output. A pass may skip work for
     /// the others (`path_trace` records no hit points, and drops nothing, when none are used).
     pub consumed: HashSet<&'static str>,
+    /// Output slots some consumer keeps ([`SlotDecl::kept`]): write them in the first
+    /// iteration only.
+    pub kept: HashSet<&'static str>,
+    /// Input slots whose producer keeps them: their layout never changes after the first
+    /// iteration (a builder may then only refit).
+    pub kept_inputs: HashSet<&'static str>,
     pub width: u32,
     pub height: u32,
 }
@@ -125,6 +238,17 @@ impl PrepareCtx<'_> {
         self.inputs
             .get(slot)
             .ok_or_else(|| crate::Error::Other(format!("input slot \"{slot}\" is not connected")))
+    }
+
+    /// The resource the graph allocated for output `slot`.
+    pub fn output(&self, slot: &str) -> Result<&Resource, crate::Error> {
+        self.outputs
+            .get(slot)
+            .ok_or_else(|| crate::Error::Other(format!("output slot \"{slot}\" was not allocated")))
+    }
+
+    pub fn pixels(&self) -> u64 {
+        self.width as u64 * self.height as u64
     }
 }
 
@@ -149,14 +273,13 @@ impl<'a> Recorder<'a> {
         })
     }
 
-    /// Records one dispatch of `pipeline` with the scene as bind group 0 and the pass's own
-    /// resources as group 1 (the layout every pass kernel follows).
+    /// Records one dispatch of `pipeline` with `groups` bound in order (the pass kernels take
+    /// the scene as group 0 and their own resources as group 1).
     pub fn dispatch(
         &mut self,
         label: &str,
         pipeline: &wgpu::ComputePipeline,
-        scene: &wgpu::BindGroup,
-        pass_group: &wgpu::BindGroup,
+        groups: &[&wgpu::BindGroup],
         workgroups: [u32; 3],
     ) {
         let mut pass = self
@@ -166,8 +289,9 @@ impl<'a> Recorder<'a> {
                 timestamp_writes: None,
             });
         pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, scene, &[]);
-        pass.set_bind_group(1, pass_group, &[]);
+        for (index, group) in (0u32..).zip(groups) {
+            pass.set_bind_group(index, *group, &[]);
+        }
         let [x, y, z] = workgroups;
         pass.dispatch_workgroups(x, y, z);
     }
@@ -190,36 +314,43 @@ impl<'a> Recorder<'a> {
 /// Per-iteration information handed to `execute`.
 pub struct ExecCtx<'a> {
     pub gpu: &'a GpuContext,
-    pub scene: &'a crate::render::SceneResources,
     /// 0-based iteration index; with the seed it decorrelates random streams between iterations.
     pub iteration: u64,
     pub seed: u64,
 }
 
-/// Statistics a pass reports after the render (read back from the GPU once, not per iteration).
-#[derive(Debug, Clone, Default)]
-pub struct PassStats {
-    pub rays: u64,
-    pub discarded_samples: u64,
-    /// Segments photons were traced along (photons emitted: `Renderer::photons`, exact on the
-    /// CPU).
-    pub photon_segments: u64,
-}
+/// Counters a pass reports after the render (read back from the GPU once, not per iteration),
+/// by name: `rays`, `discarded_samples`, `photon_segments`, or whatever a pass counts.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Counters(pub BTreeMap<&'static str, u64>);
 
-impl PassStats {
-    pub fn add(&mut self, other: &PassStats) {
-        self.rays += other.rays;
-        self.discarded_samples += other.discarded_samples;
-        self.photon_segments += other.photon_segments;
+impl Counters {
+    pub fn of(entries: &[(&'static str, u64)]) -> Self {
+        Self(entries.iter().copied().collect())
+    }
+
+    /// A counter's value; 0 when no pass counts it.
+    pub fn get(&self, name: &str) -> u64 {
+        self.0.get(name).copied().unwrap_or(0)
+    }
+
+    pub fn add(&mut self, other: &Counters) {
+        for (name, value) in &other.0 {
+            *self.0.entry(name).or_default() += value;
+        }
     }
 }
 
 pub trait Pass {
-    /// Create pipelines and output resources. Returns the resource for every output slot.
-    fn prepare(
-        &mut self,
-        ctx: PrepareCtx<'_>,
-    ) -> Result<HashMap<&'static str, Resource>, crate::Error>;
+    /// Elements of output `slot` when its size is [`Size::Computed`]; `ctx.outputs` is empty.
+    fn output_len(&self, slot: &str, _ctx: &PrepareCtx<'_>) -> Result<u64, crate::Error> {
+        Err(crate::Error::Other(format!(
+            "output slot \"{slot}\" declares a computed size the pass does not compute"
+        )))
+    }
+
+    /// Create pipelines and bind the inputs and the allocated outputs.
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), crate::Error>;
 
     /// Record this iteration's GPU work.
     fn execute(
@@ -245,27 +376,21 @@ pub trait Pass {
     }
 
     /// Counters gathered on the GPU so far (may read back; called rarely).
-    fn stats(&self, _gpu: &GpuContext) -> Result<PassStats, crate::Error> {
-        Ok(PassStats::default())
+    fn counters(&self, _gpu: &GpuContext) -> Result<Counters, crate::Error> {
+        Ok(Counters::default())
     }
 }
 
-/// A scene feature a pass may need.
+/// A scene feature a pass may need, named by the passes; the render answers whether the scene
+/// has it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SceneNeed {
-    /// A mirror or dielectric surface (caustic photons need one to become caustic photons).
-    SpecularSurface,
+pub struct SceneNeed {
+    pub name: &'static str,
+    /// For messages: "the scene has no {description}".
+    pub description: &'static str,
 }
 
-impl SceneNeed {
-    pub fn describe(self) -> &'static str {
-        match self {
-            SceneNeed::SpecularSurface => "specular (mirror or dielectric) surface",
-        }
-    }
-}
-
-/// A pass kind as the registry knows it: its name, slots, parameter names and constructor.
+/// A pass kind as the registry knows it: its name, slots, shaders and constructor.
 /// `construct` receives the node's `params` exactly as written in the graph file (RON text, e.g.
 /// `(max_depth: 12)`, or `()` when absent) and parses it with `#[serde(deny_unknown_fields)]`, so
 /// a parse error's position is relative to that text.
@@ -273,6 +398,8 @@ pub struct PassKind {
     pub name: &'static str,
     pub description: &'static str,
     pub slots: &'static [SlotDecl],
+    /// The WGSL entry files its kernels come from.
+    pub shaders: &'static [ShaderFile],
     pub construct: fn(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError>,
 }
 
@@ -290,4 +417,13 @@ pub fn parse_params<P: serde::de::DeserializeOwned>(
     ron::Options::default()
         .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
         .from_str(params)
+}
+
+/// A params error at the start of the params text, for range checks serde cannot express.
+pub fn params_error(message: String) -> ron::error::SpannedError {
+    let start = ron::error::Position { line: 1, col: 1 };
+    ron::error::SpannedError {
+        code: ron::Error::Message(message),
+        span: ron::error::Span { start, end: start },
+    }
 }

@@ -28,7 +28,7 @@ impl std::fmt::Display for Pruned {
 impl ValidGraph {
     /// Removes the nodes the scene has no use for; `has` says which needs the scene meets.
     /// Returns what was removed, in schedule order. Fails when the output node itself goes.
-    pub fn prune(&mut self, has: impl Fn(SceneNeed) -> bool) -> Result<Vec<Pruned>, Error> {
+    pub fn prune(&mut self, has: impl Fn(&SceneNeed) -> bool) -> Result<Vec<Pruned>, Error> {
         let n = self.nodes.len();
         let mut reason: Vec<Option<String>> = self
             .nodes
@@ -37,8 +37,8 @@ impl ValidGraph {
                 node.pass
                     .needs()
                     .iter()
-                    .find(|need| !has(**need))
-                    .map(|need| format!("the scene has no {}", need.describe()))
+                    .find(|need| !has(need))
+                    .map(|need| format!("the scene has no {}", need.description))
             })
             .collect();
         loop {

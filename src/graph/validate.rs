@@ -10,7 +10,7 @@ use petgraph::graph::{DiGraph, NodeIndex};
 use petgraph::visit::EdgeRef;
 use serde::Deserialize;
 
-use super::pass::{PassKind, ResourceKind, SlotDecl, SlotDir};
+use super::pass::{IMAGE, PassKind, SlotDecl, SlotDir};
 use super::source_map::{self, NodeSpans, SourceMap};
 use super::{Edge, GraphError, GraphErrors, ValidGraph, ValidNode};
 use crate::error::Location;
@@ -371,6 +371,16 @@ fn connect(
             );
             continue;
         }
+        if to_decl.previous_iteration && !from_decl.persistent {
+            report.error(
+                at,
+                format!(
+                    "edge \"{edge}\": \"{}.{}\" reads the previous iteration, but \"{}.{}\" does not persist across iterations",
+                    to.0, to.1, from.0, from.1
+                ),
+            );
+            continue;
+        }
         if let Some((_, first)) = edges
             .iter()
             .find(|(e, _)| e.to_node == to_node && e.to_slot == to_decl.name)
@@ -390,6 +400,7 @@ fn connect(
             from_slot: from_decl.name,
             to_node,
             to_slot: to_decl.name,
+            previous_iteration: to_decl.previous_iteration,
         };
         edges.push((edge, span));
     }
@@ -446,7 +457,7 @@ fn check_output(
     let kind = resolved.get(node)?.as_ref()?.kind;
     match kind.slot(slot) {
         // The output becomes the image, so it must hold per-pixel radiance.
-        Some(decl) if decl.dir == SlotDir::Out && decl.kind != ResourceKind::Radiance => {
+        Some(decl) if decl.dir == SlotDir::Out && decl.kind != IMAGE => {
             report.error(
                 at,
                 format!(
@@ -482,7 +493,12 @@ fn petgraph_of(node_count: usize, edges: &[(Edge, Range<usize>)]) -> DiGraph<usi
     for i in 0..node_count {
         graph.add_node(i);
     }
-    for (j, (e, _)) in edges.iter().enumerate() {
+    // An edge that reads the previous iteration orders nothing within one.
+    for (j, (e, _)) in edges
+        .iter()
+        .enumerate()
+        .filter(|(_, (e, _))| !e.previous_iteration)
+    {
         graph.add_edge(NodeIndex::new(e.from_node), NodeIndex::new(e.to_node), j);
     }
     graph

@@ -1,39 +1,44 @@
 //! `hit_point_bvh_lbvh`: the hit-point BVH built on the GPU every iteration, with no readback: a
 //! linear BVH (Morton codes, GPU radix sort, Karras 2012 hierarchy, bottom-up refit; see
-//! shaders/passes/lbvh.wgsl) in the same layout as `hit_point_bvh_sah`'s, so the two nodes are
-//! interchangeable in a graph. Every hit-point slot gets a leaf; slots without a hit point get
-//! empty boxes, which traversal never enters.
+//! shaders/passes/lbvh.wgsl) in the same layout as `hit_point_bvh_sah`'s, gathered by the same
+//! BVH gather, so the two nodes are interchangeable in a graph. Every hit-point slot gets a
+//! leaf; slots without a hit point get empty boxes, which traversal never enters.
 //!
-//! While the hit points keep their positions (their `frozen` flag, raised by the `ppm`
-//! estimator, which then only shrinks radii), the tree's shape stays valid, so after the first
-//! build only the refit runs, with the current radii.
-
-use std::collections::HashMap;
-use std::sync::atomic::Ordering;
+//! While the hit points keep their positions (their producer keeps them for `ppm`, which only
+//! shrinks radii), the tree's shape stays valid, so after the first build only the refit runs,
+//! with the current radii.
 
 use serde::Deserialize;
 
 use crate::Error;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::radix_sort::{RadixSort, workgroup_grid};
+use crate::gpu::shaders::ShaderFile;
 use crate::graph::pass::{
-    ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl, parse_params,
+    ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, parse_params,
 };
-use crate::passes::hit_points::tree_bytes;
+use crate::passes::SceneResources;
+use crate::passes::gather::{BVH_GATHER, Gather};
+use crate::passes::hit_points::{DEPOSITS, HIT_POINT_TREE, HIT_POINTS, PHOTON_HITS, tree_nodes};
+use crate::shader_file;
 
-const SHADER: &str = "shaders/passes/lbvh.wgsl";
-/// `WORKGROUP_SIZE` in shaders/common/dispatch.wgsl.
+const SHADER: ShaderFile = shader_file!("shaders/passes/lbvh.wgsl");
+/// `WORKGROUP_SIZE` in shaders/gpu/dispatch.wgsl.
 const WORKGROUP: u32 = 256;
 
 static SLOTS: &[SlotDecl] = &[
-    SlotDecl::input("hit_points", ResourceKind::HitPoints),
-    SlotDecl::output("tree", ResourceKind::HitPointTree),
+    SlotDecl::input("hit_points", HIT_POINTS),
+    SlotDecl::input("photon_hits", PHOTON_HITS),
+    SlotDecl::output("deposits", DEPOSITS, Size::LikeInput("hit_points")),
+    // Kept across iterations: a refit needs the shape of the last full build.
+    SlotDecl::output("tree", HIT_POINT_TREE, Size::Computed).persistent(),
 ];
 
 pub const KIND: PassKind = PassKind {
     name: "hit_point_bvh_lbvh",
-    description: "hit-point BVH built on the GPU (Morton codes, radix sort, Karras hierarchy)",
+    description: "hit-point BVH built on the GPU (Morton codes, radix sort, Karras); BVH gather",
     slots: SLOTS,
+    shaders: &[SHADER, BVH_GATHER, crate::gpu::radix_sort::SHADER],
     construct,
 };
 
@@ -45,7 +50,7 @@ fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
 /// When to skip the sort and hierarchy and only recompute bounds.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
 pub enum RefitOnly {
-    /// After the first build, whenever the hit points are frozen.
+    /// After the first build, whenever the hit points' producer keeps them.
     #[default]
     Auto,
     /// Rebuild every iteration.
@@ -72,7 +77,10 @@ struct Pipelines {
 }
 
 struct Prepared {
-    hit_points: Resource,
+    /// The hit points' producer keeps them (written once; only radii change).
+    kept: bool,
+    scene: wgpu::BindGroup,
+    gather: Gather,
     /// Leaves (hit-point slots).
     count: u32,
     keys: wgpu::Buffer,
@@ -103,10 +111,8 @@ impl HitPointBvhLbvh {
     }
 
     /// A full build is needed first, and whenever the hit points may have moved.
-    fn needs_full_build(&self, hit_points: &Resource) -> bool {
-        self.builds.full == 0
-            || self.params.refit_only == RefitOnly::Never
-            || !hit_points.frozen.load(Ordering::Relaxed)
+    fn needs_full_build(&self, kept: bool) -> bool {
+        self.builds.full == 0 || self.params.refit_only == RefitOnly::Never || !kept
     }
 }
 
@@ -124,11 +130,12 @@ fn leaf_count(len: u64) -> Result<u32, Error> {
 
 fn create_pipelines(
     ctx: &PrepareCtx<'_>,
+    scene: &wgpu::BindGroupLayout,
     layout: &wgpu::BindGroupLayout,
 ) -> Result<Pipelines, Error> {
     let pipeline = |entry| {
         ctx.shaders
-            .compute_pipeline(ctx.gpu, SHADER, entry, &[&ctx.scene.layout, layout])
+            .compute_pipeline(ctx.gpu, &SHADER, entry, &[scene, layout])
     };
     Ok(Pipelines {
         morton_codes: pipeline("morton_codes")?,
@@ -138,20 +145,24 @@ fn create_pipelines(
 }
 
 impl Pass for HitPointBvhLbvh {
-    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+    fn output_len(&self, _slot: &str, ctx: &PrepareCtx<'_>) -> Result<u64, Error> {
+        Ok(tree_nodes(ctx.input("hit_points")?.len))
+    }
+
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), Error> {
         let gpu = ctx.gpu;
-        let hit_points = ctx.input("hit_points")?.clone();
+        let scene = ctx.shared.get::<SceneResources>()?;
+        let hit_points = ctx.input("hit_points")?;
+        let tree = ctx.output("tree")?;
         let count = leaf_count(hit_points.len)?;
         let storage = wgpu::BufferUsages::STORAGE;
-        let tree = gpu.create_buffer(
-            "hit_point_bvh_lbvh tree",
-            tree_bytes(hit_points.len),
-            storage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        )?;
         // The shape, and so the node count, depends only on the number of slots.
         let node_count = (2 * count).saturating_sub(1);
-        gpu.queue
-            .write_buffer(&tree, 0, bytemuck::cast_slice(&[node_count, 0, 0, 0]));
+        gpu.queue.write_buffer(
+            &tree.buffer,
+            0,
+            bytemuck::cast_slice(&[node_count, 0, 0, 0]),
+        );
         let words = |n: u64| n.max(1) * 4;
         let keys = gpu.create_buffer("lbvh keys", words(count as u64), storage)?;
         let values = gpu.create_buffer("lbvh values", words(count as u64), storage)?;
@@ -175,17 +186,25 @@ impl Pass for HitPointBvhLbvh {
                 (Access::Read, &hit_points.buffer),
                 (Access::ReadWrite, &keys),
                 (Access::ReadWrite, &values),
-                (Access::ReadWrite, &tree),
+                (Access::ReadWrite, &tree.buffer),
                 (Access::ReadWrite, &node_slots),
                 (Access::ReadWrite, &parents),
                 (Access::ReadWrite, &visits),
             ],
         );
-        let pipelines = create_pipelines(&ctx, &layout)?;
+        let pipelines = create_pipelines(&ctx, &scene.layout, &layout)?;
         let sort = RadixSort::new(gpu, ctx.shaders)?;
-        let tree = Resource::new(ResourceKind::HitPointTree, tree, hit_points.len);
+        let gather = Gather::new(
+            &ctx,
+            "hit_point_bvh_lbvh gather",
+            &BVH_GATHER,
+            "main",
+            &[(Access::Read, &tree.buffer)],
+        )?;
         self.prepared = Some(Prepared {
-            hit_points,
+            kept: ctx.kept_inputs.contains("hit_points"),
+            scene: scene.bind_group.clone(),
+            gather,
             count,
             keys,
             values,
@@ -195,34 +214,45 @@ impl Pass for HitPointBvhLbvh {
             sort,
         });
         self.builds = BuildCounts::default();
-        Ok(HashMap::from([("tree", tree)]))
+        Ok(())
     }
 
     fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
         let full = match &self.prepared {
-            Some(p) if p.count > 0 => self.needs_full_build(&p.hit_points),
+            Some(p) if p.count > 0 => self.needs_full_build(p.kept),
             _ => return Ok(()),
         };
         let Some(p) = &mut self.prepared else {
             return Ok(());
         };
-        let scene = &ctx.scene.bind_group;
+        let scene = &p.scene;
         let per_leaf = workgroup_grid(p.count.div_ceil(WORKGROUP));
         if full {
             let codes = &p.pipelines.morton_codes;
-            recorder.dispatch("lbvh morton codes", codes, scene, &p.bind_group, per_leaf);
+            recorder.dispatch(
+                "lbvh morton codes",
+                codes,
+                &[scene, &p.bind_group],
+                per_leaf,
+            );
             p.sort
                 .record(ctx.gpu, recorder.encoder(), &p.keys, &p.values, p.count)?;
             let per_internal = workgroup_grid((p.count - 1).div_ceil(WORKGROUP));
             let emit = &p.pipelines.emit_hierarchy;
-            recorder.dispatch("lbvh hierarchy", emit, scene, &p.bind_group, per_internal);
+            recorder.dispatch(
+                "lbvh hierarchy",
+                emit,
+                &[scene, &p.bind_group],
+                per_internal,
+            );
             self.builds.full += 1;
         } else {
             self.builds.refit += 1;
         }
         recorder.encoder().clear_buffer(&p.visits, 0, None);
         let refit = &p.pipelines.refit;
-        recorder.dispatch("lbvh refit", refit, scene, &p.bind_group, per_leaf);
+        recorder.dispatch("lbvh refit", refit, &[scene, &p.bind_group], per_leaf);
+        p.gather.record(recorder, "hit_point_bvh_lbvh gather");
         Ok(())
     }
 }

@@ -1,11 +1,13 @@
-//! Hit points, the tree over them and photon deposits: the GPU layouts several passes share
-//! (mirrored in `shaders/common/hit_points.wgsl`) and the CPU side of the hit-point BVH (build,
-//! range query) that the SAH builder node and the tests use.
+//! Hit points, their radii, photon hits, the tree over hit points and photon deposits: the
+//! resource kinds several passes share, their GPU layouts (mirrored in
+//! `shaders/common/hit_points.wgsl`) and the CPU side of the hit-point BVH (build, range query)
+//! that the SAH builder node and the tests use.
 
 use glam::Vec3;
 
 use crate::Error;
 use crate::gpu::GpuContext;
+use crate::graph::pass::ResourceKind;
 use crate::scene::bvh::{Aabb, BvhNode, build_sah};
 
 /// `HitPoint.pixel` of a slot that holds no hit point this iteration.
@@ -30,44 +32,109 @@ impl GpuHitPoint {
     }
 }
 
-/// How the camera pass sets a slot's first radius; written by the estimator.
+/// What precedes the hit points in their buffer; written by the camera pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct HitPointsHeader {
+    /// Hit-point slots per pixel (the merge depth).
+    pub slots_per_pixel: u32,
+    pub _pad: [u32; 3],
+}
+
+/// How a slot's first radius is chosen; precedes the radii in their buffer, written by the
+/// estimator that owns them (the camera pass applies it to a slot whose radius is still 0).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct HitPointHeader {
+pub struct RadiusRule {
     /// Absolute radius in scene units; 0 means `radius_pixels` pixel footprints.
     pub initial_radius: f32,
     pub radius_pixels: f32,
     pub min_radius: f32,
-    pub slots_per_pixel: u32,
+    pub _pad: u32,
 }
 
-impl HitPointHeader {
+impl RadiusRule {
     /// `initial_radius` in scene units (0: `radius_pixels` pixel footprints); the floor is
     /// `MIN_RADIUS_FRACTION` of the scene's bounding radius.
-    pub fn new(initial_radius: f32, radius_pixels: f32, scene_radius: f32, slots: u32) -> Self {
+    pub fn new(initial_radius: f32, radius_pixels: f32, scene_radius: f32) -> Self {
         Self {
             initial_radius,
             radius_pixels,
             min_radius: MIN_RADIUS_FRACTION * scene_radius,
-            slots_per_pixel: slots,
+            _pad: 0,
         }
     }
+}
+
+/// Where a photon met a diffuse surface it deposits at (written by `photon_trace`, gathered by
+/// the hit-point structures).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuPhotonHit {
+    pub position: [f32; 3],
+    /// Camera segments the full path may still have (max_depth minus the photon's segments;
+    /// `UNBOUNDED` when the depth is unbounded), so that photon mapping obeys path tracing's
+    /// depth rule.
+    pub remaining: u32,
+    /// Unit direction towards where the photon came from.
+    pub wi: [f32; 3],
+    pub _pad_a: u32,
+    /// Flux per photon of this iteration.
+    pub flux: [f32; 3],
+    pub _pad_b: u32,
+}
+
+/// What precedes the photon hits: how many were written, and how many did not fit.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PhotonHitsHeader {
+    pub count: u32,
+    pub dropped: u32,
+    pub _pad: [u32; 2],
 }
 
 /// Initial search radius in pixel footprints unless the estimator says otherwise.
 pub const DEFAULT_RADIUS_PIXELS: f32 = 1.0;
 
-/// Bytes before the first hit point in a `HitPoints` buffer.
-pub const HEADER_BYTES: u64 = std::mem::size_of::<HitPointHeader>() as u64;
 pub const HIT_POINT_BYTES: u64 = std::mem::size_of::<GpuHitPoint>() as u64;
+/// Bytes before the first hit point in a hit-points buffer.
+pub const HEADER_BYTES: u64 = std::mem::size_of::<HitPointsHeader>() as u64;
 /// One `DepositCell`: photon count and RGB flux.
 pub const DEPOSIT_BYTES: u64 = 16;
-/// Bytes before the first node in a `HitPointTree` buffer (the node count and padding).
+/// Bytes before the first node in a tree buffer (the node count and padding).
 pub const TREE_HEADER_BYTES: u64 = 16;
+
+/// Camera-path vertices where photon mapping takes over: `slots_per_pixel` per pixel.
+pub const HIT_POINTS: ResourceKind = ResourceKind::new("hit_points", HEADER_BYTES, HIT_POINT_BYTES);
+/// Each hit-point slot's current search radius (0: not chosen yet) after a `RadiusRule`.
+pub const HIT_POINT_RADII: ResourceKind = ResourceKind::new(
+    "hit_point_radii",
+    std::mem::size_of::<RadiusRule>() as u64,
+    4,
+);
+/// Photons arriving at diffuse surfaces in one iteration.
+pub const PHOTON_HITS: ResourceKind = ResourceKind::new(
+    "photon_hits",
+    std::mem::size_of::<PhotonHitsHeader>() as u64,
+    std::mem::size_of::<GpuPhotonHit>() as u64,
+);
+/// Per-hit-point photon count and flux gathered in one iteration.
+pub const DEPOSITS: ResourceKind = ResourceKind::new("deposits", 0, DEPOSIT_BYTES);
+/// A BVH over hit points, in the layout the BVH gather traverses; its length is in nodes.
+pub const HIT_POINT_TREE: ResourceKind = ResourceKind::new(
+    "hit_point_tree",
+    TREE_HEADER_BYTES,
+    std::mem::size_of::<BvhNode>() as u64,
+);
 
 /// Minimum search radius as a fraction of the scene's bounding radius: far above f32
 /// resolution of positions, far below any useful radius.
 pub const MIN_RADIUS_FRACTION: f32 = 1e-5;
+
+/// Nodes of a tree over `slots` hit-point slots (one leaf each).
+pub fn tree_nodes(slots: u64) -> u64 {
+    2 * slots.max(1) - 1
+}
 
 /// Size in bytes of a tree buffer able to hold a BVH over `capacity` hit points.
 pub fn tree_bytes(capacity: u64) -> u64 {

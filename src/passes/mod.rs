@@ -1,15 +1,28 @@
-//! The registry of pass kinds: every kind a graph file may name.
+//! The registry of pass kinds (every kind a graph file may name), the WGSL modules they share,
+//! and what they ask of the scene: its shader defs, its features, its GPU copy.
 
+mod gather;
 pub mod hit_point_bvh_lbvh;
 pub mod hit_point_bvh_sah;
+// pub mod hit_point_grid;
 pub mod hit_points;
 pub mod path_trace;
 pub mod photon_trace;
 pub mod ppm;
 pub mod resolve;
+pub mod scene_resources;
 pub mod sppm;
 
-use crate::graph::pass::PassKind;
+use std::collections::HashMap;
+
+use naga_oil::compose::ShaderDefValue;
+
+use crate::gpu::shaders::{ShaderFile, ShaderLibrary, defs_of};
+use crate::graph::pass::{PassKind, SceneNeed};
+use crate::scene::{Scene, SceneFeatures};
+use crate::shader_file;
+
+pub use scene_resources::SceneResources;
 
 /// All pass kinds, in the order `hppm info` lists them.
 pub fn registry() -> &'static [PassKind] {
@@ -17,12 +30,67 @@ pub fn registry() -> &'static [PassKind] {
         path_trace::KIND,
         hit_point_bvh_sah::KIND,
         hit_point_bvh_lbvh::KIND,
+        // hit_point_grid::KIND,
         photon_trace::KIND,
         sppm::KIND,
         ppm::KIND,
         resolve::KIND,
     ];
     KINDS
+}
+
+/// Importable modules under `shaders/common/`, in dependency order (a module may import only
+/// those above it).
+pub const COMMON_MODULES: &[ShaderFile] = &[
+    shader_file!("shaders/common/rng.wgsl"),
+    shader_file!("shaders/common/sampling.wgsl"),
+    shader_file!("shaders/common/scene.wgsl"),
+    shader_file!("shaders/common/camera.wgsl"),
+    shader_file!("shaders/common/lights.wgsl"),
+    shader_file!("shaders/common/bsdf.wgsl"),
+    shader_file!("shaders/common/hit_points.wgsl"),
+    shader_file!("shaders/common/gather.wgsl"),
+];
+
+/// Shader defs that compile in code for scene features; without them that code is left out.
+pub const SCENE_DEFS: &[&str] = &["DIELECTRIC", "SPHERES", "POINT_LIGHTS"];
+
+/// The shader defs a scene needs: `DIELECTRIC` when a shape has a dielectric BSDF, `SPHERES`
+/// when it has spheres, `POINT_LIGHTS` when it has a point light.
+pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
+    let present = [
+        ("DIELECTRIC", features.dielectric),
+        ("SPHERES", features.spheres),
+        ("POINT_LIGHTS", features.point_lights),
+    ];
+    defs_of(present.iter().filter(|(_, on)| *on).map(|(name, _)| *name))
+}
+
+/// Every scene def set: kernels composed this way contain all the code there is.
+pub fn all_scene_defs() -> HashMap<String, ShaderDefValue> {
+    defs_of(SCENE_DEFS.iter().copied())
+}
+
+/// The shader library the passes compose against for `scene` on a device with or without
+/// float atomics.
+pub fn shader_library(float_atomics: bool, scene: &Scene) -> Result<ShaderLibrary, crate::Error> {
+    let defs = scene_defs(&scene.features());
+    Ok(ShaderLibrary::new(float_atomics, defs, COMMON_MODULES)?)
+}
+
+/// A mirror or dielectric surface: caustic photons need one to become caustic photons.
+pub const SPECULAR_SURFACE: SceneNeed = SceneNeed {
+    name: "specular_surface",
+    description: "specular (mirror or dielectric) surface",
+};
+
+/// Whether a scene with `features` meets `need` (pruning asks).
+pub fn scene_meets(features: &SceneFeatures, need: &SceneNeed) -> bool {
+    match need.name {
+        "specular_surface" => features.has_specular_surface(),
+        // A need no pass declares here is one no scene can be said to meet.
+        _ => false,
+    }
 }
 
 /// Depth at which Russian roulette starts when a path's depth is unbounded and no other start is

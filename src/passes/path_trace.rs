@@ -3,10 +3,10 @@
 //!
 //! When its `hit_points` output feeds another node, the first `merge_depth` diffuse vertices of
 //! each pixel's first sample become hit points for photon mapping, and the emission that photon
-//! mapping will add there (reached through specular vertices) is left out of `radiance`.
-
-use std::collections::HashMap;
-use std::sync::atomic::Ordering;
+//! mapping will add there (reached through specular vertices) is left out of `radiance`. Each
+//! hit point's radius comes from the estimator's `radii` (last iteration's), or from its radius
+//! rule while the estimator has none for that slot. When a consumer keeps the hit points (`ppm`),
+//! they are recorded in the first iteration only; later iterations only refresh their radii.
 
 use serde::Deserialize;
 
@@ -14,27 +14,32 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::graph::pass::{
-    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl,
-    parse_params,
+    Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, parse_params,
 };
+use crate::passes::SceneResources;
 use crate::passes::hit_points::{
-    DEFAULT_RADIUS_PIXELS, HEADER_BYTES, HIT_POINT_BYTES, HitPointHeader,
+    DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, RadiusRule,
 };
 use crate::passes::resolve_depths;
 use crate::scene::gpu_layout::UNBOUNDED;
+use crate::shader_file;
 
-const SHADER: &str = "shaders/passes/path_trace.wgsl";
+const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/path_trace.wgsl");
 const WORKGROUP: u32 = 8;
 
 static SLOTS: &[SlotDecl] = &[
-    SlotDecl::output("radiance", ResourceKind::Radiance).persistent(),
-    SlotDecl::output("hit_points", ResourceKind::HitPoints).persistent(),
+    SlotDecl::output("radiance", IMAGE, Size::Pixels).persistent(),
+    SlotDecl::output("hit_points", HIT_POINTS, Size::Computed).persistent(),
+    SlotDecl::input("radii", HIT_POINT_RADII)
+        .optional()
+        .previous_iteration(),
 ];
 
 pub const KIND: PassKind = PassKind {
     name: "path_trace",
     description: "camera paths with next-event estimation (MIS for area lights)",
     slots: SLOTS,
+    shaders: &[SHADER],
     construct,
 };
 
@@ -132,6 +137,7 @@ struct GpuParams {
 
 struct Prepared {
     pipeline: wgpu::ComputePipeline,
+    scene: wgpu::BindGroup,
     bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
     counters: wgpu::Buffer,
@@ -140,7 +146,8 @@ struct Prepared {
     max_depth: u32,
     rr_depth: u32,
     merge_slots: u32,
-    hit_points: Resource,
+    /// A consumer keeps the hit points: record them in the first iteration only.
+    keep_hit_points: bool,
 }
 
 pub struct PathTrace {
@@ -157,15 +164,38 @@ impl PathTrace {
     }
 }
 
+impl PathTrace {
+    /// (max_depth, rr_depth, hit-point slots per pixel) for this scene and wiring.
+    fn depths(&self, ctx: &PrepareCtx<'_>) -> Result<(u32, u32, u32), Error> {
+        let scene = ctx.shared.get::<SceneResources>()?;
+        let (max_depth, rr_depth) =
+            resolve_depths(self.params.max_depth, self.params.rr_depth, &scene.uniform);
+        // No consumer, no hit points: the pass is then a plain path tracer that drops nothing.
+        let merge_slots = if ctx.consumed.contains("hit_points") {
+            self.params.merge_depth.slots(max_depth)
+        } else {
+            0
+        };
+        Ok((max_depth, rr_depth, merge_slots))
+    }
+}
+
 impl Pass for PathTrace {
-    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+    fn output_len(&self, _slot: &str, ctx: &PrepareCtx<'_>) -> Result<u64, Error> {
+        let (_, _, merge_slots) = self.depths(ctx)?;
+        ctx.pixels().checked_mul(merge_slots as u64).ok_or_else(|| {
+            Error::Other(format!(
+                "path_trace: {} pixels x {merge_slots} hit points overflow",
+                ctx.pixels()
+            ))
+        })
+    }
+
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), Error> {
         let gpu = ctx.gpu;
-        let pixels = ctx.width as u64 * ctx.height as u64;
-        let radiance = gpu.create_buffer(
-            "path_trace radiance",
-            pixels * 16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        )?;
+        let scene = ctx.shared.get::<SceneResources>()?;
+        let radiance = ctx.output("radiance")?;
+        let hit_points = ctx.output("hit_points")?;
         let params = gpu.create_buffer(
             "path_trace params",
             std::mem::size_of::<GpuParams>() as u64,
@@ -176,50 +206,55 @@ impl Pass for PathTrace {
             16,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let (max_depth, rr_depth) = resolve_depths(
-            self.params.max_depth,
-            self.params.rr_depth,
-            &ctx.scene.uniform,
-        );
-        // No consumer, no hit points: the pass is then a plain path tracer that drops nothing.
-        let merge_slots = if ctx.consumed.contains("hit_points") {
-            self.params.merge_depth.slots(max_depth)
-        } else {
-            0
+        let (max_depth, rr_depth, merge_slots) = self.depths(&ctx)?;
+        let header = HitPointsHeader {
+            slots_per_pixel: merge_slots,
+            _pad: [0; 3],
         };
-        let hit_point_slots = pixels * merge_slots as u64;
-        let hit_points = gpu.create_buffer(
-            "path_trace hit_points",
-            HEADER_BYTES + hit_point_slots.max(1) * HIT_POINT_BYTES,
-            wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-        )?;
-        // A default the estimator overwrites when it is prepared.
-        let header = HitPointHeader::new(
-            0.0,
-            DEFAULT_RADIUS_PIXELS,
-            ctx.scene.uniform.scene_radius,
-            merge_slots,
-        );
         gpu.queue
-            .write_buffer(&hit_points, 0, bytemuck::bytes_of(&header));
+            .write_buffer(&hit_points.buffer, 0, bytemuck::bytes_of(&header));
+        // Without hit points to record the kernel never reads radii: a placeholder will do.
+        let own_radii;
+        let radii = match ctx.inputs.get("radii") {
+            Some(radii) => &*radii.buffer,
+            None => {
+                let rule = RadiusRule::new(0.0, DEFAULT_RADIUS_PIXELS, scene.uniform.scene_radius);
+                let mut bytes = bytemuck::bytes_of(&rule).to_vec();
+                bytes.resize(bytes.len() + 4 * hit_points.len.max(1) as usize, 0);
+                own_radii = gpu.create_buffer_init(
+                    "path_trace default radii",
+                    &bytes,
+                    wgpu::BufferUsages::STORAGE,
+                )?;
+                &own_radii
+            }
+        };
+        // The gather must search with the radii the estimator shrinks; without them it would
+        // use first radii forever while the estimator divides by smaller ones.
+        if merge_slots > 0 && !ctx.inputs.contains_key("radii") {
+            return Err(Error::Other(
+                "path_trace: its hit points feed photon mapping, so its \"radii\" input must be \
+                 connected to the estimator's radii (e.g. \"estimate.radii -> camera.radii\")"
+                    .into(),
+            ));
+        }
         let (layout, bind_group) = bind_buffers(
             &gpu.device,
             "path_trace",
             &[
                 (Access::Uniform, &params),
-                (Access::ReadWrite, &radiance),
+                (Access::ReadWrite, &radiance.buffer),
                 (Access::ReadWrite, &counters),
-                (Access::ReadWrite, &hit_points),
+                (Access::ReadWrite, &hit_points.buffer),
+                (Access::Read, radii),
             ],
         );
         let pipeline =
             ctx.shaders
-                .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
-        let hit_points = Resource::new(ResourceKind::HitPoints, hit_points, hit_point_slots);
+                .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
         self.prepared = Some(Prepared {
             pipeline,
+            scene: scene.bind_group.clone(),
             bind_group,
             params,
             counters,
@@ -228,20 +263,16 @@ impl Pass for PathTrace {
             max_depth,
             rr_depth,
             merge_slots,
-            hit_points: hit_points.clone(),
+            keep_hit_points: ctx.kept.contains("hit_points"),
         });
-        let radiance = Resource::new(ResourceKind::Radiance, radiance, pixels);
-        Ok(HashMap::from([
-            ("radiance", radiance),
-            ("hit_points", hit_points),
-        ]))
+        Ok(())
     }
 
     fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let record = ctx.iteration == 0 || !p.hit_points.frozen.load(Ordering::Relaxed);
+        let record = ctx.iteration == 0 || !p.keep_hit_points;
         let spp = self.params.samples_per_iteration;
         let gpu_params = GpuParams {
             sample_base: (ctx.iteration as u32).wrapping_mul(spp),
@@ -259,8 +290,7 @@ impl Pass for PathTrace {
         recorder.dispatch(
             "path_trace",
             &p.pipeline,
-            &ctx.scene.bind_group,
-            &p.bind_group,
+            &[&p.scene, &p.bind_group],
             [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
         );
         Ok(())
@@ -270,16 +300,15 @@ impl Pass for PathTrace {
         self.params.samples_per_iteration
     }
 
-    fn stats(&self, gpu: &GpuContext) -> Result<PassStats, Error> {
+    fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
         let Some(p) = &self.prepared else {
-            return Ok(PassStats::default());
+            return Ok(Counters::default());
         };
         let c: Vec<u32> = gpu.read_pod(&p.counters, 4)?;
         let wide = |lo: u32, hi: u32| (hi as u64) << 32 | lo as u64;
-        Ok(PassStats {
-            rays: wide(c[0], c[1]),
-            discarded_samples: wide(c[2], c[3]),
-            ..Default::default()
-        })
+        Ok(Counters::of(&[
+            ("rays", wide(c[0], c[1])),
+            ("discarded_samples", wide(c[2], c[3])),
+        ]))
     }
 }

@@ -1,8 +1,7 @@
 //! `photon_trace`: emits `photons_per_iteration` photons, traces them through specular surfaces
-//! and adds each deposit to every hit point whose radius contains it (photon count and flux per
-//! hit point, in the `deposits` output, cleared at the start of every iteration).
-
-use std::collections::HashMap;
+//! and writes a photon hit wherever one deposits (`photon_hits`, emptied by the graph before
+//! every iteration). Which hit points receive each photon is the gather's business: the
+//! hit-point structure nodes (`hit_point_bvh_sah`, `hit_point_bvh_lbvh`, `hit_point_grid`).
 
 use serde::Deserialize;
 
@@ -10,13 +9,14 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::graph::pass::{
-    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SceneNeed,
-    SlotDecl, parse_params,
+    Counters, ExecCtx, Pass, PassKind, PrepareCtx, Recorder, SceneNeed, Size, SlotDecl,
+    parse_params,
 };
-use crate::passes::hit_points::DEPOSIT_BYTES;
-use crate::passes::resolve_depths;
+use crate::passes::hit_points::PHOTON_HITS;
+use crate::passes::{SPECULAR_SURFACE, SceneResources, resolve_depths};
+use crate::shader_file;
 
-const SHADER: &str = "shaders/passes/photon_trace.wgsl";
+const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/photon_trace.wgsl");
 const WORKGROUP: u32 = 64;
 /// Workgroups per row of the dispatch grid (wgpu's limit per dimension is 65535).
 const GROUPS_PER_ROW: u32 = 32768;
@@ -28,17 +28,17 @@ pub const DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC: u32 = 1;
 pub const DEFAULT_PHOTONS_PER_PIXEL_ALL: u32 = 4;
 /// Decorrelates photon random streams from camera streams that share the seed.
 const PHOTON_STREAM: u32 = 0x9e37_79b9;
+/// Photon hits stored per photon in mode All (a photon deposits at every diffuse vertex); hits
+/// beyond are counted as `photon_hits_dropped`. Caustic mode deposits at most once per photon.
+pub const ALL_MODE_HITS_PER_PHOTON: u64 = 8;
 
-static SLOTS: &[SlotDecl] = &[
-    SlotDecl::input("hit_points", ResourceKind::HitPoints),
-    SlotDecl::input("hit_point_tree", ResourceKind::HitPointTree),
-    SlotDecl::output("deposits", ResourceKind::Deposits),
-];
+static SLOTS: &[SlotDecl] = &[SlotDecl::output("photon_hits", PHOTON_HITS, Size::Computed)];
 
 pub const KIND: PassKind = PassKind {
     name: "photon_trace",
-    description: "photons from the lights through specular surfaces, gathered by hit points",
+    description: "photons from the lights through specular surfaces, to where they deposit",
     slots: SLOTS,
+    shaders: &[SHADER],
     construct,
 };
 
@@ -99,11 +99,11 @@ struct GpuParams {
 
 struct Prepared {
     pipeline: wgpu::ComputePipeline,
+    scene: wgpu::BindGroup,
     bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
     counters: wgpu::Buffer,
     emitted: wgpu::Buffer,
-    deposits: Resource,
     photons: u32,
     max_depth: u32,
     rr_depth: u32,
@@ -133,29 +133,33 @@ impl PhotonTrace {
     }
 }
 
+impl PhotonTrace {
+    /// Photons per iteration: the param, else a default per image pixel by mode.
+    fn photons(&self, pixels: u64) -> u32 {
+        self.params.photons_per_iteration.unwrap_or_else(|| {
+            let per_pixel = match self.params.mode {
+                PhotonMode::Caustic => DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC,
+                PhotonMode::All => DEFAULT_PHOTONS_PER_PIXEL_ALL,
+            };
+            u32::try_from(pixels * per_pixel as u64).unwrap_or(u32::MAX)
+        })
+    }
+}
+
 impl Pass for PhotonTrace {
-    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+    fn output_len(&self, _slot: &str, ctx: &PrepareCtx<'_>) -> Result<u64, Error> {
+        let photons = self.photons(ctx.pixels()) as u64;
+        Ok(match self.params.mode {
+            PhotonMode::Caustic => photons,
+            PhotonMode::All => photons * ALL_MODE_HITS_PER_PHOTON,
+        })
+    }
+
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), Error> {
         let gpu = ctx.gpu;
-        let hit_points = ctx.input("hit_points")?;
-        let tree = ctx.input("hit_point_tree")?;
-        let pixels = ctx.width as u64 * ctx.height as u64;
-        let photons = match self.params.photons_per_iteration {
-            Some(n) => n,
-            None => {
-                let per_pixel = match self.params.mode {
-                    PhotonMode::Caustic => DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC,
-                    PhotonMode::All => DEFAULT_PHOTONS_PER_PIXEL_ALL,
-                };
-                u32::try_from(pixels * per_pixel as u64).unwrap_or(u32::MAX)
-            }
-        };
-        let deposits = gpu.create_buffer(
-            "photon_trace deposits",
-            hit_points.len.max(1) * DEPOSIT_BYTES,
-            wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-        )?;
+        let scene = ctx.shared.get::<SceneResources>()?;
+        let photon_hits = ctx.output("photon_hits")?;
+        let photons = self.photons(ctx.pixels());
         let params = gpu.create_buffer(
             "photon_trace params",
             std::mem::size_of::<GpuParams>() as u64,
@@ -163,7 +167,7 @@ impl Pass for PhotonTrace {
         )?;
         let counters = gpu.create_buffer(
             "photon_trace counters",
-            8,
+            16,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
         let emitted = gpu.create_buffer(
@@ -176,34 +180,28 @@ impl Pass for PhotonTrace {
             "photon_trace",
             &[
                 (Access::Uniform, &params),
-                (Access::Read, &hit_points.buffer),
-                (Access::Read, &tree.buffer),
-                (Access::ReadWrite, &deposits),
+                (Access::ReadWrite, &photon_hits.buffer),
                 (Access::ReadWrite, &counters),
                 (Access::ReadWrite, &emitted),
             ],
         );
         let pipeline =
             ctx.shaders
-                .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
-        let (max_depth, rr_depth) = resolve_depths(
-            self.params.max_depth,
-            self.params.rr_depth,
-            &ctx.scene.uniform,
-        );
-        let deposits = Resource::new(ResourceKind::Deposits, deposits, hit_points.len);
+                .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
+        let (max_depth, rr_depth) =
+            resolve_depths(self.params.max_depth, self.params.rr_depth, &scene.uniform);
         self.prepared = Some(Prepared {
             pipeline,
+            scene: scene.bind_group.clone(),
             bind_group,
             params,
             counters,
             emitted,
-            deposits: deposits.clone(),
             photons,
             max_depth,
             rr_depth,
         });
-        Ok(HashMap::from([("deposits", deposits)]))
+        Ok(())
     }
 
     fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
@@ -230,13 +228,11 @@ impl Pass for PhotonTrace {
         ctx.gpu
             .queue
             .write_buffer(&p.params, 0, bytemuck::bytes_of(&gpu_params));
-        recorder.encoder().clear_buffer(&p.deposits.buffer, 0, None);
         if groups > 0 {
             recorder.dispatch(
                 "photon_trace",
                 &p.pipeline,
-                &ctx.scene.bind_group,
-                &p.bind_group,
+                &[&p.scene, &p.bind_group],
                 [groups_per_row, groups.div_ceil(groups_per_row), 1],
             );
         }
@@ -246,7 +242,7 @@ impl Pass for PhotonTrace {
     fn needs(&self) -> &'static [SceneNeed] {
         match self.params.mode {
             // Without a specular surface no photon is ever deposited.
-            PhotonMode::Caustic => &[SceneNeed::SpecularSurface],
+            PhotonMode::Caustic => &[SPECULAR_SURFACE],
             PhotonMode::All => &[],
         }
     }
@@ -255,14 +251,15 @@ impl Pass for PhotonTrace {
         self.prepared.as_ref().map_or(0, |p| p.photons as u64)
     }
 
-    fn stats(&self, gpu: &GpuContext) -> Result<PassStats, Error> {
+    fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
         let Some(p) = &self.prepared else {
-            return Ok(PassStats::default());
+            return Ok(Counters::default());
         };
-        let c: Vec<u32> = gpu.read_pod(&p.counters, 2)?;
-        Ok(PassStats {
-            photon_segments: (c[1] as u64) << 32 | c[0] as u64,
-            ..Default::default()
-        })
+        let c: Vec<u32> = gpu.read_pod(&p.counters, 4)?;
+        let wide = |lo: u32, hi: u32| (hi as u64) << 32 | lo as u64;
+        Ok(Counters::of(&[
+            ("photon_segments", wide(c[0], c[1])),
+            ("photon_hits_dropped", wide(c[2], c[3])),
+        ]))
     }
 }

@@ -3,31 +3,34 @@
 //! pixel's first hit-point search radius, in scene units, for debugging); with `hppm render
 //! --aovs` its `pt` and `caustic` inputs are written too.
 
-use std::collections::HashMap;
-
 use serde::Deserialize;
 
 use crate::Error;
 use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu::shaders::ShaderFile;
 use crate::graph::pass::{
-    ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl, parse_params,
+    ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, parse_params,
 };
+use crate::passes::SceneResources;
+use crate::passes::hit_points::HIT_POINTS;
+use crate::shader_file;
 
-const SHADER: &str = "shaders/passes/resolve.wgsl";
+const SHADER: ShaderFile = shader_file!("shaders/passes/resolve.wgsl");
 const WORKGROUP: u32 = 8;
 
 static SLOTS: &[SlotDecl] = &[
-    SlotDecl::input("pt", ResourceKind::Radiance),
-    SlotDecl::input("caustic", ResourceKind::Radiance).optional(),
-    SlotDecl::input("hit_points", ResourceKind::HitPoints).optional(),
-    SlotDecl::output("combined", ResourceKind::Radiance),
-    SlotDecl::output("radius", ResourceKind::Radiance),
+    SlotDecl::input("pt", IMAGE),
+    SlotDecl::input("caustic", IMAGE).optional(),
+    SlotDecl::input("hit_points", HIT_POINTS).optional(),
+    SlotDecl::output("combined", IMAGE, Size::Pixels),
+    SlotDecl::output("radius", IMAGE, Size::Pixels),
 ];
 
 pub const KIND: PassKind = PassKind {
     name: "resolve",
     description: "final image: path-traced + photon-mapped radiance (AOVs pt, caustic, radius)",
     slots: SLOTS,
+    shaders: &[SHADER],
     construct,
 };
 
@@ -52,6 +55,7 @@ struct GpuParams {
 
 struct Prepared {
     pipeline: wgpu::ComputePipeline,
+    scene: wgpu::BindGroup,
     bind_group: wgpu::BindGroup,
     width: u32,
     height: u32,
@@ -62,24 +66,17 @@ pub struct Resolve {
 }
 
 impl Pass for Resolve {
-    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), Error> {
         let gpu = ctx.gpu;
-        let pixels = ctx.width as u64 * ctx.height as u64;
+        let scene = ctx.shared.get::<SceneResources>()?;
         let pt = ctx.input("pt")?;
         let caustic = ctx.inputs.get("caustic");
         let hit_points = ctx.inputs.get("hit_points");
         // Unconnected optional inputs are bound to a small placeholder the kernel never reads.
         let placeholder =
             gpu.create_buffer("resolve placeholder", 64, wgpu::BufferUsages::STORAGE)?;
-        let image = |label| {
-            gpu.create_buffer(
-                label,
-                pixels * 16,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            )
-        };
-        let combined = image("resolve combined")?;
-        let radius = image("resolve radius")?;
+        let combined = ctx.output("combined")?;
+        let radius = ctx.output("radius")?;
         let params = GpuParams {
             width: ctx.width,
             height: ctx.height,
@@ -99,40 +96,31 @@ impl Pass for Resolve {
                 (Access::Read, &pt.buffer),
                 (Access::Read, caustic.map_or(&placeholder, |r| &r.buffer)),
                 (Access::Read, hit_points.map_or(&placeholder, |r| &r.buffer)),
-                (Access::ReadWrite, &combined),
-                (Access::ReadWrite, &radius),
+                (Access::ReadWrite, &combined.buffer),
+                (Access::ReadWrite, &radius.buffer),
             ],
         );
         let pipeline =
             ctx.shaders
-                .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
+                .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
         self.prepared = Some(Prepared {
             pipeline,
+            scene: scene.bind_group.clone(),
             bind_group,
             width: ctx.width,
             height: ctx.height,
         });
-        Ok(HashMap::from([
-            (
-                "combined",
-                Resource::new(ResourceKind::Radiance, combined, pixels),
-            ),
-            (
-                "radius",
-                Resource::new(ResourceKind::Radiance, radius, pixels),
-            ),
-        ]))
+        Ok(())
     }
 
-    fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
+    fn execute(&mut self, _ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
         recorder.dispatch(
             "resolve",
             &p.pipeline,
-            &ctx.scene.bind_group,
-            &p.bind_group,
+            &[&p.scene, &p.bind_group],
             [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
         );
         Ok(())

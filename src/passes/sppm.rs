@@ -2,42 +2,48 @@
 //! Every iteration the camera pass regenerates the hit points; per pixel and photon-mapped
 //! depth this node keeps N, R and tau across iterations and merges each iteration's deposits
 //! with the update of design.md section 2. Its `radiance` output is the photon-mapped radiance
-//! (w = 1). `ppm` (src/passes/ppm.rs) runs the same merge on hit points it keeps.
-
-use std::collections::HashMap;
-use std::sync::atomic::Ordering;
+//! (w = 1); its `radii` output, the radius of every hit-point slot after its rule, is state it
+//! owns and the camera pass reads in the next iteration. `ppm` (src/passes/ppm.rs) runs the same
+//! merge on hit points it keeps.
 
 use serde::Deserialize;
 
 use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu::shaders::ShaderFile;
 use crate::graph::pass::{
-    ExecCtx, Pass, PassKind, PassStats, PrepareCtx, Recorder, Resource, ResourceKind, SlotDecl,
-    parse_params,
+    Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Resource, Size, SlotDecl,
+    params_error, parse_params,
 };
-use crate::passes::hit_points::{DEFAULT_RADIUS_PIXELS, HitPointHeader, read_hit_points};
+use crate::passes::SceneResources;
+use crate::passes::hit_points::{
+    DEFAULT_RADIUS_PIXELS, DEPOSITS, HIT_POINT_RADII, HIT_POINTS, RadiusRule,
+};
+use crate::shader_file;
 
-const SHADER: &str = "shaders/passes/merge.wgsl";
+pub(crate) const SHADER: ShaderFile = shader_file!("shaders/passes/merge.wgsl");
 const WORKGROUP: u32 = 8;
 /// Bytes of one slot's N, tau and photon total (`SlotStats` in merge.wgsl).
 const SLOT_STATS_BYTES: u64 = 32;
 
-pub(crate) static SLOTS: &[SlotDecl] = &[
-    SlotDecl::input("hit_points", ResourceKind::HitPoints),
-    SlotDecl::input("deposits", ResourceKind::Deposits),
-    SlotDecl::output("radiance", ResourceKind::Radiance).persistent(),
+static SLOTS: &[SlotDecl] = &[
+    SlotDecl::input("hit_points", HIT_POINTS),
+    SlotDecl::input("deposits", DEPOSITS),
+    SlotDecl::output("radiance", IMAGE, Size::Pixels),
+    SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points")).persistent(),
 ];
 
 pub const KIND: PassKind = PassKind {
     name: "sppm",
     description: "stochastic progressive photon mapping: per-pixel N, R, tau over iterations",
     slots: SLOTS,
+    shaders: &[SHADER],
     construct,
 };
 
 fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
-    Ok(Box::new(Merge::new(MergeParams::parse(params)?, false)))
+    Ok(Box::new(Merge::new(MergeParams::parse(params)?)))
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -69,13 +75,7 @@ impl MergeParams {
         };
         match problem {
             None => Ok(params),
-            Some(message) => {
-                let start = ron::error::Position { line: 1, col: 1 };
-                Err(ron::error::SpannedError {
-                    code: ron::Error::Message(message),
-                    span: ron::error::Span { start, end: start },
-                })
-            }
+            Some(message) => Err(params_error(message)),
         }
     }
 }
@@ -103,28 +103,27 @@ struct GpuParams {
 
 struct Prepared {
     pipeline: wgpu::ComputePipeline,
+    scene: wgpu::BindGroup,
     bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
     stats: wgpu::Buffer,
-    hit_points: Resource,
+    radii: Resource,
     slots: u64,
     slots_per_pixel: u32,
     width: u32,
     height: u32,
 }
 
-/// The merge shared by `sppm` and `ppm`; `keep_hit_points` makes it `ppm`.
+/// The merge shared by `sppm` and `ppm` (which differ in their slots: `ppm` keeps its input).
 pub struct Merge {
     params: MergeParams,
-    keep_hit_points: bool,
     prepared: Option<Prepared>,
 }
 
 impl Merge {
-    pub fn new(params: MergeParams, keep_hit_points: bool) -> Self {
+    pub fn new(params: MergeParams) -> Self {
         Self {
             params,
-            keep_hit_points,
             prepared: None,
         }
     }
@@ -135,13 +134,13 @@ impl Merge {
             return Ok(Vec::new());
         };
         let words: Vec<[u32; 8]> = gpu.read_pod(&p.stats, p.slots as usize)?;
-        let hit_points = read_hit_points(gpu, &p.hit_points.buffer, p.slots)?;
+        let radii = read_radii(gpu, &p.radii)?;
         Ok(words
             .iter()
-            .zip(&hit_points)
-            .map(|(w, hp)| {
+            .zip(&radii)
+            .map(|(w, radius)| {
                 // The kernel keeps tau / R^2 (merge.wgsl says why).
-                let r2 = hp.radius * hp.radius;
+                let r2 = radius * radius;
                 SlotStats {
                     tau: [0, 1, 2].map(|c| f32::from_bits(w[c]) * r2),
                     n: f32::from_bits(w[3]),
@@ -162,29 +161,33 @@ pub struct SlotStats {
     pub discarded: u32,
 }
 
+/// The radius of every slot of a `radii` resource (0: not chosen yet). Reads back.
+pub fn read_radii(gpu: &GpuContext, radii: &Resource) -> Result<Vec<f32>, Error> {
+    let bytes = gpu.read_buffer(
+        &radii.buffer,
+        HIT_POINT_RADII.header_bytes,
+        radii.len * HIT_POINT_RADII.element_bytes,
+    )?;
+    let bytes = &bytes[..(radii.len * HIT_POINT_RADII.element_bytes) as usize];
+    Ok(bytemuck::pod_collect_to_vec(bytes))
+}
+
 impl Pass for Merge {
-    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<HashMap<&'static str, Resource>, Error> {
+    fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), Error> {
         let gpu = ctx.gpu;
+        let scene = ctx.shared.get::<SceneResources>()?;
         let hit_points = ctx.input("hit_points")?;
         let deposits = ctx.input("deposits")?;
-        let pixels = ctx.width as u64 * ctx.height as u64;
-        let slots_per_pixel = (hit_points.len / pixels.max(1)) as u32;
-        let header = HitPointHeader::new(
+        let radiance = ctx.output("radiance")?;
+        let radii = ctx.output("radii")?;
+        let slots_per_pixel = (hit_points.len / ctx.pixels().max(1)) as u32;
+        let rule = RadiusRule::new(
             self.params.initial_radius.unwrap_or(0.0),
             self.params.radius_pixels,
-            ctx.scene.uniform.scene_radius,
-            slots_per_pixel,
+            scene.uniform.scene_radius,
         );
         gpu.queue
-            .write_buffer(&hit_points.buffer, 0, bytemuck::bytes_of(&header));
-        if self.keep_hit_points {
-            hit_points.frozen.store(true, Ordering::Relaxed);
-        }
-        let radiance = gpu.create_buffer(
-            "merge radiance",
-            pixels * 16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        )?;
+            .write_buffer(&radii.buffer, 0, bytemuck::bytes_of(&rule));
         let stats = gpu.create_buffer(
             "merge slot stats",
             hit_points.len.max(1) * SLOT_STATS_BYTES,
@@ -200,28 +203,29 @@ impl Pass for Merge {
             "merge",
             &[
                 (Access::Uniform, &params),
-                (Access::ReadWrite, &hit_points.buffer),
+                (Access::Read, &hit_points.buffer),
                 (Access::ReadWrite, &deposits.buffer),
                 (Access::ReadWrite, &stats),
-                (Access::ReadWrite, &radiance),
+                (Access::ReadWrite, &radiance.buffer),
+                (Access::ReadWrite, &radii.buffer),
             ],
         );
         let pipeline =
             ctx.shaders
-                .compute_pipeline(gpu, SHADER, "main", &[&ctx.scene.layout, &layout])?;
+                .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
         self.prepared = Some(Prepared {
             pipeline,
+            scene: scene.bind_group.clone(),
             bind_group,
             params,
             stats,
-            hit_points: hit_points.clone(),
+            radii: radii.clone(),
             slots: hit_points.len,
             slots_per_pixel,
             width: ctx.width,
             height: ctx.height,
         });
-        let radiance = Resource::new(ResourceKind::Radiance, radiance, pixels);
-        Ok(HashMap::from([("radiance", radiance)]))
+        Ok(())
     }
 
     fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
@@ -242,22 +246,18 @@ impl Pass for Merge {
         recorder.dispatch(
             "merge",
             &p.pipeline,
-            &ctx.scene.bind_group,
-            &p.bind_group,
+            &[&p.scene, &p.bind_group],
             [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
         );
         Ok(())
     }
 
-    fn stats(&self, gpu: &GpuContext) -> Result<PassStats, Error> {
+    fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
         let discarded = self
             .slot_stats(gpu)?
             .iter()
             .map(|s| s.discarded as u64)
             .sum();
-        Ok(PassStats {
-            discarded_samples: discarded,
-            ..Default::default()
-        })
+        Ok(Counters::of(&[("discarded_samples", discarded)]))
     }
 }

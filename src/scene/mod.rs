@@ -114,12 +114,6 @@ impl SceneFeatures {
     pub fn has_lights(&self) -> bool {
         self.area_lights || self.point_lights
     }
-
-    pub fn meets(&self, need: crate::graph::pass::SceneNeed) -> bool {
-        match need {
-            crate::graph::pass::SceneNeed::SpecularSurface => self.has_specular_surface(),
-        }
-    }
 }
 
 impl std::fmt::Display for SceneFeatures {

@@ -5,8 +5,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
+use crate::app::render::{Budget, Renderer};
 use crate::gpu::GpuContext;
-use crate::render::{Budget, Renderer};
 use crate::{Error, graph, passes, scene};
 
 const SCENES: &[&str] = &["scenes/cornell_diffuse.ron", "scenes/cornell_box.ron"];
@@ -47,7 +47,7 @@ fn measure(
         &never,
         |_, _| {},
     )?;
-    let rays_before = renderer.stats()?.rays;
+    let rays_before = renderer.counters()?.get("rays");
     let spp_before = renderer.samples_per_pixel();
     let summary = renderer.run(
         Budget {
@@ -62,7 +62,7 @@ fn measure(
         scene: scene_path.display().to_string(),
         spp: renderer.samples_per_pixel() - spp_before,
         seconds: summary.seconds,
-        rays: renderer.stats()?.rays - rays_before,
+        rays: renderer.counters()?.get("rays") - rays_before,
     })
 }
 

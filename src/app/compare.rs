@@ -7,10 +7,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use crate::Error;
+use crate::app::plot::{self, Series};
+use crate::app::render::{Budget, NodeTime, Renderer};
 use crate::gpu::GpuContext;
 use crate::image::{ErrorMetrics, Image, Provenance};
-use crate::plot::{self, Series};
-use crate::render::{Budget, NodeTime, Renderer};
 use crate::{graph, passes, scene};
 
 /// What to compare (the command line's arguments).

@@ -9,11 +9,11 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use crate::app::render::{Budget, Renderer};
 use crate::gpu::GpuContext;
 use crate::graph::{ValidGraph, parse_graph};
 use crate::image::Image;
 use crate::passes::hit_points::{GpuHitPoint, build_tree};
-use crate::render::{Budget, Renderer};
 use crate::{Error, passes, scene};
 
 const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
@@ -63,18 +63,18 @@ fn node_table(gpu: &GpuContext, locate: fn(&str) -> PathBuf) -> Result<String, E
             let (w, h) = (scene.camera.width, scene.camera.height);
             let mut r = Renderer::new(gpu, &scene, graph, w, h, 1)?;
             run_iterations(&mut r, 2)?;
-            let before = r.stats()?;
+            let before = r.counters()?;
             r.enable_profiling()?;
             let iterations = 8;
             run_iterations(&mut r, iterations)?;
-            let after = r.stats()?;
+            let after = r.counters()?;
             let times = r.node_times();
             let photon_seconds: f64 = times
                 .iter()
                 .filter(|t| t.kind == "photon_trace")
                 .map(|t| t.wall_seconds)
                 .sum();
-            let segments = after.photon_segments - before.photon_segments;
+            let segments = after.get("photon_segments") - before.get("photon_segments");
             let nodes: Vec<String> = times
                 .iter()
                 .map(|t| {

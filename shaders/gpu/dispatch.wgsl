@@ -1,4 +1,4 @@
-#define_import_path common::dispatch
+#define_import_path gpu::dispatch
 
 // One-dimensional work spread over a two-dimensional grid of workgroups, because a dispatch
 // dimension is limited to 65535 workgroups (about 16.7M invocations at 256 per workgroup) and

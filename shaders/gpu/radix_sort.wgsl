@@ -13,7 +13,7 @@
 // invocation keep barriers few: on CPU drivers (lavapipe) each barrier switches through every
 // invocation of the workgroup, and with one pair per invocation barriers dominated (4x slower).
 
-#import common::dispatch::{WORKGROUP_SIZE, flat_workgroup}
+#import gpu::dispatch::{WORKGROUP_SIZE, flat_workgroup}
 
 const RADIX: u32 = 16u;
 const KEYS_PER_INVOCATION: u32 = 16u;

@@ -1,76 +1,58 @@
-//! `hppm bench --lbvh`: the hit-point BVH built on the CPU (`hit_point_bvh_sah`: readback, SAH
-//! build, upload) against the GPU (`hit_point_bvh_lbvh`: full build and refit-only), each waited
-//! for, and the photon pass traversing either tree, for 1M and 10M hit points spread over the
-//! glass Cornell box's surfaces (as a camera pass at that many pixels would record them).
+//! `hppm bench --gather`: the hit-point structures side by side, each as its graph node runs it
+//! (build, then the gather of one iteration's photon hits into deposits), waited for: the BVH
+//! built on the CPU (`hit_point_bvh_sah`: readback, SAH build, upload), the BVH built on the GPU
+//! (`hit_point_bvh_lbvh`, full build and refit-only) and the hash grid (`hit_point_grid`), for
+//! hit points spread over the glass Cornell box's surfaces (as a camera pass at that many pixels
+//! would record them) and the caustic photon hits of one photon pass.
 
-use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
-use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 use crate::gpu::GpuContext;
 use crate::gpu::radix_sort::RadixSort;
-use crate::graph::pass::{ExecCtx, Pass, PrepareCtx, Recorder, Resource, ResourceKind};
-use crate::passes::hit_point_bvh_lbvh::{HitPointBvhLbvh, LbvhParams};
-use crate::passes::hit_point_bvh_sah::HitPointBvhSah;
-use crate::passes::hit_points::{GpuHitPoint, HitPointHeader};
+use crate::gpu::shaders::ShaderLibrary;
+use crate::graph::exec::{Standalone, Wiring};
+use crate::graph::pass::{Pass, PassKind, Resource, Shared};
+use crate::passes::hit_points::{GpuHitPoint, HIT_POINTS, HitPointsHeader};
 use crate::passes::photon_trace::{PhotonMode, PhotonTrace, PhotonTraceParams};
-use crate::render::SceneResources;
+use crate::passes::{self, SceneResources};
 use crate::scene::Scene;
 use crate::scene::gpu_layout::GpuScene;
-use crate::shaders::ShaderLibrary;
 use crate::{Error, scene};
 
 const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
-const SIZES: &[u32] = &[1_000_000, 2_000_000, 10_000_000];
-const PHOTONS: u32 = 1 << 16;
+/// 128^2, 512^2 and 1024^2 pixels' worth of hit points.
+const SIZES: &[u32] = &[16_384, 262_144, 1_048_576];
+const PHOTONS: u32 = 1 << 18;
 const REPEATS: usize = 3;
 
-/// One pass at a time on the glass Cornell box's shared resources.
+/// The glass Cornell box on the device, shared as a render shares it.
 struct Bench<'a> {
     gpu: &'a GpuContext,
-    scene: SceneResources,
+    shared: Shared,
     shaders: ShaderLibrary,
 }
 
 impl Bench<'_> {
     fn prepare(
         &self,
+        kind: &PassKind,
         pass: &mut dyn Pass,
         inputs: &[(&'static str, &Resource)],
-    ) -> Result<HashMap<&'static str, Resource>, Error> {
-        pass.prepare(PrepareCtx {
-            gpu: self.gpu,
-            scene: &self.scene,
-            shaders: &self.shaders,
-            inputs: inputs.iter().map(|(s, r)| (*s, (*r).clone())).collect(),
-            consumed: HashSet::new(),
-            width: 128,
-            height: 128,
-        })
-    }
-
-    /// Seconds for one iteration of `pass`, submitted and waited for.
-    fn time(&self, pass: &mut dyn Pass, iteration: u64) -> Result<f64, Error> {
-        let ctx = ExecCtx {
-            gpu: self.gpu,
-            scene: &self.scene,
-            iteration,
-            seed: 1,
-        };
-        let start = Instant::now();
-        let mut recorder = Recorder::new(self.gpu);
-        pass.execute(&ctx, &mut recorder)?;
-        recorder.flush()?;
-        Ok(start.elapsed().as_secs_f64())
+        wiring: &Wiring,
+    ) -> Result<Standalone, Error> {
+        let (gpu, shaders, shared) = (self.gpu, &self.shaders, &self.shared);
+        Standalone::prepare(gpu, shaders, shared, (128, 128), kind, pass, inputs, wiring)
     }
 
     /// Median milliseconds of REPEATS iterations after a warm-up one (pipeline compilation).
-    fn median_ms(&self, pass: &mut dyn Pass) -> Result<f64, Error> {
-        self.time(pass, 0)?;
+    fn median_ms(&self, run: &Standalone, pass: &mut dyn Pass) -> Result<f64, Error> {
+        run.run(self.gpu, pass, 0, 1)?;
         let mut times = Vec::with_capacity(REPEATS);
         for i in 0..REPEATS {
-            times.push(self.time(pass, 1 + i as u64)? * 1e3);
+            let start = Instant::now();
+            run.run(self.gpu, pass, 1 + i as u64, 1)?;
+            times.push(start.elapsed().as_secs_f64() * 1e3);
         }
         times.sort_by(f64::total_cmp);
         Ok(times[REPEATS / 2])
@@ -118,52 +100,85 @@ fn surface_hit_points(scene: &Scene, count: u32) -> Vec<GpuHitPoint> {
 }
 
 fn hit_point_resource(gpu: &GpuContext, points: &[GpuHitPoint]) -> Result<Resource, Error> {
-    let header = HitPointHeader::new(0.0, 1.0, 1.0, 1);
+    let header = HitPointsHeader {
+        slots_per_pixel: 1,
+        _pad: [0; 3],
+    };
     let mut bytes = bytemuck::bytes_of(&header).to_vec();
     bytes.extend_from_slice(bytemuck::cast_slice(points));
     let usage =
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
     let buffer = gpu.create_buffer_init("bench hit points", &bytes, usage)?;
-    Ok(Resource::new(
-        ResourceKind::HitPoints,
-        buffer,
-        points.len() as u64,
-    ))
+    Ok(Resource::new(HIT_POINTS, buffer, points.len() as u64))
 }
 
-/// Milliseconds of the photon pass (PHOTONS caustic photons) traversing `tree`.
-fn photon_ms(bench: &Bench<'_>, hit_points: &Resource, tree: &Resource) -> Result<f64, Error> {
+/// One photon pass's caustic photon hits (PHOTONS photons), kept for every structure.
+fn photon_hits(bench: &Bench<'_>) -> Result<Resource, Error> {
     let mut photons = PhotonTrace::new(PhotonTraceParams {
         mode: PhotonMode::Caustic,
         photons_per_iteration: Some(PHOTONS),
         ..Default::default()
     });
-    bench.prepare(
-        &mut photons,
-        &[("hit_points", hit_points), ("hit_point_tree", tree)],
-    )?;
-    bench.median_ms(&mut photons)
+    let kind = &passes::photon_trace::KIND;
+    let run = bench.prepare(kind, &mut photons, &[], &Wiring::default())?;
+    run.run(bench.gpu, &mut photons, 0, 1)?;
+    Ok(run.output("photon_hits")?.clone())
 }
 
-/// One table row: SAH build, photon pass on its tree, LBVH build, refit, photon pass on it.
-fn row(bench: &Bench<'_>, scene: &Scene, count: u32) -> Result<String, Error> {
+/// Milliseconds of one structure node (build + gather), and of its refit-only path when the
+/// hit points are kept, if it has one.
+fn structure_ms(
+    bench: &Bench<'_>,
+    kind: &PassKind,
+    hit_points: &Resource,
+    photon_hits: &Resource,
+) -> Result<(f64, Option<f64>), Error> {
+    let inputs = [("hit_points", hit_points), ("photon_hits", photon_hits)];
+    let params_error = |e: ron::error::SpannedError| Error::Other(format!("{}: {e}", kind.name));
+    let mut pass = (kind.construct)("()").map_err(params_error)?;
+    let run = bench.prepare(kind, &mut *pass, &inputs, &Wiring::default())?;
+    let build = bench.median_ms(&run, &mut *pass)?;
+    drop((run, pass));
+    let refit = if kind.name == passes::hit_point_bvh_lbvh::KIND.name {
+        let mut pass = (kind.construct)("()").map_err(params_error)?;
+        let kept = Wiring {
+            kept_inputs: vec!["hit_points"],
+            ..Default::default()
+        };
+        let run = bench.prepare(kind, &mut *pass, &inputs, &kept)?;
+        Some(bench.median_ms(&run, &mut *pass)?)
+    } else {
+        None
+    };
+    Ok((build, refit))
+}
+
+/// The structures compared, in table order.
+const STRUCTURES: &[&PassKind] = &[
+    &passes::hit_point_bvh_sah::KIND,
+    &passes::hit_point_bvh_lbvh::KIND,
+];
+
+/// One table row: every structure's build + gather at `count` hit points.
+fn row(
+    bench: &Bench<'_>,
+    scene: &Scene,
+    photon_hits: &Resource,
+    count: u32,
+) -> Result<String, Error> {
     let points = surface_hit_points(scene, count);
     let hit_points = hit_point_resource(bench.gpu, &points)?;
     drop(points);
-    let mut sah = HitPointBvhSah::default();
-    let sah_tree = bench.prepare(&mut sah, &[("hit_points", &hit_points)])?["tree"].clone();
-    let sah_ms = bench.median_ms(&mut sah)?;
-    let sah_photon_ms = photon_ms(bench, &hit_points, &sah_tree)?;
-    drop((sah, sah_tree));
-    let mut lbvh = HitPointBvhLbvh::new(LbvhParams::default());
-    let lbvh_tree = bench.prepare(&mut lbvh, &[("hit_points", &hit_points)])?["tree"].clone();
-    let lbvh_ms = bench.median_ms(&mut lbvh)?;
-    let lbvh_photon_ms = photon_ms(bench, &hit_points, &lbvh_tree)?;
-    hit_points.frozen.store(true, Ordering::Relaxed);
-    let refit_ms = bench.median_ms(&mut lbvh)?;
-    Ok(format!(
-        "| {count} | {sah_ms:.0} | {lbvh_ms:.0} | {refit_ms:.0} | {sah_photon_ms:.0} | {lbvh_photon_ms:.0} |\n"
-    ))
+    let mut line = format!("| {count} |");
+    for kind in STRUCTURES {
+        let (build, refit) = structure_ms(bench, kind, &hit_points, photon_hits)?;
+        line.push_str(&format!(" {build:.0} |"));
+        if let Some(refit) = refit {
+            line.push_str(&format!(" {refit:.0} |"));
+        }
+    }
+    line.push('\n');
+    Ok(line)
 }
 
 /// Median milliseconds of the radix sort alone on `count` pseudo-random pairs, waited for.
@@ -192,28 +207,44 @@ fn sort_ms(bench: &Bench<'_>, count: u32) -> Result<f64, Error> {
     Ok(times[REPEATS / 2])
 }
 
-/// Runs the hit-point BVH benchmark and returns it as Markdown.
+/// Runs the hit-point structure benchmark and returns it as Markdown.
 pub fn run(adapter: Option<&str>, locate: fn(&str) -> PathBuf) -> Result<String, Error> {
     let gpu = GpuContext::new(adapter)?;
     let scene = scene::load(&locate(GLASS))?;
+    let mut shared = Shared::default();
+    shared.insert(SceneResources::upload(
+        &gpu,
+        &GpuScene::new(&scene, 128, 128),
+    )?);
     let bench = Bench {
         gpu: &gpu,
-        scene: SceneResources::upload(&gpu, &GpuScene::new(&scene, 128, 128))?,
-        shaders: ShaderLibrary::new(gpu.has_float_atomics(), crate::shaders::scene_defs(&scene)),
+        shared,
+        shaders: passes::shader_library(gpu.has_float_atomics(), &scene)?,
     };
+    let photon_hits = photon_hits(&bench)?;
+    let hits: Vec<u32> = gpu.read_pod(&photon_hits.buffer, 1)?;
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let mut header = String::from("| hit points |");
+    let mut rule = String::from("|---|");
+    for kind in STRUCTURES {
+        header.push_str(&format!(" {} build + gather |", kind.name));
+        rule.push_str("---|");
+        if kind.name == passes::hit_point_bvh_lbvh::KIND.name {
+            header.push_str(" hit_point_bvh_lbvh refit + gather (kept hit points) |");
+            rule.push_str("---|");
+        }
+    }
     let mut out = format!(
-        "\n### hit-point BVH, adapter: {} (host: {cores} CPU cores)\n\n\
-         Hit points on the glass Cornell box's surfaces; milliseconds per build, each waited \
-         for (median of {REPEATS} after a warm-up); photon pass: {PHOTONS} caustic photons \
-         traversing the tree.\n\n\
-         | hit points | CPU SAH (readback + build + upload) | GPU LBVH build | GPU LBVH refit only | photon pass, SAH tree | photon pass, LBVH tree |\n\
-         |---|---|---|---|---|---|\n",
-        gpu.adapter_label()
+        "\n### hit-point structures, adapter: {} (host: {cores} CPU cores)\n\n\
+         Hit points on the glass Cornell box's surfaces; milliseconds per node run (build, then \
+         the gather of {} caustic photon hits from {PHOTONS} photons), each waited for (median \
+         of {REPEATS} after a warm-up).\n\n{header}\n{rule}\n",
+        gpu.adapter_label(),
+        hits[0]
     );
     let mut not_run = String::new();
     for &count in SIZES {
-        match row(&bench, &scene, count) {
+        match row(&bench, &scene, &photon_hits, count) {
             Ok(line) => out.push_str(&line),
             Err(e) => not_run.push_str(&format!("\n{count} hit points not run: {e}\n")),
         }

@@ -1,0 +1,213 @@
+//! Renders a validated graph over a scene: prunes what the scene does not need, uploads the
+//! scene and shares it with the passes, prepares the graph, then runs iterations until a budget
+//! is met.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::graph::ValidGraph;
+use crate::graph::exec::PreparedGraph;
+use crate::graph::pass::{Counters, IMAGE, Resource, Shared};
+use crate::image::Image;
+use crate::passes::{SceneResources, scene_meets, shader_library};
+use crate::scene::Scene;
+use crate::scene::gpu_layout::GpuScene;
+
+pub use crate::graph::exec::NodeTime;
+
+/// When to stop rendering. With several set, whichever comes first.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Budget {
+    pub spp: Option<u64>,
+    pub seconds: Option<f64>,
+    /// Photons emitted in total.
+    pub photons: Option<u64>,
+}
+
+/// A graph prepared on a device for one scene, ready to iterate.
+pub struct Renderer<'a> {
+    gpu: &'a GpuContext,
+    graph: PreparedGraph,
+    output: Resource,
+    /// Every image output of the output node and every image it reads (its AOVs), by slot.
+    aovs: Vec<(&'static str, Resource)>,
+    width: u32,
+    height: u32,
+    seed: u64,
+    iteration: u64,
+    spp_per_iteration: u64,
+    photons_per_iteration: u64,
+    /// Nodes the scene had no use for, removed before preparing.
+    pruned: Vec<crate::graph::Pruned>,
+}
+
+impl<'a> Renderer<'a> {
+    pub fn new(
+        gpu: &'a GpuContext,
+        scene: &Scene,
+        mut graph: ValidGraph,
+        width: u32,
+        height: u32,
+        seed: u64,
+    ) -> Result<Self, Error> {
+        let features = scene.features();
+        let pruned = graph.prune(|need| scene_meets(&features, need))?;
+        let shaders = shader_library(gpu.has_float_atomics(), scene)?;
+        let mut shared = Shared::default();
+        shared.insert(SceneResources::upload(
+            gpu,
+            &GpuScene::new(scene, width, height),
+        )?);
+        let graph = PreparedGraph::new(gpu, &shaders, &shared, graph, width, height)?;
+        let out_node = graph.graph().output.0;
+        let kind = graph.graph().nodes[out_node].kind;
+        let mut aovs: Vec<(&'static str, Resource)> = kind
+            .slots
+            .iter()
+            .filter(|slot| slot.kind == IMAGE)
+            .filter_map(|slot| {
+                graph
+                    .resource(out_node, slot.name)
+                    .or_else(|| graph.input(out_node, slot.name))
+                    .map(|r| (slot.name, r.clone()))
+            })
+            .collect();
+        aovs.sort_by_key(|(slot, _)| *slot);
+        let output = graph.output()?.clone();
+        let spp_per_iteration = graph.spp_per_iteration();
+        let photons_per_iteration = graph.photons_per_iteration();
+        Ok(Self {
+            gpu,
+            graph,
+            output,
+            aovs,
+            width,
+            height,
+            seed,
+            iteration: 0,
+            spp_per_iteration,
+            photons_per_iteration,
+            pruned,
+        })
+    }
+
+    /// Records and submits one iteration of every node, in schedule order.
+    pub fn iterate(&mut self) -> Result<(), Error> {
+        self.graph.iterate(self.gpu, self.iteration, self.seed)?;
+        self.iteration += 1;
+        Ok(())
+    }
+
+    /// Nodes removed because the scene had no use for them, with the reason.
+    pub fn pruned(&self) -> &[crate::graph::Pruned] {
+        &self.pruned
+    }
+
+    /// Times every node from now on (see `PreparedGraph::enable_profiling`).
+    pub fn enable_profiling(&mut self) -> Result<(), Error> {
+        self.graph.enable_profiling(self.gpu)
+    }
+
+    /// Per-node times summed since profiling began, in schedule order.
+    pub fn node_times(&self) -> Vec<NodeTime> {
+        self.graph.node_times()
+    }
+
+    pub fn iterations(&self) -> u64 {
+        self.iteration
+    }
+
+    pub fn samples_per_pixel(&self) -> u64 {
+        self.iteration * self.spp_per_iteration
+    }
+
+    pub fn spp_per_iteration(&self) -> u64 {
+        self.spp_per_iteration
+    }
+
+    /// Photons emitted so far (exact: a u64 on the CPU).
+    pub fn photons(&self) -> u64 {
+        self.iteration * self.photons_per_iteration
+    }
+
+    pub fn photons_per_iteration(&self) -> u64 {
+        self.photons_per_iteration
+    }
+
+    /// Reads the output slot back and averages it.
+    pub fn image(&self) -> Result<Image, Error> {
+        self.read_radiance(&self.output)
+    }
+
+    /// Every image slot of the output node, written or read (e.g. `combined`, `pt`,
+    /// `caustic`, `radius` of `resolve`), by slot name.
+    pub fn aovs(&self) -> Result<Vec<(&'static str, Image)>, Error> {
+        self.aovs
+            .iter()
+            .map(|(slot, r)| Ok((*slot, self.read_radiance(r)?)))
+            .collect()
+    }
+
+    fn read_radiance(&self, resource: &Resource) -> Result<Image, Error> {
+        let sums: Vec<[f32; 4]> = self.gpu.read_pod(&resource.buffer, resource.len as usize)?;
+        Ok(Image::from_sums(self.width, self.height, &sums))
+    }
+
+    /// Counters summed over every node.
+    pub fn counters(&self) -> Result<Counters, Error> {
+        self.graph.counters(self.gpu)
+    }
+
+    /// Iterates until `budget` is met or `cancel` is raised, calling `progress` after each
+    /// iteration with the seconds elapsed.
+    pub fn run(
+        &mut self,
+        budget: Budget,
+        cancel: &AtomicBool,
+        mut progress: impl FnMut(&Self, f64),
+    ) -> Result<RunSummary, Error> {
+        let start = Instant::now();
+        let spp_iterations = budget
+            .spp
+            .map(|spp| spp.div_ceil(self.spp_per_iteration.max(1)));
+        let photon_iterations = budget
+            .photons
+            .filter(|_| self.photons_per_iteration > 0)
+            .map(|n| n.div_ceil(self.photons_per_iteration.max(1)));
+        let target_iterations = match (spp_iterations, photon_iterations) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        loop {
+            let elapsed = start.elapsed().as_secs_f64();
+            let spp_done = target_iterations.is_some_and(|t| self.iteration >= t);
+            let time_done = budget.seconds.is_some_and(|s| elapsed >= s);
+            if spp_done || time_done || cancel.load(Ordering::Relaxed) {
+                break;
+            }
+            self.iterate()?;
+            // Waiting each iteration keeps the queue short, so the time budget and Ctrl-C are
+            // honoured within one iteration.
+            self.gpu.wait()?;
+            progress(self, start.elapsed().as_secs_f64());
+        }
+        Ok(RunSummary {
+            seconds: start.elapsed().as_secs_f64(),
+            iterations: self.iteration,
+            samples_per_pixel: self.samples_per_pixel(),
+            photons: self.photons(),
+            cancelled: cancel.load(Ordering::Relaxed),
+        })
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct RunSummary {
+    pub seconds: f64,
+    pub iterations: u64,
+    pub samples_per_pixel: u64,
+    pub photons: u64,
+    pub cancelled: bool,
+}

@@ -1,0 +1,167 @@
+//! WGSL composition with naga_oil. A library is built once per device and scene: it adds every
+//! importable module (this layer's own under `shaders/gpu/`, then the caller's) to one composer
+//! with one set of shader defs, and composes entry files against it on demand. Sources are
+//! compiled into the binary, so `hppm` runs from any directory; `$HPPM_SHADER_DIR` overrides
+//! them to edit shaders without rebuilding.
+
+use std::borrow::Cow;
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+use naga_oil::compose::{
+    ComposableModuleDescriptor, Composer, NagaModuleDescriptor, ShaderDefValue,
+};
+use wgpu::naga;
+
+use super::{GpuContext, GpuError};
+
+/// A WGSL file: its path relative to the crate root (how errors and `$HPPM_SHADER_DIR` name it)
+/// and the text compiled into the binary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShaderFile {
+    pub path: &'static str,
+    pub source: &'static str,
+}
+
+/// `shader_file!("shaders/passes/x.wgsl")`: the file with its text embedded at compile time.
+#[macro_export]
+macro_rules! shader_file {
+    ($path:literal) => {
+        $crate::gpu::shaders::ShaderFile {
+            path: $path,
+            source: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/", $path)),
+        }
+    };
+}
+
+/// This layer's importable modules (`gpu::*`), added before any caller's module.
+pub const GPU_MODULES: &[ShaderFile] = &[crate::shader_file!("shaders/gpu/dispatch.wgsl")];
+
+impl ShaderFile {
+    /// The text to compile: from `$HPPM_SHADER_DIR/path` when that variable is set, else the
+    /// embedded copy.
+    pub fn text(&self) -> Result<Cow<'static, str>, GpuError> {
+        match std::env::var_os("HPPM_SHADER_DIR") {
+            Some(dir) => {
+                let file = std::path::Path::new(&dir).join(self.path);
+                std::fs::read_to_string(&file)
+                    .map(Cow::Owned)
+                    .map_err(|e| GpuError::Shader(format!("{}: {e}", file.display())))
+            }
+            None => Ok(Cow::Borrowed(self.source)),
+        }
+    }
+}
+
+/// Shader defs as naga_oil takes them, from the names of the defs that are set.
+pub fn defs_of<'a>(names: impl IntoIterator<Item = &'a str>) -> HashMap<String, ShaderDefValue> {
+    names
+        .into_iter()
+        .map(|name| (name.to_string(), ShaderDefValue::Bool(true)))
+        .collect()
+}
+
+/// Composes entry files for one device and one set of shader defs.
+pub struct ShaderLibrary {
+    defs: HashMap<String, ShaderDefValue>,
+    // `make_naga_module` needs `&mut`; passes compose through a shared reference.
+    composer: Mutex<Composer>,
+}
+
+impl ShaderLibrary {
+    /// `modules`: the caller's importable modules in dependency order (a module may import only
+    /// those before it, and this layer's `gpu::*`). With `float_atomics` (the device has
+    /// SHADER_FLOAT32_ATOMIC) the def `FLOAT_ATOMICS` is set and modules may use `atomic<f32>`;
+    /// without it they use a compare-and-swap loop.
+    pub fn new(
+        float_atomics: bool,
+        mut defs: HashMap<String, ShaderDefValue>,
+        modules: &[ShaderFile],
+    ) -> Result<Self, GpuError> {
+        let mut capabilities = naga::valid::Capabilities::default();
+        if float_atomics {
+            capabilities |= naga::valid::Capabilities::SHADER_FLOAT32_ATOMIC;
+            defs.insert("FLOAT_ATOMICS".into(), ShaderDefValue::Bool(true));
+        }
+        let mut composer = Composer::default().with_capabilities(capabilities);
+        for module in GPU_MODULES.iter().chain(modules) {
+            let source = module.text()?;
+            let added = composer.add_composable_module(ComposableModuleDescriptor {
+                source: &source,
+                file_path: module.path,
+                shader_defs: defs.clone(),
+                ..Default::default()
+            });
+            if let Err(e) = added {
+                return Err(GpuError::Shader(e.emit_to_string(&composer)));
+            }
+        }
+        Ok(Self {
+            defs,
+            composer: Mutex::new(composer),
+        })
+    }
+
+    pub fn defs(&self) -> &HashMap<String, ShaderDefValue> {
+        &self.defs
+    }
+
+    /// Composes and validates the entry file `file`.
+    pub fn compose(&self, file: &ShaderFile) -> Result<naga::Module, GpuError> {
+        self.compose_source(file.path, &file.text()?)
+    }
+
+    /// Composes an entry file given as text; `path` names it in error messages.
+    pub fn compose_source(&self, path: &str, source: &str) -> Result<naga::Module, GpuError> {
+        let mut composer = self
+            .composer
+            .lock()
+            .map_err(|_| GpuError::Shader("shader composer poisoned by a panic".into()))?;
+        composer
+            .make_naga_module(NagaModuleDescriptor {
+                source,
+                file_path: path,
+                shader_defs: self.defs.clone(),
+                ..Default::default()
+            })
+            .map_err(|e| GpuError::Shader(e.emit_to_string(&composer)))
+    }
+
+    /// A compute pipeline for `entry` in `file`, with an explicit layout.
+    pub fn compute_pipeline(
+        &self,
+        gpu: &GpuContext,
+        file: &ShaderFile,
+        entry: &str,
+        layouts: &[&wgpu::BindGroupLayout],
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        let module = self.compose(file)?;
+        let shader = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(file.path),
+                source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
+            });
+        let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> =
+            layouts.iter().map(|l| Some(*l)).collect();
+        let layout = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(file.path),
+                bind_group_layouts: &layout_refs,
+                immediate_size: 0,
+            });
+        let pipeline = gpu
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(file.path),
+                layout: Some(&layout),
+                module: &shader,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        gpu.check_errors()?;
+        Ok(pipeline)
+    }
+}

@@ -1,0 +1,392 @@
+//! Running a validated graph: allocate every output from its slot's size rule, prepare the nodes
+//! in schedule order (each input wired to the resource its producer's slot holds), then record
+//! iterations. Persistent outputs are zeroed once; the others before every iteration.
+
+use std::collections::{HashMap, HashSet};
+use std::time::Instant;
+
+use super::ValidGraph;
+use super::pass::{
+    Counters, ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, Shared, Size, SlotDir,
+};
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::gpu::shaders::ShaderLibrary;
+use crate::gpu::timer::NodeTimer;
+
+/// Per-node time summed over the profiled iterations.
+#[derive(Debug, Clone)]
+pub struct NodeTime {
+    pub name: String,
+    pub kind: &'static str,
+    /// CPU wall clock from the node's start until the GPU finished its work.
+    pub wall_seconds: f64,
+    /// GPU clock between timestamps before and after the node's commands, where the adapter
+    /// writes timestamps inside encoders. A node that waits on the CPU (the SAH builder) counts
+    /// that wait too.
+    pub gpu_seconds: Option<f64>,
+}
+
+struct Profile {
+    timer: Option<NodeTimer>,
+    wall_seconds: Vec<f64>,
+    gpu_seconds: Vec<f64>,
+}
+
+/// A graph whose resources are allocated and whose nodes are prepared on one device.
+pub struct PreparedGraph {
+    graph: ValidGraph,
+    /// Every output slot's resource, by (node, slot).
+    resources: HashMap<(usize, &'static str), Resource>,
+    /// Outputs the graph zeroes before each iteration (those not declared persistent).
+    cleared: Vec<Resource>,
+    profile: Option<Profile>,
+}
+
+/// Outputs of `node` that some consumer keeps ([`super::pass::SlotDecl::kept`]).
+fn kept_outputs(graph: &ValidGraph, node: usize) -> HashSet<&'static str> {
+    graph
+        .edges
+        .iter()
+        .filter(|e| e.from_node == node)
+        .filter(|e| {
+            graph.nodes[e.to_node]
+                .kind
+                .slot(e.to_slot)
+                .is_some_and(|s| s.kept)
+        })
+        .map(|e| e.from_slot)
+        .collect()
+}
+
+/// Every output of a pass, allocated by its slot's size rule: (slot, resource, persistent).
+fn allocate_outputs(
+    ctx: &PrepareCtx<'_>,
+    kind: &PassKind,
+    label: &str,
+    pass: &dyn Pass,
+) -> Result<Vec<(&'static str, Resource, bool)>, Error> {
+    let mut outputs = Vec::new();
+    for slot in kind.slots.iter().filter(|s| s.dir == SlotDir::Out) {
+        let len = match slot.size {
+            Size::Pixels => ctx.pixels(),
+            Size::LikeInput(input) => ctx.input(input)?.len,
+            Size::Computed => pass.output_len(slot.name, ctx)?,
+        };
+        let label = format!("{label}.{}", slot.name);
+        let resource = Resource::allocate(ctx.gpu, &label, slot.kind, len)?;
+        outputs.push((slot.name, resource, slot.persistent));
+    }
+    Ok(outputs)
+}
+
+/// A node's error, placed at the node in its graph file.
+fn in_node(node: &super::ValidNode, error: Error) -> Error {
+    Error::Other(format!(
+        "{}: node \"{}\" ({}): {error}",
+        node.location, node.name, node.kind.name
+    ))
+}
+
+impl PreparedGraph {
+    pub fn new(
+        gpu: &GpuContext,
+        shaders: &ShaderLibrary,
+        shared: &Shared,
+        mut graph: ValidGraph,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, Error> {
+        let order = graph.order.clone();
+        let context = |graph: &ValidGraph,
+                       node: usize,
+                       resources: &HashMap<(usize, &'static str), Resource>| {
+            let inputs: HashMap<&'static str, Resource> = graph
+                .inputs_of(node)
+                .filter_map(|e| {
+                    resources
+                        .get(&(e.from_node, e.from_slot))
+                        .map(|r| (e.to_slot, r.clone()))
+                })
+                .collect();
+            let consumed: HashSet<&'static str> = graph
+                .edges
+                .iter()
+                .filter(|e| e.from_node == node)
+                .map(|e| e.from_slot)
+                .chain((graph.output.0 == node).then_some(graph.output.1))
+                .collect();
+            let kept_inputs = graph
+                .inputs_of(node)
+                .filter(|e| kept_outputs(graph, e.from_node).contains(e.from_slot))
+                .map(|e| e.to_slot)
+                .collect();
+            PrepareCtx {
+                gpu,
+                shaders,
+                shared,
+                inputs,
+                outputs: HashMap::new(),
+                consumed,
+                kept: kept_outputs(graph, node),
+                kept_inputs,
+                width,
+                height,
+            }
+        };
+        // Outputs first, all of them: an input that reads the previous iteration is wired to
+        // a node scheduled after its consumer.
+        let mut resources = HashMap::new();
+        let mut cleared = Vec::new();
+        for &node in &order {
+            let ctx = context(&graph, node, &resources);
+            let valid = &graph.nodes[node];
+            let outputs = allocate_outputs(&ctx, valid.kind, &valid.name, &*valid.pass)
+                .map_err(|e| in_node(valid, e))?;
+            for (slot, resource, persistent) in outputs {
+                if !persistent {
+                    cleared.push(resource.clone());
+                }
+                resources.insert((node, slot), resource);
+            }
+        }
+        for &node in &order {
+            let mut ctx = context(&graph, node, &resources);
+            ctx.outputs = resources
+                .iter()
+                .filter(|((n, _), _)| *n == node)
+                .map(|((_, slot), r)| (*slot, r.clone()))
+                .collect();
+            let valid = &mut graph.nodes[node];
+            let prepared = valid.pass.prepare(ctx);
+            prepared.map_err(|e| in_node(valid, e))?;
+        }
+        gpu.check_errors()?;
+        Ok(Self {
+            graph,
+            resources,
+            cleared,
+            profile: None,
+        })
+    }
+
+    pub fn graph(&self) -> &ValidGraph {
+        &self.graph
+    }
+
+    /// The resource of output `slot` of `node`.
+    pub fn resource(&self, node: usize, slot: &str) -> Option<&Resource> {
+        self.resources
+            .iter()
+            .find(|((n, s), _)| *n == node && *s == slot)
+            .map(|(_, r)| r)
+    }
+
+    /// The resource the graph's output slot holds.
+    pub fn output(&self) -> Result<&Resource, Error> {
+        let (node, slot) = self.graph.output;
+        self.resource(node, slot).ok_or_else(|| {
+            Error::Other(format!(
+                "node \"{}\" has no output slot \"{slot}\"",
+                self.graph.nodes[node].name
+            ))
+        })
+    }
+
+    /// The resource connected to input `slot` of `node`, if any.
+    pub fn input(&self, node: usize, slot: &str) -> Option<&Resource> {
+        self.graph
+            .inputs_of(node)
+            .find(|e| e.to_slot == slot)
+            .and_then(|e| self.resource(e.from_node, e.from_slot))
+    }
+
+    /// Records and submits one iteration of every node, in schedule order.
+    pub fn iterate(&mut self, gpu: &GpuContext, iteration: u64, seed: u64) -> Result<(), Error> {
+        let mut recorder = Recorder::new(gpu);
+        for resource in &self.cleared {
+            recorder.encoder().clear_buffer(&resource.buffer, 0, None);
+        }
+        let ctx = ExecCtx {
+            gpu,
+            iteration,
+            seed,
+        };
+        for &node in &self.graph.order {
+            let start = Instant::now();
+            let timer = self.profile.as_ref().and_then(|p| p.timer.as_ref());
+            if let Some(timer) = timer {
+                timer.begin(recorder.encoder(), node);
+            }
+            self.graph.nodes[node].pass.execute(&ctx, &mut recorder)?;
+            if let Some(timer) = timer {
+                timer.end(recorder.encoder(), node);
+            }
+            if let Some(profile) = &mut self.profile {
+                // Each node's work is submitted and waited for on its own: wall time per node,
+                // at the cost of the overlap a real render has.
+                recorder.flush()?;
+                profile.wall_seconds[node] += start.elapsed().as_secs_f64();
+            }
+        }
+        if let Some(profile) = &mut self.profile
+            && let Some(timer) = &profile.timer
+        {
+            timer.resolve(recorder.encoder());
+            recorder.flush()?;
+            let seconds = timer.read(gpu)?;
+            for &node in &self.graph.order {
+                profile.gpu_seconds[node] += seconds[node];
+            }
+        }
+        recorder.submit();
+        Ok(())
+    }
+
+    /// Times every node from now on: GPU time from timestamp queries where the adapter can
+    /// write them inside encoders, and CPU wall time (each node waited for on its own) always.
+    /// Profiling serialises the nodes, so an iteration is slower than without it.
+    pub fn enable_profiling(&mut self, gpu: &GpuContext) -> Result<(), Error> {
+        let nodes = self.graph.nodes.len();
+        self.profile = Some(Profile {
+            timer: NodeTimer::new(gpu, nodes)?,
+            wall_seconds: vec![0.0; nodes],
+            gpu_seconds: vec![0.0; nodes],
+        });
+        Ok(())
+    }
+
+    /// Per-node times summed since profiling began, in schedule order.
+    pub fn node_times(&self) -> Vec<NodeTime> {
+        let Some(profile) = &self.profile else {
+            return Vec::new();
+        };
+        self.graph
+            .order
+            .iter()
+            .map(|&n| {
+                let node = &self.graph.nodes[n];
+                NodeTime {
+                    name: node.name.clone(),
+                    kind: node.kind.name,
+                    wall_seconds: profile.wall_seconds[n],
+                    gpu_seconds: profile.timer.as_ref().map(|_| profile.gpu_seconds[n]),
+                }
+            })
+            .collect()
+    }
+
+    /// Camera samples per pixel one iteration adds (the most any node adds).
+    pub fn spp_per_iteration(&self) -> u64 {
+        self.graph
+            .nodes
+            .iter()
+            .map(|n| n.pass.samples_per_iteration() as u64)
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Photons one iteration emits, over every node.
+    pub fn photons_per_iteration(&self) -> u64 {
+        self.graph
+            .nodes
+            .iter()
+            .map(|n| n.pass.photons_per_iteration())
+            .sum()
+    }
+
+    /// Counters summed over every node.
+    pub fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
+        let mut total = Counters::default();
+        for node in &self.graph.nodes {
+            total.add(&node.pass.counters(gpu)?);
+        }
+        Ok(total)
+    }
+}
+
+/// How a pass run alone is wired: which of its outputs count as consumed and kept, and which
+/// inputs come kept from their producer (what a graph would tell it).
+#[derive(Debug, Clone, Default)]
+pub struct Wiring {
+    pub consumed: Vec<&'static str>,
+    pub kept: Vec<&'static str>,
+    pub kept_inputs: Vec<&'static str>,
+}
+
+/// A pass prepared alone: its outputs, allocated as a graph would.
+pub struct Standalone {
+    pub outputs: HashMap<&'static str, Resource>,
+    cleared: Vec<Resource>,
+}
+
+impl Standalone {
+    /// Allocates the outputs of `pass` (of `kind`) by its slots' rules and prepares it with
+    /// `inputs`, as one node of a graph at `width` x `height` would be. For pass tests and
+    /// benchmarks.
+    #[allow(clippy::too_many_arguments)]
+    pub fn prepare(
+        gpu: &GpuContext,
+        shaders: &ShaderLibrary,
+        shared: &Shared,
+        size: (u32, u32),
+        kind: &PassKind,
+        pass: &mut dyn Pass,
+        inputs: &[(&'static str, &Resource)],
+        wiring: &Wiring,
+    ) -> Result<Self, Error> {
+        let mut ctx = PrepareCtx {
+            gpu,
+            shaders,
+            shared,
+            inputs: inputs.iter().map(|(s, r)| (*s, (*r).clone())).collect(),
+            outputs: HashMap::new(),
+            consumed: wiring.consumed.iter().copied().collect(),
+            kept: wiring.kept.iter().copied().collect(),
+            kept_inputs: wiring.kept_inputs.iter().copied().collect(),
+            width: size.0,
+            height: size.1,
+        };
+        let mut outputs = HashMap::new();
+        let mut cleared = Vec::new();
+        for (slot, resource, persistent) in allocate_outputs(&ctx, kind, kind.name, pass)? {
+            if !persistent {
+                cleared.push(resource.clone());
+            }
+            outputs.insert(slot, resource);
+        }
+        ctx.outputs = outputs.clone();
+        pass.prepare(ctx)?;
+        gpu.check_errors()?;
+        Ok(Self { outputs, cleared })
+    }
+
+    /// The output `slot` (allocated for every output slot of the kind).
+    pub fn output(&self, slot: &str) -> Result<&Resource, Error> {
+        self.outputs
+            .get(slot)
+            .ok_or_else(|| Error::Other(format!("no output slot \"{slot}\"")))
+    }
+
+    /// Records one iteration of `pass` after zeroing its non-persistent outputs, as a graph
+    /// does, submits it and waits.
+    pub fn run(
+        &self,
+        gpu: &GpuContext,
+        pass: &mut dyn Pass,
+        iteration: u64,
+        seed: u64,
+    ) -> Result<(), Error> {
+        let mut recorder = Recorder::new(gpu);
+        for resource in &self.cleared {
+            recorder.encoder().clear_buffer(&resource.buffer, 0, None);
+        }
+        let ctx = ExecCtx {
+            gpu,
+            iteration,
+            seed,
+        };
+        pass.execute(&ctx, &mut recorder)?;
+        recorder.flush()
+    }
+}

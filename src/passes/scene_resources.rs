@@ -1,0 +1,60 @@
+//! The scene on the GPU: bind group 0 of every pass kernel. The render uploads it once and
+//! shares it with the passes (`Shared`), which keep a handle to its bind group.
+
+use crate::Error;
+use crate::gpu::GpuContext;
+use crate::gpu::binding::{Access, bind_buffers};
+use crate::scene::gpu_layout::{GpuScene, GpuSceneUniform};
+
+pub struct SceneResources {
+    pub layout: wgpu::BindGroupLayout,
+    pub bind_group: wgpu::BindGroup,
+    pub uniform: GpuSceneUniform,
+    _buffers: Vec<wgpu::Buffer>,
+}
+
+impl SceneResources {
+    pub fn upload(gpu: &GpuContext, scene: &GpuScene) -> Result<Self, Error> {
+        use bytemuck::{bytes_of, cast_slice};
+        let storage = wgpu::BufferUsages::STORAGE;
+        let uniform = gpu.create_buffer_init(
+            "scene uniform",
+            bytes_of(&scene.uniform),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let tables: [(&str, &[u8]); 7] = [
+            ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
+            ("scene prim indices", cast_slice(&scene.prim_indices)),
+            ("scene triangles", cast_slice(&scene.triangles)),
+            ("scene spheres", cast_slice(&scene.spheres)),
+            ("scene materials", cast_slice(&scene.materials)),
+            ("scene lights", cast_slice(&scene.lights)),
+            ("scene light cdf", cast_slice(&scene.light_cdf)),
+        ];
+        let mut buffers = vec![uniform];
+        for (label, bytes) in tables {
+            buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
+        }
+        let entries: Vec<_> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                (
+                    if i == 0 {
+                        Access::Uniform
+                    } else {
+                        Access::Read
+                    },
+                    b,
+                )
+            })
+            .collect();
+        let (layout, bind_group) = bind_buffers(&gpu.device, "scene", &entries);
+        Ok(Self {
+            layout,
+            bind_group,
+            uniform: scene.uniform,
+            _buffers: buffers,
+        })
+    }
+}
