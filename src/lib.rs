@@ -12,6 +12,7 @@ pub mod image;
 pub mod passes;
 pub mod plot;
 pub mod render;
+pub mod ron_span;
 pub mod scene;
 pub mod shaders;
 
