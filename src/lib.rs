@@ -13,6 +13,7 @@ pub mod gpu;
 pub mod graph;
 pub mod image;
 pub mod passes;
+pub mod ron_span;
 pub mod scene;
 
 pub use error::Location;

@@ -1,133 +1,10 @@
-//! Where things are in a graph file. serde tells us what a RON file says but not where; this
-//! small tokenizer and structural walk records the byte spans of each node, its fields and its
-//! params keys, each edge and the output, so that every validation error can name a line.
-//! It runs only on files serde already accepted, but never panics on any input.
+//! Where things are in a graph file: the byte spans of each node, its fields and its params
+//! keys, each edge and the output, read off the shared RON outline ([`crate::ron_span`]) so
+//! that every validation error can name a line.
 
 use std::ops::Range;
 
-#[derive(Debug, Clone, PartialEq)]
-enum Tok {
-    Str,
-    Ident,
-    Number,
-    Open(u8),
-    Close(u8),
-    Punct(u8),
-}
-
-#[derive(Debug, Clone)]
-struct Token {
-    kind: Tok,
-    span: Range<usize>,
-}
-
-fn tokenize(text: &str) -> Vec<Token> {
-    let bytes = text.as_bytes();
-    let mut tokens = Vec::new();
-    let mut i = 0;
-    while i < bytes.len() {
-        let c = bytes[i];
-        let start = i;
-        let kind = match c {
-            b' ' | b'\t' | b'\r' | b'\n' => {
-                i += 1;
-                continue;
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
-                    i += 1;
-                }
-                continue;
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                i += 2;
-                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
-                    i += 1;
-                }
-                i = (i + 2).min(bytes.len());
-                continue;
-            }
-            b'"' => {
-                i += 1;
-                while i < bytes.len() && bytes[i] != b'"' {
-                    i += if bytes[i] == b'\\' { 2 } else { 1 };
-                }
-                i = (i + 1).min(bytes.len());
-                Tok::Str
-            }
-            b'r' if matches!(bytes.get(i + 1), Some(b'"') | Some(b'#')) => {
-                // Raw string r#"..."#: count the hashes, then find the matching close.
-                let mut j = i + 1;
-                while bytes.get(j) == Some(&b'#') {
-                    j += 1;
-                }
-                let hashes = j - i - 1;
-                if bytes.get(j) != Some(&b'"') {
-                    i += 1;
-                    tokens.push(Token {
-                        kind: Tok::Ident,
-                        span: start..i,
-                    });
-                    continue;
-                }
-                j += 1;
-                loop {
-                    if j >= bytes.len() {
-                        break;
-                    }
-                    if bytes[j] == b'"'
-                        && bytes[j + 1..]
-                            .iter()
-                            .take(hashes)
-                            .filter(|&&b| b == b'#')
-                            .count()
-                            == hashes
-                    {
-                        j += 1 + hashes;
-                        break;
-                    }
-                    j += 1;
-                }
-                i = j.min(bytes.len());
-                Tok::Str
-            }
-            b'(' | b'[' | b'{' => {
-                i += 1;
-                Tok::Open(c)
-            }
-            b')' | b']' | b'}' => {
-                i += 1;
-                Tok::Close(c)
-            }
-            c if c.is_ascii_alphabetic() || c == b'_' => {
-                while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
-                    i += 1;
-                }
-                Tok::Ident
-            }
-            c if c.is_ascii_digit() || c == b'-' || c == b'+' || c == b'.' => {
-                i += 1;
-                while i < bytes.len()
-                    && (bytes[i].is_ascii_alphanumeric()
-                        || matches!(bytes[i], b'.' | b'_' | b'+' | b'-'))
-                {
-                    i += 1;
-                }
-                Tok::Number
-            }
-            _ => {
-                // Skip a whole UTF-8 character.
-                i += text[i..].chars().next().map_or(1, char::len_utf8);
-                Tok::Punct(c)
-            }
-        };
-        tokens.push(Token {
-            kind,
-            span: start..i,
-        });
-    }
-    tokens
-}
+use crate::ron_span::{Group, Outline};
 
 /// One `key: value` of a struct, with spans.
 #[derive(Debug, Clone)]
@@ -165,168 +42,56 @@ impl SourceMap {
     }
 }
 
-struct Walker<'t> {
-    text: &'t str,
-    tokens: Vec<Token>,
+/// The `key: value` items of a struct group (items without a key are left out).
+fn fields(group: Group<'_>) -> Vec<Field> {
+    group
+        .items()
+        .filter_map(|item| {
+            let key = item.key()?;
+            Some(Field {
+                key: key.name.to_string(),
+                key_span: key.span,
+                value_span: item.value_span(),
+            })
+        })
+        .collect()
 }
 
-impl Walker<'_> {
-    fn slice(&self, i: usize) -> &str {
-        self.tokens
-            .get(i)
-            .map_or("", |t| &self.text[t.span.clone()])
-    }
-
-    fn kind(&self, i: usize) -> Option<&Tok> {
-        self.tokens.get(i).map(|t| &t.kind)
-    }
-
-    fn start(&self, i: usize) -> usize {
-        self.tokens.get(i).map_or(self.text.len(), |t| t.span.start)
-    }
-
-    fn end(&self, i: usize) -> usize {
-        self.tokens.get(i).map_or(self.text.len(), |t| t.span.end)
-    }
-
-    /// Index just past the group opened at `i` (which must be an Open token).
-    fn skip_group(&self, i: usize) -> usize {
-        let mut depth = 0usize;
-        let mut j = i;
-        while j < self.tokens.len() {
-            match self.tokens[j].kind {
-                Tok::Open(_) => depth += 1,
-                Tok::Close(_) => {
-                    depth = depth.saturating_sub(1);
-                    if depth == 0 {
-                        return j + 1;
-                    }
-                }
-                _ => {}
-            }
-            j += 1;
-        }
-        j
-    }
-
-    /// Index just past the value starting at `i`: a group, or a token optionally followed by a
-    /// group (`Some(..)`, `Name(..)`).
-    fn skip_value(&self, i: usize) -> usize {
-        match self.kind(i) {
-            Some(Tok::Open(_)) => self.skip_group(i),
-            Some(Tok::Ident) if matches!(self.kind(i + 1), Some(Tok::Open(b'('))) => {
-                self.skip_group(i + 1)
-            }
-            Some(_) => i + 1,
-            None => i,
-        }
-    }
-
-    /// Fields of the struct whose `(` is at `open`. Returns them and the index past `)`.
-    fn fields(&self, open: usize) -> (Vec<Field>, usize) {
-        let end = self.skip_group(open);
-        let mut fields = Vec::new();
-        let mut i = open + 1;
-        while i + 1 < end {
-            let is_key = matches!(self.kind(i), Some(Tok::Ident))
-                && matches!(self.kind(i + 1), Some(Tok::Punct(b':')));
-            if !is_key {
-                i = self.skip_value(i).max(i + 1);
-                continue;
-            }
-            let value_start = i + 2;
-            let value_end = self.skip_value(value_start).max(value_start);
-            fields.push(Field {
-                key: self.slice(i).to_string(),
-                key_span: self.start(i)..self.end(i),
-                value_span: self.start(value_start)
-                    ..self
-                        .end(value_end.saturating_sub(1))
-                        .max(self.start(value_start)),
-            });
-            i = value_end;
-        }
-        (fields, end)
-    }
-
-    /// Index of the token starting at byte `offset`.
-    fn token_at(&self, offset: usize) -> Option<usize> {
-        self.tokens.iter().position(|t| t.span.start == offset)
-    }
-
-    /// Top-level-ish items of the list whose `[` starts at `offset`: spans of each element.
-    fn list_items(&self, offset: usize) -> Vec<(usize, Range<usize>)> {
-        let Some(open) = self.token_at(offset) else {
-            return Vec::new();
-        };
-        if !matches!(self.kind(open), Some(Tok::Open(b'['))) {
-            return Vec::new();
-        }
-        let end = self.skip_group(open);
-        let mut items = Vec::new();
-        let mut i = open + 1;
-        while i + 1 < end {
-            if matches!(self.kind(i), Some(Tok::Punct(b','))) {
-                i += 1;
-                continue;
-            }
-            let next = self.skip_value(i).max(i + 1);
-            items.push((i, self.start(i)..self.end(next - 1)));
-            i = next;
-        }
-        items
-    }
+/// The group of field `key`'s value in `group`, if it opens with `bracket`.
+fn value_group<'a>(group: Group<'a>, key: &str, bracket: u8) -> Option<Group<'a>> {
+    group.field(key)?.group().filter(|g| g.bracket() == bracket)
 }
 
 /// Records where the parts of a graph file are.
 pub fn map(text: &str) -> SourceMap {
-    let walker = Walker {
-        text,
-        tokens: tokenize(text),
-    };
-    let Some(open) = walker.tokens.iter().position(|t| t.kind == Tok::Open(b'(')) else {
+    let outline = Outline::new(text);
+    let Some(top) = outline.value().filter(|g| g.bracket() == b'(') else {
         return SourceMap::default();
     };
-    let (top_fields, _) = walker.fields(open);
-    let mut map = SourceMap {
-        top_fields,
-        ..Default::default()
-    };
-    if let Some(nodes) = map.top("nodes").cloned() {
-        for (first, span) in walker.list_items(nodes.value_span.start) {
-            // A node may be written `(..)` or `Node(..)`.
-            let open = if matches!(walker.kind(first), Some(Tok::Ident)) {
-                first + 1
-            } else {
-                first
-            };
-            let (fields, _) = if matches!(walker.kind(open), Some(Tok::Open(b'('))) {
-                walker.fields(open)
-            } else {
-                (Vec::new(), open)
-            };
-            let params_fields = fields
-                .iter()
-                .find(|f| f.key == "params")
-                .and_then(|f| walker.token_at(f.value_span.start))
-                .filter(|&i| matches!(walker.kind(i), Some(Tok::Open(b'('))))
-                .map(|i| walker.fields(i).0)
-                .unwrap_or_default();
-            map.nodes.push(NodeSpans {
-                span,
-                fields,
-                params_fields,
-            });
-        }
+    let nodes = value_group(top, "nodes", b'[').map_or_else(Vec::new, |list| {
+        list.items()
+            .map(|node| {
+                // A node may be written `(..)` or `Node(..)`.
+                let group = node.group().filter(|g| g.bracket() == b'(');
+                NodeSpans {
+                    span: node.span(),
+                    fields: group.map(fields).unwrap_or_default(),
+                    params_fields: group
+                        .and_then(|g| value_group(g, "params", b'('))
+                        .map(fields)
+                        .unwrap_or_default(),
+                }
+            })
+            .collect()
+    });
+    let edges = value_group(top, "edges", b'[').map_or_else(Vec::new, |list| {
+        list.items().map(|edge| edge.span()).collect()
+    });
+    SourceMap {
+        top_fields: fields(top),
+        nodes,
+        edges,
     }
-    if let Some(edges) = map.top("edges").cloned() {
-        map.edges = walker
-            .list_items(edges.value_span.start)
-            .into_iter()
-            .map(|(_, span)| span)
-            .collect();
-    }
-    map
 }
 
 #[cfg(test)]
@@ -375,5 +140,23 @@ mod tests {
         }
         let _ = map("r#\"unterminated");
         let _ = map("\"\\");
+    }
+
+    /// What the old graph-only tokenizer got wrong: a nested block comment ended at its first
+    /// `*/`, so ` c */` became tokens and the field after it was lost.
+    #[test]
+    fn a_nested_comment_and_a_raw_string_keep_the_fields_after_them() {
+        let text = "(\n    version: 1,\n    nodes: [\n        /* a /* b */ c */ (name: \"a\", pass: \"k\", params: (s: r#\"x\") // \"#, y: 2)),\n    ],\n    /* a /* b */ c */ output: \"a.out\",\n)";
+        let map = map(text);
+        let a = &map.nodes[0];
+        assert_eq!(
+            &text[a.field("params").unwrap().value_span.clone()],
+            "(s: r#\"x\") // \"#, y: 2)"
+        );
+        let keys: Vec<_> = a.params_fields.iter().map(|f| f.key.as_str()).collect();
+        assert_eq!(keys, ["s", "y"]);
+        let output = map.top("output").unwrap();
+        assert_eq!(&text[output.value_span.clone()], "\"a.out\"");
+        assert_eq!(text[..output.key_span.start].matches('\n').count() + 1, 6);
     }
 }

@@ -44,6 +44,7 @@ use serde::Deserialize;
 
 use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh};
 use crate::error::Location;
+use crate::ron_span::{self, Item, Key, Kind, Outline, Token};
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -158,13 +159,17 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 
 /// Parses scene `text`; `path` names the file in errors and anchors relative OBJ paths.
 pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
+    // RON itself accepts NaN and inf, so serde would neither refuse them nor say where they are.
     let outline = Outline::new(text);
-    if let Some(token) = outline.first_non_finite_number() {
+    let non_finite = outline.tokens().iter().find(|t| {
+        matches!(t.kind, Kind::Ident | Kind::Number) && is_non_finite_number(outline.text_of(t))
+    });
+    if let Some(token) = non_finite {
         return Err(SceneError::at(
-            Location::from_offset(path, text, token.start),
+            Location::from_offset(path, text, token.span.start),
             format!(
                 "\"{}\": numbers must be finite (NaN and infinity are not allowed)",
-                &text[token.start..token.end]
+                outline.text_of(token)
             ),
         ));
     }
@@ -192,30 +197,73 @@ struct Builder<'a> {
     outline: &'a Outline<'a>,
 }
 
-impl Builder<'_> {
+impl<'a> Builder<'a> {
     fn at(&self, offset: usize, message: impl Into<String>) -> SceneError {
         SceneError::at(Location::from_offset(self.path, self.text, offset), message)
     }
 
+    /// The item `name: ...` of the file's top-level struct.
+    fn top_item(&self, name: &str) -> Option<Item<'a>> {
+        self.outline.value()?.field(name)
+    }
+
     /// Where top-level field `name` starts (the file start if it is not written).
     fn field(&self, name: &str) -> usize {
-        self.outline.top_field(name).map_or(0, |g| g.start)
+        self.top_item(name).map_or(0, |f| f.span().start)
+    }
+
+    /// Element `index` of the top-level list `list`.
+    fn list_element(&self, list: &str, index: usize) -> Option<Item<'a>> {
+        self.top_item(list)?.group()?.items().nth(index)
     }
 
     /// Where element `index` of the top-level list `list` starts.
     fn element(&self, list: &str, index: usize) -> usize {
-        self.outline
-            .top_list_element(list, index)
-            .map_or_else(|| self.field(list), |g| g.start)
+        self.list_element(list, index)
+            .map_or_else(|| self.field(list), |e| e.span().start)
     }
 
-    /// Where `word` first appears within element `index` of list `list` (or where the element
-    /// starts).
+    /// Where the first token of element `index` of list `list` that satisfies `wanted` starts
+    /// (or where the element starts).
+    fn token_in_element(&self, list: &str, index: usize, wanted: impl Fn(&Token) -> bool) -> usize {
+        self.list_element(list, index)
+            .and_then(|e| e.tokens().iter().find(|t| wanted(t)))
+            .map_or_else(|| self.element(list, index), |t| t.span.start)
+    }
+
+    /// Where `word` first appears within element `index` of list `list`.
     fn word_in_element(&self, list: &str, index: usize, word: &str) -> usize {
-        self.outline
-            .top_list_element(list, index)
-            .and_then(|g| self.outline.find_word(g, word))
-            .unwrap_or_else(|| self.element(list, index))
+        self.token_in_element(list, index, |t| self.outline.text_of(t) == word)
+    }
+
+    /// Where a string holding `contents` first appears within element `index` of list `list`.
+    fn string_in_element(&self, list: &str, index: usize, contents: &str) -> usize {
+        self.token_in_element(list, index, |t| {
+            t.kind == Kind::Str
+                && ron_span::string_contents(self.outline.text_of(t)) == Some(contents)
+        })
+    }
+
+    /// The quoted keys of the `materials` map, in file order.
+    fn material_keys(&self) -> Vec<Key<'a>> {
+        let Some(map) = self.top_item("materials").and_then(|f| f.group()) else {
+            return Vec::new();
+        };
+        map.items()
+            .filter_map(|item| item.key())
+            .filter(|k| k.quoted)
+            .collect()
+    }
+
+    /// The second occurrence of a material name written twice.
+    fn duplicate_material_key(&self) -> Option<Key<'a>> {
+        let keys = self.material_keys();
+        keys.iter().enumerate().find_map(|(i, k)| {
+            keys[..i]
+                .iter()
+                .any(|earlier| earlier.name == k.name)
+                .then(|| k.clone())
+        })
     }
 
     fn build(&self, file: SceneFile) -> Result<Scene, SceneError> {
@@ -311,12 +359,12 @@ impl Builder<'_> {
         &self,
         materials: &BTreeMap<String, MaterialFile>,
     ) -> Result<(), SceneError> {
-        if let Some(key) = self.outline.duplicate_material_key() {
+        if let Some(key) = self.duplicate_material_key() {
             return Err(self.at(
-                key.start,
+                key.span.start,
                 format!(
                     "material {} is defined twice",
-                    &self.text[key.start..key.end]
+                    self.text.get(key.span).unwrap_or_default()
                 ),
             ));
         }
@@ -333,9 +381,10 @@ impl Builder<'_> {
                 _ => continue,
             };
             let here = self
-                .outline
-                .material_key(name)
-                .map_or_else(|| self.field("materials"), |k| k.start);
+                .material_keys()
+                .into_iter()
+                .find(|k| k.name == name)
+                .map_or_else(|| self.field("materials"), |k| k.span.start);
             return Err(self.at(here, format!("material \"{name}\": {problem}")));
         }
         Ok(())
@@ -348,13 +397,12 @@ impl Builder<'_> {
         index: usize,
         shape: &ShapeFile,
     ) -> Result<(), SceneError> {
-        let quoted_name = format!("\"{}\"", shape.material);
         let bsdf = match materials.get(&shape.material) {
             Some(m) => bsdf_of(m),
             None => {
                 let names: Vec<&String> = materials.keys().collect();
                 return Err(self.at(
-                    self.word_in_element("shapes", index, &quoted_name),
+                    self.string_in_element("shapes", index, &shape.material),
                     format!(
                         "unknown material \"{}\" (defined: {names:?})",
                         shape.material
@@ -479,206 +527,7 @@ fn to_world(steps: &[TransformStep]) -> Result<Mat4, String> {
     Ok(m)
 }
 
-/// The structure of RON text, just enough to say where an entry starts: serde gives positions
-/// only for syntax errors, and the scene's semantic errors (an unknown material in the third
-/// shape) should point at that entry, not at the first similar text in the file.
-///
-/// Tolerates any input (it also runs before the text is known to be valid RON, to find NaNs).
-struct Outline<'a> {
-    text: &'a str,
-    tokens: Vec<Token>,
-    /// The file's value: the last bracket group at depth 0 (after any `#![enable(...)]`).
-    top: Option<Group>,
-}
-
-#[derive(Clone, Copy, PartialEq, Debug)]
-enum Kind {
-    Open,
-    Close,
-    Comma,
-    Colon,
-    Str,
-    Word,
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Token {
-    kind: Kind,
-    start: usize,
-    end: usize,
-}
-
-/// Tokens `first..last` (indices into `Outline::tokens`); `start` is the byte offset of the
-/// first.
-#[derive(Clone, Copy, Debug)]
-struct Group {
-    first: usize,
-    last: usize,
-    start: usize,
-}
-
-impl<'a> Outline<'a> {
-    fn new(text: &'a str) -> Outline<'a> {
-        let tokens = tokenize(text);
-        let mut outline = Outline {
-            text,
-            tokens,
-            top: None,
-        };
-        outline.top = outline.last_top_level_group();
-        outline
-    }
-
-    fn last_top_level_group(&self) -> Option<Group> {
-        let mut depth = 0i32;
-        let mut top = None;
-        let mut open = None;
-        for (i, t) in self.tokens.iter().enumerate() {
-            match t.kind {
-                Kind::Open => {
-                    if depth == 0 {
-                        open = Some(i);
-                    }
-                    depth += 1;
-                }
-                Kind::Close => {
-                    depth -= 1;
-                    if depth == 0 {
-                        top = open.map(|first| self.group(first, i + 1));
-                    }
-                }
-                _ => {}
-            }
-        }
-        top
-    }
-
-    fn group(&self, first: usize, last: usize) -> Group {
-        Group {
-            first,
-            last,
-            start: self.tokens[first].start,
-        }
-    }
-
-    fn text_of(&self, t: &Token) -> &'a str {
-        self.text.get(t.start..t.end).unwrap_or("")
-    }
-
-    /// The comma-separated items directly inside the bracket group `g`.
-    fn items(&self, g: Group) -> Vec<Group> {
-        let mut items = Vec::new();
-        let mut depth = 0;
-        let mut item_first = g.first + 1;
-        let inner_last = g.last.saturating_sub(1);
-        for i in g.first + 1..inner_last {
-            match self.tokens[i].kind {
-                Kind::Open => depth += 1,
-                Kind::Close => depth -= 1,
-                Kind::Comma if depth == 0 => {
-                    if item_first < i {
-                        items.push(self.group(item_first, i));
-                    }
-                    item_first = i + 1;
-                }
-                _ => {}
-            }
-        }
-        if item_first < inner_last {
-            items.push(self.group(item_first, inner_last));
-        }
-        items
-    }
-
-    /// The item `key: value` of group `g` whose key is written `key` (a word or a quoted string).
-    fn keyed_item(&self, g: Group, key: &str) -> Option<Group> {
-        self.items(g).into_iter().find(|item| {
-            item.last > item.first + 1
-                && self.tokens[item.first + 1].kind == Kind::Colon
-                && self.text_of(&self.tokens[item.first]) == key
-        })
-    }
-
-    /// The first bracket group inside `item` (the value of `key: (...)`).
-    fn value_group(&self, item: Group) -> Option<Group> {
-        let first = (item.first..item.last).find(|&i| self.tokens[i].kind == Kind::Open)?;
-        let mut depth = 0;
-        for i in first..item.last {
-            match self.tokens[i].kind {
-                Kind::Open => depth += 1,
-                Kind::Close => {
-                    depth -= 1;
-                    if depth == 0 {
-                        return Some(self.group(first, i + 1));
-                    }
-                }
-                _ => {}
-            }
-        }
-        None
-    }
-
-    /// The item `name: ...` of the file's top-level struct.
-    fn top_field(&self, name: &str) -> Option<Group> {
-        self.keyed_item(self.top?, name)
-    }
-
-    /// Element `index` of the top-level list `list`.
-    fn top_list_element(&self, list: &str, index: usize) -> Option<Group> {
-        let list = self.value_group(self.top_field(list)?)?;
-        self.items(list).get(index).copied()
-    }
-
-    /// Byte offset of the first token of `g` whose text is `word`.
-    fn find_word(&self, g: Group, word: &str) -> Option<usize> {
-        self.tokens[g.first..g.last]
-            .iter()
-            .find(|t| self.text_of(t) == word)
-            .map(|t| t.start)
-    }
-
-    /// The quoted keys of the `materials` map, in file order.
-    fn material_keys(&self) -> Vec<Token> {
-        let Some(map) = self
-            .top_field("materials")
-            .and_then(|f| self.value_group(f))
-        else {
-            return Vec::new();
-        };
-        self.items(map)
-            .into_iter()
-            .map(|item| self.tokens[item.first])
-            .filter(|t| t.kind == Kind::Str)
-            .collect()
-    }
-
-    fn material_key(&self, name: &str) -> Option<Token> {
-        let quoted = format!("\"{name}\"");
-        self.material_keys()
-            .into_iter()
-            .find(|t| self.text_of(t) == quoted)
-    }
-
-    /// The second occurrence of a material name written twice.
-    fn duplicate_material_key(&self) -> Option<Token> {
-        let keys = self.material_keys();
-        keys.iter().enumerate().find_map(|(i, k)| {
-            keys[..i]
-                .iter()
-                .any(|earlier| self.text_of(earlier) == self.text_of(k))
-                .then_some(*k)
-        })
-    }
-
-    /// The first number-like word that is NaN or infinite as an `f32` (`NaN`, `-inf`, `1e39`).
-    fn first_non_finite_number(&self) -> Option<Token> {
-        self.tokens
-            .iter()
-            .copied()
-            .find(|t| t.kind == Kind::Word && is_non_finite_number(self.text_of(t)))
-    }
-}
-
+/// Whether a number-like token is NaN or infinite as an `f32` (`NaN`, `-inf`, `1e39`).
 fn is_non_finite_number(word: &str) -> bool {
     let unsigned = word.trim_start_matches(['+', '-']).to_ascii_lowercase();
     if matches!(unsigned.as_str(), "nan" | "inf" | "infinity") {
@@ -689,111 +538,40 @@ fn is_non_finite_number(word: &str) -> bool {
     starts_like_number && digits.parse::<f64>().is_ok_and(|v| !(v as f32).is_finite())
 }
 
-/// Splits RON text into brackets, separators, strings and words (numbers, identifiers),
-/// skipping white space and comments. Never fails: unterminated strings and comments run to
-/// the end of the text.
-fn tokenize(text: &str) -> Vec<Token> {
-    let bytes = text.as_bytes();
-    let mut tokens = Vec::new();
-    let mut i = 0;
-    while i < bytes.len() {
-        let start = i;
-        let kind = match bytes[i] {
-            b'(' | b'[' | b'{' => Kind::Open,
-            b')' | b']' | b'}' => Kind::Close,
-            b',' => Kind::Comma,
-            b':' => Kind::Colon,
-            b'"' => {
-                i = string_end(bytes, i);
-                tokens.push(Token {
-                    kind: Kind::Str,
-                    start,
-                    end: i,
-                });
-                continue;
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                i = bytes[i..]
-                    .iter()
-                    .position(|&b| b == b'\n')
-                    .map_or(bytes.len(), |p| i + p);
-                continue;
-            }
-            b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                i = block_comment_end(bytes, i);
-                continue;
-            }
-            b if b.is_ascii_whitespace() => {
-                i += 1;
-                continue;
-            }
-            _ => {
-                i = word_end(bytes, i);
-                tokens.push(Token {
-                    kind: Kind::Word,
-                    start,
-                    end: i,
-                });
-                continue;
-            }
-        };
-        i += 1;
-        tokens.push(Token {
-            kind,
-            start,
-            end: i,
-        });
-    }
-    tokens
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// The offset just past the string starting at the quote `bytes[start]`.
-fn string_end(bytes: &[u8], start: usize) -> usize {
-    let mut i = start + 1;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'\\' => i += 2,
-            b'"' => return i + 1,
-            _ => i += 1,
+    fn error(text: &str) -> String {
+        match parse(Path::new("t.ron"), text) {
+            Ok(_) => panic!("accepted:\n{text}"),
+            Err(e) => e.to_string(),
         }
     }
-    bytes.len()
-}
 
-/// The offset just past the (possibly nested) block comment starting at `bytes[start]`.
-fn block_comment_end(bytes: &[u8], start: usize) -> usize {
-    let mut depth = 0;
-    let mut i = start;
-    while i + 1 < bytes.len() {
-        match (bytes[i], bytes[i + 1]) {
-            (b'/', b'*') => {
-                depth += 1;
-                i += 2;
-            }
-            (b'*', b'/') => {
-                depth -= 1;
-                i += 2;
-                if depth == 0 {
-                    return i;
-                }
-            }
-            _ => i += 1,
-        }
+    /// The scene's own tokenizer read `r#"a" // )"#` as a word, a string and a comment that
+    /// swallowed the rest of the line, so the `"glass"` key was not found and the error fell
+    /// back to line 3.
+    #[test]
+    fn errors_after_a_raw_string_and_a_nested_comment_point_at_their_entry() {
+        let material = "(\n camera: (origin: (0, 0, 5), target: (0, 0, 0), fov_x: 40, width: 8, height: 8),\n materials: {\n  r#\"a\" // )\"#: Mirror,\n  /* a /* b */ c */ \"glass\": Dielectric(int_ior: -1.5),\n },\n shapes: [],\n)";
+        let err = error(material);
+        assert!(
+            err.contains("t.ron:5:21:") && err.contains("glass"),
+            "{err}"
+        );
+        let shape = "(\n camera: (origin: (0, 0, 5), target: (0, 0, 0), fov_x: 40, width: 8, height: 8),\n materials: { \"m\": Mirror },\n shapes: [\n  (shape: Cube, material: \"m\"),\n  /* a /* b */ c */ (shape: Cube,\n   material: r#\"x\" // )\"#),\n ],\n)";
+        let err = error(shape);
+        assert!(
+            err.contains("t.ron:7:14:") && err.contains("unknown material"),
+            "{err}"
+        );
     }
-    bytes.len()
-}
 
-/// A word runs until white space, a bracket, a separator, a quote or a comment. All of those
-/// are ASCII, so word boundaries are always char boundaries.
-fn word_end(bytes: &[u8], start: usize) -> usize {
-    let mut i = start;
-    while i < bytes.len() {
-        let b = bytes[i];
-        let comment = b == b'/' && matches!(bytes.get(i + 1), Some(b'/' | b'*'));
-        if b.is_ascii_whitespace() || b"()[]{},:\"".contains(&b) || comment {
-            break;
-        }
-        i += 1;
+    #[test]
+    fn a_non_finite_number_is_found_past_a_raw_string() {
+        let text = "(\n camera: (origin: (0, 0, 5), target: (0, 0, 0), fov_x: 40, width: 8, height: 8),\n materials: { r#\"NaN \" // \"#: Mirror },\n shapes: [(shape: Cube, material: \"NaN \", emission: (1, -inf, 1))],\n)";
+        let err = error(text);
+        assert!(err.contains("t.ron:4:") && err.contains("-inf"), "{err}");
     }
-    i.max(start + 1)
 }
