@@ -11,7 +11,7 @@ fn locate(relative: &str) -> PathBuf {
 fn main() {
     let adapter = std::env::var("HPPM_TEST_ADAPTER").ok();
     let write = std::env::var_os("HPPM_BENCH_WRITE").map(PathBuf::from);
-    if let Err(e) = hppm::bench::run(adapter.as_deref(), 32, write.as_deref(), locate) {
+    if let Err(e) = hppm::app::bench::run(adapter.as_deref(), 32, write.as_deref(), locate) {
         eprintln!("error: {e}");
         std::process::exit(1);
     }

@@ -1,6 +1,5 @@
 //! hppm: a GPU renderer that combines path tracing with progressive photon mapping, built as a
 //! render graph of wgpu compute passes described in RON.
-
 //!
 //! Layers point one way: `gpu` (device, buffers, shader composition, radix sort) knows nothing
 //! above it; `graph` (schema, validation, pruning, schedule, allocation, execution) knows `gpu`

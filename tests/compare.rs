@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use hppm::compare::{log_log_slope, parse_peer_csv, read_mask, snapshot_times};
+use hppm::app::compare::{log_log_slope, parse_peer_csv, read_mask, snapshot_times};
 use hppm::image::{Image, Provenance};
 
 fn image(width: u32, height: u32, pixels: Vec<[f32; 3]>) -> Image {

@@ -5,23 +5,24 @@
 
 mod common;
 
-use std::collections::HashMap;
-use std::path::Path;
-use std::sync::atomic::Ordering;
-
 use common::pass_harness::{
-    PassHarness, check_range_queries, hit_point, hit_point_resource, write_hit_points,
+    PassHarness, check_range_queries, hit_point, hit_point_resource, photon_hits_resource,
+    write_hit_points,
 };
 use common::*;
 use glam::Vec3;
 use hppm::gpu::GpuContext;
 use hppm::gpu::radix_sort::RadixSort;
+use hppm::graph::exec::Wiring;
 use hppm::graph::pass::Resource;
-use hppm::passes::hit_point_bvh_lbvh::{BuildCounts, HitPointBvhLbvh, LbvhParams, RefitOnly};
-use hppm::passes::hit_points::{GpuHitPoint, NO_PIXEL, TREE_HEADER_BYTES, sphere_box, tree_bytes};
+use hppm::passes::hit_point_bvh_lbvh::{
+    BuildCounts, HitPointBvhLbvh, KIND as LBVH, LbvhParams, RefitOnly,
+};
+use hppm::passes::hit_points::{GpuHitPoint, NO_PIXEL, TREE_HEADER_BYTES, sphere_box};
 use hppm::scene::Scene;
 use hppm::scene::bvh::BvhNode;
-use hppm::shaders::ShaderLibrary;
+use std::collections::HashMap;
+use std::path::Path;
 
 /// xorshift64*: seeded, enough for test data.
 struct Rng(u64);
@@ -85,7 +86,9 @@ fn check_sort(gpu: &GpuContext, sort: &mut RadixSort, name: &str, keys: &[u32]) 
 #[test]
 fn radix_sort_matches_a_stable_cpu_sort() {
     let gpu = gpu();
-    let shaders = ShaderLibrary::new(gpu.has_float_atomics(), HashMap::new());
+    let shaders =
+        hppm::gpu::shaders::ShaderLibrary::new(gpu.has_float_atomics(), HashMap::new(), &[])
+            .expect("gpu modules compose");
     let mut sort = RadixSort::new(&gpu, &shaders).expect("radix sort");
     let mut rng = Rng(7);
     let mut random =
@@ -130,7 +133,7 @@ const SCENE: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 
 fn read_tree(gpu: &GpuContext, tree: &Resource) -> Vec<BvhNode> {
     let bytes = gpu
-        .read_buffer(&tree.buffer, 0, tree_bytes(tree.len))
+        .read_buffer(&tree.buffer, 0, tree.buffer.size())
         .expect("tree readback");
     let node_count = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as usize;
     let start = TREE_HEADER_BYTES as usize;
@@ -220,8 +223,10 @@ fn check_tree(name: &str, nodes: &[BvhNode], points: &[GpuHitPoint], queries: &[
 
 fn build_on_gpu(h: &PassHarness<'_>, points: &[GpuHitPoint]) -> Vec<BvhNode> {
     let hit_points = hit_point_resource(h.gpu, points);
+    let no_photons = photon_hits_resource(h.gpu, &[]);
     let mut bvh = HitPointBvhLbvh::new(LbvhParams::default());
-    let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
+    let inputs = [("hit_points", &hit_points), ("photon_hits", &no_photons)];
+    let tree = h.prepare(&LBVH, &mut bvh, &inputs)["tree"].clone();
     h.run(&mut bvh, 0, 1);
     read_tree(h.gpu, &tree)
 }
@@ -368,10 +373,15 @@ fn refit_only_keeps_the_shape_and_follows_shrinking_radii() {
         })
         .collect();
     let hit_points = hit_point_resource(&gpu, &points);
-    // As the `ppm` estimator does when it is prepared.
-    hit_points.frozen.store(true, Ordering::Relaxed);
+    let no_photons = photon_hits_resource(&gpu, &[]);
+    let inputs = [("hit_points", &hit_points), ("photon_hits", &no_photons)];
+    // As a graph wires it when the `ppm` estimator keeps the camera's hit points.
+    let kept = Wiring {
+        kept_inputs: vec!["hit_points"],
+        ..Default::default()
+    };
     let mut bvh = HitPointBvhLbvh::new(LbvhParams::default());
-    let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
+    let tree = h.prepare_wired(&LBVH, &mut bvh, &inputs, &kept)["tree"].clone();
     h.run(&mut bvh, 0, 1);
     let built = read_tree(&gpu, &tree);
     check_tree("built", &built, &points, &queries);
@@ -389,11 +399,11 @@ fn refit_only_keeps_the_shape_and_follows_shrinking_radii() {
     }
     assert_eq!(bvh.builds(), BuildCounts { full: 1, refit: 3 });
 
-    // `refit_only: Never` rebuilds every iteration even when frozen.
+    // `refit_only: Never` rebuilds every iteration even when the hit points are kept.
     let mut never = HitPointBvhLbvh::new(LbvhParams {
         refit_only: RefitOnly::Never,
     });
-    h.prepare(&mut never, &[("hit_points", &hit_points)]);
+    h.prepare_wired(&LBVH, &mut never, &inputs, &kept);
     h.run(&mut never, 0, 1);
     h.run(&mut never, 1, 1);
     assert_eq!(never.builds(), BuildCounts { full: 2, refit: 0 });
@@ -428,7 +438,7 @@ fn render_graph(
     }
     let graph = hppm::graph::parse_graph(Path::new(&path), &text, hppm::passes::registry())
         .unwrap_or_else(|e| panic!("{graph_file}: {e}"));
-    let mut r = hppm::render::Renderer::new(&gpu, &scene, graph, size, size, 9)
+    let mut r = hppm::app::render::Renderer::new(&gpu, &scene, graph, size, size, 9)
         .unwrap_or_else(|e| panic!("renderer: {e}"));
     render_to(&mut r, spp)
 }
@@ -447,7 +457,7 @@ fn hybrid_lbvh_renders_what_hybrid_renders() {
         "hybrid_lbvh differs from hybrid: {difference}"
     );
 
-    // With `ppm` the hit points are frozen, so every iteration after the first is a refit.
+    // With `ppm` the hit points are kept, so every iteration after the first is a refit.
     let swap = (
         "pass: \"hit_point_bvh_sah\"",
         "pass: \"hit_point_bvh_lbvh\"",

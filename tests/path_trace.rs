@@ -43,7 +43,10 @@ fn white_furnace_cube_from_ron_scene() {
     let mut r = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 7);
     let image = render_to(&mut r, 64);
     assert_uniform(&image, 2.0, 0.01, 0.25);
-    assert_eq!(r.stats().map(|s| s.discarded_samples).ok(), Some(0));
+    assert_eq!(
+        r.counters().map(|c| c.get("discarded_samples")).ok(),
+        Some(0)
+    );
 }
 
 fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
@@ -201,7 +204,7 @@ fn overflowing_samples_are_discarded_and_counted() {
     }
     let mut r = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 1);
     let image = render_to(&mut r, 4);
-    let discarded = r.stats().expect("stats").discarded_samples;
+    let discarded = r.counters().expect("counters").get("discarded_samples");
     eprintln!("discarded {discarded} of {} samples", 16 * 16 * 4);
     assert!(discarded > 0, "expected overflowing samples");
     assert!(discarded < 16 * 16 * 4, "not every sample overflows");

@@ -11,11 +11,13 @@ use common::pass_harness::{
 use common::*;
 use glam::Vec3;
 use hppm::gpu::GpuContext;
-use hppm::graph::pass::{ExecCtx, Pass, Recorder, Resource, ResourceKind};
-use hppm::passes::hit_point_bvh_sah::HitPointBvhSah;
-use hppm::passes::hit_points::{GpuHitPoint, HitPointHeader, NO_PIXEL, build_tree};
-use hppm::passes::photon_trace::{PhotonMode, PhotonTrace, PhotonTraceParams};
-use hppm::passes::sppm::{Merge, MergeParams};
+use hppm::graph::exec::Wiring;
+use hppm::graph::pass::{ExecCtx, Pass, Recorder, Resource};
+use hppm::passes::hit_point_bvh_sah::{self, HitPointBvhSah};
+use hppm::passes::hit_points::{DEPOSITS, GpuHitPoint, NO_PIXEL, build_tree};
+use hppm::passes::photon_trace::{self, PhotonMode, PhotonTrace, PhotonTraceParams};
+use hppm::passes::sppm::read_radii;
+use hppm::passes::sppm::{self, Merge, MergeParams};
 use hppm::scene::Scene;
 use hppm::scene::bvh::{build_sah, closest_hit, scene_boxes};
 use hppm::scene::gpu_layout::GpuScene;
@@ -255,27 +257,19 @@ fn gpu_caustic_deposits(
     aim: bool,
 ) -> Vec<(u32, [f32; 3])> {
     let h = PassHarness::new(gpu, scene, (32, 32), float_atomics);
-    let header = HitPointHeader {
-        initial_radius: 0.0,
-        radius_pixels: 1.0,
-        min_radius: 0.0,
-        slots_per_pixel: 1,
-    };
-    let hit_points = hit_point_resource_with(gpu, header, points);
-    let mut bvh = HitPointBvhSah::default();
-    let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
-    h.run(&mut bvh, 0, PHOTON_SEED);
+    let hit_points = hit_point_resource_with(gpu, 1, points);
     let mut photon_pass = PhotonTrace::new(PhotonTraceParams {
         mode: PhotonMode::Caustic,
         photons_per_iteration: Some(photons),
         aim,
         ..Default::default()
     });
-    let out = h.prepare(
-        &mut photon_pass,
-        &[("hit_points", &hit_points), ("hit_point_tree", &tree)],
-    );
+    let photon_hits = h.prepare(&photon_trace::KIND, &mut photon_pass, &[])["photon_hits"].clone();
     h.run(&mut photon_pass, 0, PHOTON_SEED);
+    let mut bvh = HitPointBvhSah::default();
+    let inputs = [("hit_points", &hit_points), ("photon_hits", &photon_hits)];
+    let out = h.prepare(&hit_point_bvh_sah::KIND, &mut bvh, &inputs);
+    h.run(&mut bvh, 0, PHOTON_SEED);
     read_deposits(gpu, &out["deposits"])
 }
 
@@ -429,25 +423,14 @@ fn photons_carry_the_lights_power() {
     ];
     for float_atomics in [gpu.has_float_atomics(), false] {
         let h = PassHarness::new(&gpu, &scene, (16, 16), float_atomics);
-        let header = HitPointHeader {
-            initial_radius: 0.0,
-            radius_pixels: 1.0,
-            min_radius: 0.0,
-            slots_per_pixel: 1,
-        };
-        let hit_points = hit_point_resource_with(&gpu, header, &[hit_point(Vec3::ZERO, 0.0)]);
-        let mut bvh = HitPointBvhSah::default();
-        let tree = h.prepare(&mut bvh, &[("hit_points", &hit_points)])["tree"].clone();
+        let hit_points = hit_point_resource_with(&gpu, 1, &[hit_point(Vec3::ZERO, 0.0)]);
         let mut photons = PhotonTrace::new(PhotonTraceParams {
             mode: PhotonMode::All,
             photons_per_iteration: Some(1 << 18),
             ..Default::default()
         });
-        h.prepare(
-            &mut photons,
-            &[("hit_points", &hit_points), ("hit_point_tree", &tree)],
-        );
-        h.run(&mut bvh, 0, 1);
+        let _ = &hit_points;
+        h.prepare(&photon_trace::KIND, &mut photons, &[]);
         h.run(&mut photons, 0, 1);
         let emitted = photons.emitted_flux(&gpu).expect("readback");
         eprintln!("float atomics {float_atomics}: emitted {emitted:?}, analytic {expected:?}");
@@ -508,24 +491,30 @@ fn deposit_words(deposits: impl Iterator<Item = (u32, [f32; 3])>) -> Vec<[u32; 4
 }
 
 /// A `Merge` (sppm) prepared on `hit_points` and `deposits`, and its outputs.
-fn prepared_merge(
+fn prepare_merge(
     h: &PassHarness<'_>,
-    alpha: f64,
+    merge: &mut Merge,
     hit_points: &Resource,
     deposits: &Resource,
-) -> (Merge, HashMap<&'static str, Resource>) {
-    let mut merge = Merge::new(
-        MergeParams {
-            alpha: alpha as f32,
-            ..Default::default()
-        },
-        false,
-    );
-    let out = h.prepare(
-        &mut merge,
+) -> HashMap<&'static str, Resource> {
+    // As in a graph, its radii go back to the camera pass.
+    let wiring = Wiring {
+        consumed: vec!["radiance", "radii"],
+        ..Default::default()
+    };
+    h.prepare_wired(
+        &sppm::KIND,
+        merge,
         &[("hit_points", hit_points), ("deposits", deposits)],
-    );
-    (merge, out)
+        &wiring,
+    )
+}
+
+fn merge_with(alpha: f64) -> Merge {
+    Merge::new(MergeParams {
+        alpha: alpha as f32,
+        ..Default::default()
+    })
 }
 
 #[test]
@@ -566,13 +555,7 @@ fn merge_matches_the_progressive_update_in_f64() {
     let mut results = Vec::new();
     for float_atomics in [gpu.has_float_atomics(), false] {
         let h = PassHarness::new(&gpu, &scene, (width, height), float_atomics);
-        let header = HitPointHeader {
-            initial_radius: 0.0,
-            radius_pixels: 1.0,
-            min_radius: 0.0,
-            slots_per_pixel: slots,
-        };
-        let hit_points = hit_point_resource_with(&gpu, header, &points);
+        let hit_points = hit_point_resource_with(&gpu, slots, &points);
         let deposits_buffer = gpu
             .create_buffer(
                 "test deposits",
@@ -580,8 +563,9 @@ fn merge_matches_the_progressive_update_in_f64() {
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             )
             .expect("buffer");
-        let deposits = Resource::new(ResourceKind::Deposits, deposits_buffer, count as u64);
-        let (mut merge, out) = prepared_merge(&h, alpha, &hit_points, &deposits);
+        let deposits = Resource::new(DEPOSITS, deposits_buffer, count as u64);
+        let mut merge = merge_with(alpha);
+        let out = prepare_merge(&h, &mut merge, &hit_points, &deposits);
         for (it, deposit) in iterations.iter().enumerate() {
             let words = deposit_words(deposit.iter().copied());
             gpu.queue
@@ -589,12 +573,7 @@ fn merge_matches_the_progressive_update_in_f64() {
             h.run(&mut merge, it as u64, 0);
         }
         let stats = merge.slot_stats(&gpu).expect("stats");
-        let radii: Vec<f32> =
-            hppm::passes::hit_points::read_hit_points(&gpu, &hit_points.buffer, count as u64)
-                .expect("readback")
-                .iter()
-                .map(|h| h.radius)
-                .collect();
+        let radii = read_radii(&gpu, &out["radii"]).expect("readback");
         let radiance: Vec<[f32; 4]> = gpu
             .read_pod(&out["radiance"].buffer, (width * height) as usize)
             .expect("readback");
@@ -697,8 +676,7 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
         .map(|i| [0.5, 1.0, 2.0].map(|c| c * counts[i] as f32 * 1e-3))
         .collect();
     let h = PassHarness::new(&gpu, &scene, (width, height), gpu.has_float_atomics());
-    let header = HitPointHeader::new(0.0, 1.0, 0.0, 1);
-    let hit_points = hit_point_resource_with(&gpu, header, &points);
+    let hit_points = hit_point_resource_with(&gpu, 1, &points);
     let words = deposit_words(counts.iter().copied().zip(flux.iter().copied()));
     let deposits_buffer = gpu
         .create_buffer_init(
@@ -707,8 +685,9 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
             wgpu::BufferUsages::STORAGE,
         )
         .expect("buffer");
-    let deposits = Resource::new(ResourceKind::Deposits, deposits_buffer, count as u64);
-    let (mut merge, out) = prepared_merge(&h, alpha, &hit_points, &deposits);
+    let deposits = Resource::new(DEPOSITS, deposits_buffer, count as u64);
+    let mut merge = merge_with(alpha);
+    let out = prepare_merge(&h, &mut merge, &hit_points, &deposits);
     // The merge never clears deposits (the photon pass does), so each dispatch merges them again.
     let mut iteration = 0;
     while iteration < ITERATIONS {
@@ -716,7 +695,6 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
         for _ in 0..2_000.min(ITERATIONS - iteration) {
             let ctx = ExecCtx {
                 gpu: &gpu,
-                scene: &h.scene,
                 iteration,
                 seed: 0,
             };
@@ -726,12 +704,7 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
         recorder.flush().expect("flush");
     }
     let stats = merge.slot_stats(&gpu).expect("stats");
-    let gpu_radii: Vec<f32> =
-        hppm::passes::hit_points::read_hit_points(&gpu, &hit_points.buffer, count as u64)
-            .expect("readback")
-            .iter()
-            .map(|h| h.radius)
-            .collect();
+    let gpu_radii = read_radii(&gpu, &out["radii"]).expect("readback");
     let radiance: Vec<[f32; 4]> = gpu
         .read_pod(&out["radiance"].buffer, count)
         .expect("readback");

@@ -3,18 +3,47 @@
 
 use std::collections::HashMap;
 
+use hppm::gpu::shaders::{ShaderFile, ShaderLibrary};
+use hppm::passes::{COMMON_MODULES, registry};
 use hppm::scene::bvh::BvhNode;
 use hppm::scene::gpu_layout::{GpuLight, GpuMaterial, GpuSceneUniform, GpuSphere, GpuTriangle};
-use hppm::shaders::{PASS_SHADERS, ShaderLibrary};
 use wgpu::naga;
 
+fn library_with(
+    float_atomics: bool,
+    defs: HashMap<String, naga_oil::compose::ShaderDefValue>,
+) -> ShaderLibrary {
+    ShaderLibrary::new(float_atomics, defs, COMMON_MODULES).expect("modules compose")
+}
+
 fn library(float_atomics: bool) -> ShaderLibrary {
-    ShaderLibrary::new(float_atomics, hppm::shaders::all_scene_defs())
+    library_with(float_atomics, hppm::passes::all_scene_defs())
+}
+
+/// Every entry file some pass kind names, once each.
+fn pass_shaders() -> Vec<ShaderFile> {
+    let mut files: Vec<ShaderFile> = Vec::new();
+    for kind in registry() {
+        for file in kind.shaders {
+            if !files.contains(file) {
+                files.push(*file);
+            }
+        }
+    }
+    files
+}
+
+/// The entry file at `path`, as a pass kind names it.
+fn shader(path: &str) -> ShaderFile {
+    pass_shaders()
+        .into_iter()
+        .find(|f| f.path == path)
+        .unwrap_or_else(|| panic!("no pass names {path}"))
 }
 
 /// Every subset of the scene defs (2^3) with and without float atomics.
 fn every_def_combination() -> Vec<(bool, HashMap<String, naga_oil::compose::ShaderDefValue>)> {
-    let names = hppm::shaders::SCENE_DEFS;
+    let names = hppm::passes::SCENE_DEFS;
     let mut out = Vec::new();
     for float_atomics in [true, false] {
         for mask in 0..(1u32 << names.len()) {
@@ -33,10 +62,11 @@ fn every_def_combination() -> Vec<(bool, HashMap<String, naga_oil::compose::Shad
 #[test]
 fn every_pass_shader_composes_and_validates() {
     for (float_atomics, defs) in every_def_combination() {
-        let lib = ShaderLibrary::new(float_atomics, defs);
-        for (path, _) in PASS_SHADERS {
+        let lib = library_with(float_atomics, defs);
+        for file in pass_shaders() {
+            let path = file.path;
             let module = lib
-                .compose(path)
+                .compose(&file)
                 .unwrap_or_else(|e| panic!("{path} (float atomics {float_atomics}): {e}"));
             naga::valid::Validator::new(
                 naga::valid::ValidationFlags::all(),
@@ -68,7 +98,7 @@ fn struct_size(module: &naga::Module, name: &str) -> Option<u32> {
 #[test]
 fn gpu_structs_match_wgsl_layout() {
     let module = library(true)
-        .compose("shaders/passes/path_trace.wgsl")
+        .compose(&shader("shaders/passes/path_trace.wgsl"))
         .expect("path_trace composes");
     let expected = [
         ("SceneUniform", std::mem::size_of::<GpuSceneUniform>()),
@@ -117,16 +147,20 @@ fn scene_features_compile_code_in_and_out() {
             .unwrap_or_else(|e| panic!("{p}: {e}"))
     };
     let has = |lib: &ShaderLibrary, path: &str, name: &str| {
-        let module = lib.compose(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+        let module = lib
+            .compose(&shader(path))
+            .unwrap_or_else(|e| panic!("{path}: {e}"));
         function_names(&module).iter().any(|f| f.contains(name))
     };
-    let diffuse = ShaderLibrary::new(
+    let diffuse = library_with(
         true,
-        hppm::shaders::scene_defs(&load("tests/refs/scenes/cornell_diffuse/scene.xml")),
+        hppm::passes::scene_defs(&load("tests/refs/scenes/cornell_diffuse/scene.xml").features()),
     );
-    let glass = ShaderLibrary::new(
+    let glass = library_with(
         true,
-        hppm::shaders::scene_defs(&load("tests/refs/scenes/cornell_glass_sphere/scene.xml")),
+        hppm::passes::scene_defs(
+            &load("tests/refs/scenes/cornell_glass_sphere/scene.xml").features(),
+        ),
     );
     for path in [
         "shaders/passes/path_trace.wgsl",
@@ -153,9 +187,11 @@ fn scene_features_compile_code_in_and_out() {
             "{path}: glass scene has spheres"
         );
     }
-    let point_light = ShaderLibrary::new(
+    let point_light = library_with(
         true,
-        hppm::shaders::scene_defs(&load("tests/refs/scenes/point_light_caustic/scene.xml")),
+        hppm::passes::scene_defs(
+            &load("tests/refs/scenes/point_light_caustic/scene.xml").features(),
+        ),
     );
     for (path, function) in [
         ("shaders/passes/path_trace.wgsl", "sample_point_light"),
@@ -170,4 +206,63 @@ fn scene_features_compile_code_in_and_out() {
             "{path}: point-light scene"
         );
     }
+}
+
+/// Every Rust struct uploaded to a WGSL struct (scene tables, hit points, photon hits, deposits,
+/// tree nodes, each pass's params) has the composed module's size and each named field's
+/// offset, and a size that keeps arrays of it at the same stride. A field added, reordered or
+/// retyped on one side only fails here instead of rendering garbage.
+#[test]
+fn every_uploaded_struct_matches_its_wgsl_layout() {
+    let lib = library(true);
+    let layouts = registry()
+        .iter()
+        .flat_map(|kind| kind.layouts)
+        .chain(hppm::passes::hit_points::LAYOUTS)
+        .chain(hppm::passes::scene_resources::LAYOUTS);
+    let mut checked = Vec::new();
+    let mut problems = Vec::new();
+    for layout in layouts {
+        let module = lib
+            .compose(&layout.shader)
+            .unwrap_or_else(|e| panic!("{}: {e}", layout.shader.path));
+        if let Err(e) = layout.check(&module) {
+            problems.push(e);
+        }
+        checked.push(layout.wgsl);
+    }
+    eprintln!("checked {} layouts: {}", checked.len(), checked.join(", "));
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    for name in [
+        "PathTraceParams",
+        "PhotonParams",
+        "MergeParams",
+        "HitPoint",
+        "PhotonHit",
+    ] {
+        assert!(checked.contains(&name), "{name} is not checked");
+    }
+}
+
+/// The check itself finds a wrong offset and a wrong size (so the test above can fail).
+#[test]
+fn a_layout_that_differs_is_reported() {
+    #[repr(C)]
+    struct Shifted {
+        _pad: u32,
+        position: [f32; 3],
+        pixel: u32,
+    }
+    let file = shader("shaders/passes/gather_bvh.wgsl");
+    let module = library(true).compose(&file).expect("compose");
+    let layout = hppm::struct_layout!(Shifted => "HitPoint" in file, { position, pixel });
+    let err = layout.check(&module).expect_err("must differ");
+    assert!(
+        err.contains("HitPoint (Rust Shifted): 64 bytes in WGSL, 20 in Rust"),
+        "{err}"
+    );
+    assert!(
+        err.contains("position: offset 0 in WGSL, 4 in Rust"),
+        "{err}"
+    );
 }

@@ -7,13 +7,13 @@
 mod common;
 
 use common::*;
+use hppm::app::render::Renderer;
 use hppm::image::Image;
-use hppm::render::Renderer;
 
 /// Renders `spp` iterations and returns the image with the samples discarded as NaN/Inf.
 fn render_counting(r: &mut Renderer<'_>, spp: u64) -> (Image, u64) {
     let image = render_to(r, spp);
-    let discarded = r.stats().expect("stats").discarded_samples;
+    let discarded = r.counters().expect("counters").get("discarded_samples");
     assert!(
         image.pixels.iter().flatten().all(|v| v.is_finite()),
         "NaN or Inf in the image"

@@ -34,11 +34,12 @@ fn add_deposit_flux(cell: u32, channel: u32, value: f32) {
 // Adds `hit` to hit point `index` when the hit lies inside its sphere; returns whether it did.
 fn gather_at(index: u32, hit: PhotonHit) -> bool {
     let hp = hit_points.points[index];
-    if hp.pixel == NO_PIXEL {
+    if hp.pixel == NO_PIXEL || !(hp.radius > 0.0) {
         return false;
     }
+    // Written so that a NaN distance (a photon hit that is not a number) counts for nobody.
     let d = hit.position - hp.position;
-    if dot(d, d) > hp.radius * hp.radius {
+    if !(dot(d, d) <= hp.radius * hp.radius) {
         return false;
     }
     // One-sided diffuse: light arriving from behind the hit point's surface adds nothing.

@@ -157,6 +157,7 @@ fn structure_ms(
 const STRUCTURES: &[&PassKind] = &[
     &passes::hit_point_bvh_sah::KIND,
     &passes::hit_point_bvh_lbvh::KIND,
+    &passes::hit_point_grid::KIND,
 ];
 
 /// One table row: every structure's build + gather at `count` hit points.

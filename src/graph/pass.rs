@@ -8,6 +8,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
 
 use crate::gpu::GpuContext;
+use crate::gpu::layout::StructLayout;
 use crate::gpu::shaders::{ShaderFile, ShaderLibrary};
 
 /// What flows along an edge. Kinds are declared by the passes that produce and consume them
@@ -400,6 +401,8 @@ pub struct PassKind {
     pub slots: &'static [SlotDecl],
     /// The WGSL entry files its kernels come from.
     pub shaders: &'static [ShaderFile],
+    /// The Rust structs it uploads to WGSL structs (its params), checked against the shaders.
+    pub layouts: &'static [StructLayout],
     pub construct: fn(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError>,
 }
 

@@ -39,6 +39,7 @@ pub const KIND: PassKind = PassKind {
     description: "hit-point BVH built on the GPU (Morton codes, radix sort, Karras); BVH gather",
     slots: SLOTS,
     shaders: &[SHADER, BVH_GATHER, crate::gpu::radix_sort::SHADER],
+    layouts: &[],
     construct,
 };
 

@@ -29,6 +29,7 @@ pub const KIND: PassKind = PassKind {
     description: "hit-point BVH built on the CPU (binned SAH) every iteration; BVH gather",
     slots: SLOTS,
     shaders: &[BVH_GATHER],
+    layouts: &[],
     construct,
 };
 

@@ -7,8 +7,12 @@ use glam::Vec3;
 
 use crate::Error;
 use crate::gpu::GpuContext;
+use crate::gpu::layout::StructLayout;
 use crate::graph::pass::ResourceKind;
+use crate::passes::gather::BVH_GATHER;
+use crate::passes::sppm::SHADER as SPPM_SHADER;
 use crate::scene::bvh::{Aabb, BvhNode, build_sah};
+use crate::struct_layout;
 
 /// `HitPoint.pixel` of a slot that holds no hit point this iteration.
 pub const NO_PIXEL: u32 = u32::MAX;
@@ -99,8 +103,16 @@ pub const DEFAULT_RADIUS_PIXELS: f32 = 1.0;
 pub const HIT_POINT_BYTES: u64 = std::mem::size_of::<GpuHitPoint>() as u64;
 /// Bytes before the first hit point in a hit-points buffer.
 pub const HEADER_BYTES: u64 = std::mem::size_of::<HitPointsHeader>() as u64;
+/// Photons gathered by one hit point in one iteration (`DepositCell`, added to atomically).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuDepositCell {
+    pub count: u32,
+    pub flux: [f32; 3],
+}
+
 /// One `DepositCell`: photon count and RGB flux.
-pub const DEPOSIT_BYTES: u64 = 16;
+pub const DEPOSIT_BYTES: u64 = std::mem::size_of::<GpuDepositCell>() as u64;
 /// Bytes before the first node in a tree buffer (the node count and padding).
 pub const TREE_HEADER_BYTES: u64 = 16;
 
@@ -126,6 +138,21 @@ pub const HIT_POINT_TREE: ResourceKind = ResourceKind::new(
     TREE_HEADER_BYTES,
     std::mem::size_of::<BvhNode>() as u64,
 );
+
+/// The structs above against their WGSL twins (tests/shaders.rs checks every offset).
+pub const LAYOUTS: &[StructLayout] = &[
+    struct_layout!(GpuHitPoint => "HitPoint" in BVH_GATHER, {
+        position, pixel, normal, radius, wo, depth, weight, footprint
+    }),
+    struct_layout!(HitPointsHeader => "HitPointsHeader" in BVH_GATHER, { slots_per_pixel }),
+    struct_layout!(RadiusRule => "RadiusRule" in SPPM_SHADER, {
+        initial_radius, radius_pixels, min_radius
+    }),
+    struct_layout!(GpuPhotonHit => "PhotonHit" in BVH_GATHER, { position, remaining, wi, flux }),
+    struct_layout!(PhotonHitsHeader => "PhotonHitsIn" in BVH_GATHER, { count, dropped } head),
+    struct_layout!(GpuDepositCell => "DepositCell" in BVH_GATHER, { count, flux }),
+    struct_layout!(BvhNode => "HitPointNode" in BVH_GATHER, { min, left_or_first, max, count }),
+];
 
 /// Minimum search radius as a fraction of the scene's bounding radius: far above f32
 /// resolution of positions, far below any useful radius.

@@ -4,7 +4,7 @@
 mod gather;
 pub mod hit_point_bvh_lbvh;
 pub mod hit_point_bvh_sah;
-// pub mod hit_point_grid;
+pub mod hit_point_grid;
 pub mod hit_points;
 pub mod path_trace;
 pub mod photon_trace;
@@ -30,7 +30,7 @@ pub fn registry() -> &'static [PassKind] {
         path_trace::KIND,
         hit_point_bvh_sah::KIND,
         hit_point_bvh_lbvh::KIND,
-        // hit_point_grid::KIND,
+        hit_point_grid::KIND,
         photon_trace::KIND,
         sppm::KIND,
         ppm::KIND,

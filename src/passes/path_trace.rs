@@ -35,11 +35,17 @@ static SLOTS: &[SlotDecl] = &[
         .previous_iteration(),
 ];
 
+/// `GpuParams` against `PathTraceParams` in the shader.
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PathTraceParams" in SHADER, {
+    sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond
+});
+
 pub const KIND: PassKind = PassKind {
     name: "path_trace",
     description: "camera paths with next-event estimation (MIS for area lights)",
     slots: SLOTS,
     shaders: &[SHADER],
+    layouts: &[PARAMS_LAYOUT],
     construct,
 };
 
@@ -213,7 +219,7 @@ impl Pass for PathTrace {
         };
         gpu.queue
             .write_buffer(&hit_points.buffer, 0, bytemuck::bytes_of(&header));
-        // Without hit points to record the kernel never reads radii: a placeholder will do.
+        // Without an estimator's radii every hit point takes the default rule's first radius.
         let own_radii;
         let radii = match ctx.inputs.get("radii") {
             Some(radii) => &*radii.buffer,
@@ -229,15 +235,6 @@ impl Pass for PathTrace {
                 &own_radii
             }
         };
-        // The gather must search with the radii the estimator shrinks; without them it would
-        // use first radii forever while the estimator divides by smaller ones.
-        if merge_slots > 0 && !ctx.inputs.contains_key("radii") {
-            return Err(Error::Other(
-                "path_trace: its hit points feed photon mapping, so its \"radii\" input must be \
-                 connected to the estimator's radii (e.g. \"estimate.radii -> camera.radii\")"
-                    .into(),
-            ));
-        }
         let (layout, bind_group) = bind_buffers(
             &gpu.device,
             "path_trace",

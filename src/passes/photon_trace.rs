@@ -34,11 +34,17 @@ pub const ALL_MODE_HITS_PER_PHOTON: u64 = 8;
 
 static SLOTS: &[SlotDecl] = &[SlotDecl::output("photon_hits", PHOTON_HITS, Size::Computed)];
 
+/// `GpuParams` against `PhotonParams` in the shader.
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PhotonParams" in SHADER, {
+    photons, seed, iteration, mode, max_depth, rr_depth, flux_scale, groups_per_row, aim
+});
+
 pub const KIND: PassKind = PassKind {
     name: "photon_trace",
     description: "photons from the lights through specular surfaces, to where they deposit",
     slots: SLOTS,
     shaders: &[SHADER],
+    layouts: &[PARAMS_LAYOUT],
     construct,
 };
 

@@ -6,7 +6,7 @@
 
 use crate::graph::pass::{IMAGE, Pass, PassKind, Size, SlotDecl};
 use crate::passes::hit_points::{DEPOSITS, HIT_POINT_RADII, HIT_POINTS};
-use crate::passes::sppm::{Merge, MergeParams, SHADER};
+use crate::passes::sppm::{Merge, MergeParams, PARAMS_LAYOUT, SHADER};
 
 static SLOTS: &[SlotDecl] = &[
     SlotDecl::input("hit_points", HIT_POINTS).kept(),
@@ -20,6 +20,7 @@ pub const KIND: PassKind = PassKind {
     description: "progressive photon mapping: hit points of one camera pass, photon passes repeat",
     slots: SLOTS,
     shaders: &[SHADER],
+    layouts: &[PARAMS_LAYOUT],
     construct,
 };
 

@@ -26,11 +26,17 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("radius", IMAGE, Size::Pixels),
 ];
 
+/// `GpuParams` against `ResolveParams` in the shader.
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "ResolveParams" in SHADER, {
+    width, height, has_caustic, has_hit_points
+});
+
 pub const KIND: PassKind = PassKind {
     name: "resolve",
     description: "final image: path-traced + photon-mapped radiance (AOVs pt, caustic, radius)",
     slots: SLOTS,
     shaders: &[SHADER],
+    layouts: &[PARAMS_LAYOUT],
     construct,
 };
 

@@ -4,7 +4,37 @@
 use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
-use crate::scene::gpu_layout::{GpuScene, GpuSceneUniform};
+use crate::gpu::layout::StructLayout;
+use crate::scene::bvh::BvhNode;
+use crate::scene::gpu_layout::{
+    GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle,
+};
+use crate::struct_layout;
+
+/// Any kernel that traces rays has every scene struct.
+const TRACER: crate::gpu::shaders::ShaderFile =
+    crate::shader_file!("shaders/passes/path_trace.wgsl");
+
+/// The scene's GPU structs against their WGSL twins in shaders/common/scene.wgsl (checked by
+/// tests/shaders.rs).
+pub const LAYOUTS: &[StructLayout] = &[
+    struct_layout!(GpuSceneUniform => "SceneUniform" in TRACER, {
+        camera_origin, tan_half_x, camera_right, tan_half_y, camera_up, width, camera_forward,
+        height, bounds_min, epsilon, bounds_max, scene_radius, num_triangles, num_spheres,
+        num_lights, max_depth, rr_depth, specular_center, specular_radius
+    }),
+    struct_layout!(BvhNode => "BvhNode" in TRACER, { min, left_or_first, max, count }),
+    struct_layout!(GpuTriangle => "Triangle" in TRACER, { vertex, material, edge_a, light, edge_b }),
+    struct_layout!(GpuSphere => "Sphere" in TRACER, {
+        center, radius, material, light, flip_normals
+    }),
+    struct_layout!(GpuMaterial => "Material" in TRACER, {
+        albedo, kind, emission, int_ior, ext_ior
+    }),
+    struct_layout!(GpuLight => "Light" in TRACER, {
+        position, kind, radiance, prim, select_prob, area
+    }),
+];
 
 pub struct SceneResources {
     pub layout: wgpu::BindGroupLayout,

@@ -34,11 +34,17 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points")).persistent(),
 ];
 
+/// `GpuParams` against `MergeParams` in the shader.
+pub(crate) const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "MergeParams" in SHADER, {
+    alpha, inv_iterations, slots_per_pixel, width, height
+});
+
 pub const KIND: PassKind = PassKind {
     name: "sppm",
     description: "stochastic progressive photon mapping: per-pixel N, R, tau over iterations",
     slots: SLOTS,
     shaders: &[SHADER],
+    layouts: &[PARAMS_LAYOUT],
     construct,
 };
 
@@ -180,6 +186,15 @@ impl Pass for Merge {
         let deposits = ctx.input("deposits")?;
         let radiance = ctx.output("radiance")?;
         let radii = ctx.output("radii")?;
+        // The gather must search with the radii this node shrinks; if they do not reach the
+        // camera pass, it would keep the first radii while the estimate divides by smaller ones.
+        if !ctx.consumed.contains("radii") {
+            return Err(Error::Other(
+                "its radii feed nothing: connect them to the camera pass that records its hit \
+                 points (e.g. \"estimate.radii -> camera.radii\")"
+                    .into(),
+            ));
+        }
         let slots_per_pixel = (hit_points.len / ctx.pixels().max(1)) as u32;
         let rule = RadiusRule::new(
             self.params.initial_radius.unwrap_or(0.0),

@@ -1,24 +1,36 @@
 //! Running one pass alone on a scene's shared resources, outside a render graph: prepare it
 //! with hand-made inputs, execute one iteration and wait.
 
-use std::collections::{HashMap, HashSet};
+use std::cell::RefCell;
+use std::collections::HashMap;
 
 use glam::Vec3;
 use hppm::gpu::GpuContext;
-use hppm::graph::pass::{ExecCtx, Pass, PrepareCtx, Recorder, Resource, ResourceKind};
-use hppm::passes::hit_points::{GpuHitPoint, HEADER_BYTES, HitPointHeader, tree_range_query};
-use hppm::render::SceneResources;
+use hppm::gpu::shaders::ShaderLibrary;
+use hppm::graph::exec::{Standalone, Wiring};
+use hppm::graph::pass::{Pass, PassKind, Resource, Shared};
+use hppm::passes::SceneResources;
+use hppm::passes::hit_points::{
+    GpuHitPoint, GpuPhotonHit, HEADER_BYTES, HIT_POINTS, HitPointsHeader, PHOTON_HITS,
+    PhotonHitsHeader, tree_range_query,
+};
 use hppm::scene::Scene;
 use hppm::scene::bvh::BvhNode;
 use hppm::scene::gpu_layout::GpuScene;
-use hppm::shaders::ShaderLibrary;
 
 pub struct PassHarness<'a> {
     pub gpu: &'a GpuContext,
-    pub scene: SceneResources,
+    pub shared: Shared,
     pub shaders: ShaderLibrary,
     pub width: u32,
     pub height: u32,
+    // Each prepared pass's outputs, by the pass's address, so that `run` zeroes its
+    // non-persistent outputs as a graph would.
+    prepared: RefCell<Vec<(usize, Standalone)>>,
+}
+
+fn address(pass: &dyn Pass) -> usize {
+    pass as *const dyn Pass as *const () as usize
 }
 
 impl<'a> PassHarness<'a> {
@@ -26,42 +38,64 @@ impl<'a> PassHarness<'a> {
     /// the compare-and-swap fallback, so tests can run both paths on one device.
     pub fn new(gpu: &'a GpuContext, scene: &Scene, size: (u32, u32), float_atomics: bool) -> Self {
         let gpu_scene = GpuScene::new(scene, size.0, size.1);
+        let mut shared = Shared::default();
+        shared.insert(SceneResources::upload(gpu, &gpu_scene).expect("scene upload"));
         Self {
             gpu,
-            scene: SceneResources::upload(gpu, &gpu_scene).expect("scene upload"),
-            shaders: ShaderLibrary::new(float_atomics, hppm::shaders::scene_defs(scene)),
+            shared,
+            shaders: hppm::passes::shader_library(float_atomics, scene).expect("shaders"),
             width: size.0,
             height: size.1,
+            prepared: RefCell::new(Vec::new()),
         }
     }
 
+    pub fn scene(&self) -> &SceneResources {
+        self.shared.get::<SceneResources>().expect("scene")
+    }
+
+    /// Prepares `pass` (of `kind`) alone with `inputs`; returns its allocated outputs.
     pub fn prepare(
         &self,
+        kind: &PassKind,
         pass: &mut dyn Pass,
         inputs: &[(&'static str, &Resource)],
     ) -> HashMap<&'static str, Resource> {
-        let ctx = PrepareCtx {
-            gpu: self.gpu,
-            scene: &self.scene,
-            shaders: &self.shaders,
-            inputs: inputs.iter().map(|(s, r)| (*s, (*r).clone())).collect(),
-            consumed: HashSet::new(),
-            width: self.width,
-            height: self.height,
-        };
-        pass.prepare(ctx).expect("prepare")
+        self.prepare_wired(kind, pass, inputs, &Wiring::default())
     }
 
+    /// `prepare`, with the consumers and keeping a graph would tell the pass.
+    pub fn prepare_wired(
+        &self,
+        kind: &PassKind,
+        pass: &mut dyn Pass,
+        inputs: &[(&'static str, &Resource)],
+        wiring: &Wiring,
+    ) -> HashMap<&'static str, Resource> {
+        let size = (self.width, self.height);
+        let (gpu, shaders, shared) = (self.gpu, &self.shaders, &self.shared);
+        let prepared = Standalone::prepare(gpu, shaders, shared, size, kind, pass, inputs, wiring)
+            .expect("prepare");
+        let outputs = prepared.outputs.clone();
+        let key = address(pass);
+        let mut all = self.prepared.borrow_mut();
+        all.retain(|(k, _)| *k != key);
+        all.push((key, prepared));
+        outputs
+    }
+
+    /// One iteration of a prepared pass, waited for. The pass is found by its address, so it
+    /// must not move between `prepare` and `run`.
     pub fn run(&self, pass: &mut dyn Pass, iteration: u64, seed: u64) {
-        let ctx = ExecCtx {
-            gpu: self.gpu,
-            scene: &self.scene,
-            iteration,
-            seed,
-        };
-        let mut recorder = Recorder::new(self.gpu);
-        pass.execute(&ctx, &mut recorder).expect("execute");
-        recorder.flush().expect("flush");
+        let key = address(pass);
+        let all = self.prepared.borrow();
+        let (_, prepared) = all
+            .iter()
+            .find(|(k, _)| *k == key)
+            .expect("run a pass prepared by this harness");
+        prepared
+            .run(self.gpu, pass, iteration, seed)
+            .expect("execute");
     }
 }
 
@@ -112,23 +146,21 @@ pub fn check_range_queries(
     );
 }
 
-/// A `HitPoints` resource holding `points` after a header of one slot per pixel.
+/// A hit-points resource holding `points` after a header of one slot per pixel.
 pub fn hit_point_resource(gpu: &GpuContext, points: &[GpuHitPoint]) -> Resource {
-    let header = HitPointHeader {
-        initial_radius: 0.0,
-        radius_pixels: 1.0,
-        min_radius: 0.0,
-        slots_per_pixel: 1,
-    };
-    hit_point_resource_with(gpu, header, points)
+    hit_point_resource_with(gpu, 1, points)
 }
 
-/// A `HitPoints` resource holding `header`, then `points`.
+/// A hit-points resource holding `points`, `slots_per_pixel` to a pixel.
 pub fn hit_point_resource_with(
     gpu: &GpuContext,
-    header: HitPointHeader,
+    slots_per_pixel: u32,
     points: &[GpuHitPoint],
 ) -> Resource {
+    let header = HitPointsHeader {
+        slots_per_pixel,
+        _pad: [0; 3],
+    };
     let mut bytes = bytemuck::bytes_of(&header).to_vec();
     bytes.extend_from_slice(bytemuck::cast_slice(points));
     let usage =
@@ -136,11 +168,28 @@ pub fn hit_point_resource_with(
     let buffer = gpu
         .create_buffer_init("test hit points", &bytes, usage)
         .expect("buffer");
-    Resource::new(ResourceKind::HitPoints, buffer, points.len() as u64)
+    Resource::new(HIT_POINTS, buffer, points.len() as u64)
 }
 
 /// Overwrites the hit points of `resource` (same count).
 pub fn write_hit_points(gpu: &GpuContext, resource: &Resource, points: &[GpuHitPoint]) {
     gpu.queue
         .write_buffer(&resource.buffer, HEADER_BYTES, bytemuck::cast_slice(points));
+}
+
+/// A photon-hits resource holding `hits` (room for at least one), as photon_trace writes them.
+pub fn photon_hits_resource(gpu: &GpuContext, hits: &[GpuPhotonHit]) -> Resource {
+    let header = PhotonHitsHeader {
+        count: hits.len() as u32,
+        ..Default::default()
+    };
+    let mut bytes = bytemuck::bytes_of(&header).to_vec();
+    bytes.extend_from_slice(bytemuck::cast_slice(hits));
+    bytes.resize(bytes.len().max(16 + 48), 0);
+    let usage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+    let buffer = gpu
+        .create_buffer_init("test photon hits", &bytes, usage)
+        .expect("buffer");
+    Resource::new(PHOTON_HITS, buffer, hits.len().max(1) as u64)
 }
