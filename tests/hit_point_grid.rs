@@ -3,76 +3,30 @@
 //! every hit point whose sphere holds it, and by no other), the grid's lists against the cells a
 //! CPU computes for each hit point, empty inputs, and the one-line swap of the BVH node for the
 //! grid in the hybrid graph, which must leave the image as it was.
-//!
-//! Self-contained (tests/common is shared with tests that change independently).
+
+mod common;
 
 use std::collections::HashSet;
-use std::path::{Path, PathBuf};
+
+use common::pass_harness::{hit_point_resource, photon_hits_resource_with};
+use common::rng::Rng;
+use common::*;
 
 use glam::Vec3;
 use hppm::gpu::GpuContext;
 use hppm::gpu::shaders::ShaderLibrary;
 use hppm::graph::exec::{Standalone, Wiring};
-use hppm::graph::pass::{Resource, Shared};
+use hppm::graph::pass::Shared;
 use hppm::passes::SceneResources;
 use hppm::passes::hit_point_grid::{
     CELLS_PER_HIT_POINT, GRID_INFO_BYTES, GridInfo, KIND, bucket_count,
 };
-use hppm::passes::hit_points::{
-    GpuHitPoint, GpuPhotonHit, HIT_POINTS, HitPointsHeader, NO_PIXEL, PHOTON_HITS, PhotonHitsHeader,
-};
+use hppm::passes::hit_points::{GpuHitPoint, GpuPhotonHit, NO_PIXEL};
 use hppm::scene::Scene;
 use hppm::scene::gpu_layout::{GpuScene, UNBOUNDED};
 
 const SCENE: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const SIZE: (u32, u32) = (32, 32);
-
-fn repo_path(relative: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
-}
-
-/// The adapter named by HPPM_TEST_ADAPTER, or the best one; fails (never skips) without one.
-fn gpu() -> GpuContext {
-    let choice = std::env::var("HPPM_TEST_ADAPTER").ok();
-    let gpu = GpuContext::new(choice.as_deref())
-        .unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
-    eprintln!("adapter: {}", gpu.adapter_label());
-    gpu
-}
-
-fn load_scene() -> Scene {
-    hppm::scene::load(&repo_path(SCENE)).unwrap_or_else(|e| panic!("{SCENE}: {e}"))
-}
-
-/// xorshift64*: seeded, enough for test data.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u32(&mut self) -> u32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 32) as u32
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
-    }
-    fn in_box(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        lo + (hi - lo) * Vec3::new(self.unit(), self.unit(), self.unit())
-    }
-    fn direction(&mut self) -> Vec3 {
-        loop {
-            let v = self.in_box(Vec3::splat(-1.0), Vec3::splat(1.0));
-            if (1e-3..=1.0).contains(&v.length_squared()) {
-                return v.normalize();
-            }
-        }
-    }
-    /// Log-uniform in [lo, hi].
-    fn log_uniform(&mut self, lo: f32, hi: f32) -> f32 {
-        (lo.ln() + (hi.ln() - lo.ln()) * self.unit()).exp()
-    }
-}
 
 /// The scene on the device and the shaders composed for it, as a render shares them.
 struct Harness<'a> {
@@ -102,7 +56,7 @@ impl<'a> Harness<'a> {
     fn run(&self, points: &[GpuHitPoint], hits: &[GpuPhotonHit], count: u32) -> Outcome {
         let gpu = self.gpu;
         let hit_points = hit_point_resource(gpu, points);
-        let photon_hits = photon_hit_resource(gpu, hits, count);
+        let photon_hits = photon_hits_resource_with(gpu, hits, count);
         let mut pass = (KIND.construct)("()").expect("params");
         let inputs = [("hit_points", &hit_points), ("photon_hits", &photon_hits)];
         let run = Standalone::prepare(
@@ -148,38 +102,6 @@ struct Outcome {
     flux: Vec<[f32; 3]>,
     info: GridInfo,
     words: Vec<u32>,
-}
-
-fn hit_point_resource(gpu: &GpuContext, points: &[GpuHitPoint]) -> Resource {
-    let header = HitPointsHeader {
-        slots_per_pixel: 1,
-        _pad: [0; 3],
-    };
-    let mut bytes = bytemuck::bytes_of(&header).to_vec();
-    bytes.extend_from_slice(bytemuck::cast_slice(points));
-    let buffer = gpu
-        .create_buffer_init("test hit points", &bytes, storage())
-        .expect("buffer");
-    Resource::new(HIT_POINTS, buffer, points.len() as u64)
-}
-
-/// A PHOTON_HITS resource as photon_trace leaves it: `count` hits stored, `hits.len()` slots.
-fn photon_hit_resource(gpu: &GpuContext, hits: &[GpuPhotonHit], count: u32) -> Resource {
-    let header = PhotonHitsHeader {
-        count,
-        dropped: 0,
-        _pad: [0; 2],
-    };
-    let mut bytes = bytemuck::bytes_of(&header).to_vec();
-    bytes.extend_from_slice(bytemuck::cast_slice(hits));
-    let buffer = gpu
-        .create_buffer_init("test photon hits", &bytes, storage())
-        .expect("buffer");
-    Resource::new(PHOTON_HITS, buffer, hits.len() as u64)
-}
-
-fn storage() -> wgpu::BufferUsages {
-    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST
 }
 
 fn hit_point(position: Vec3, radius: f32, normal: Vec3, pixel: u32) -> GpuHitPoint {
@@ -538,7 +460,7 @@ fn collision_case(rng: &mut Rng, lo: Vec3, hi: Vec3) -> (Vec<GpuHitPoint>, Vec<G
 #[test]
 fn grid_gather_matches_brute_force() {
     let gpu = gpu();
-    let scene = load_scene();
+    let scene = load_scene(SCENE);
     let mut atomics = vec![gpu.has_float_atomics()];
     if atomics[0] {
         atomics.push(false);
@@ -590,7 +512,7 @@ fn grid_gather_matches_brute_force() {
 #[test]
 fn empty_inputs_deposit_nothing() {
     let gpu = gpu();
-    let scene = load_scene();
+    let scene = load_scene(SCENE);
     let h = Harness::new(&gpu, &scene, gpu.has_float_atomics());
     let (lo, hi) = (h.bounds_min, h.bounds_max);
     let mut rng = Rng(99);
@@ -682,7 +604,7 @@ fn swapping_the_bvh_for_the_grid_keeps_the_image() {
     );
 
     let gpu = gpu();
-    let scene = load_scene();
+    let scene = load_scene(SCENE);
     let seed = 7;
     let with_bvh = render(&gpu, &scene, "graphs/hybrid.ron", seed);
     let with_grid = render(&gpu, &scene, "graphs/hybrid_grid.ron", seed);

@@ -9,6 +9,7 @@ use common::pass_harness::{
     PassHarness, check_range_queries, hit_point, hit_point_resource, photon_hits_resource,
     write_hit_points,
 };
+use common::rng::Rng;
 use common::*;
 use glam::Vec3;
 use hppm::gpu::GpuContext;
@@ -23,24 +24,6 @@ use hppm::scene::Scene;
 use hppm::scene::bvh::BvhNode;
 use std::collections::HashMap;
 use std::path::Path;
-
-/// xorshift64*: seeded, enough for test data.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u32(&mut self) -> u32 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 32) as u32
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
-    }
-    fn in_box(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        lo + (hi - lo) * Vec3::new(self.unit(), self.unit(), self.unit())
-    }
-}
 
 // ---------------------------------------------------------------------------------------------
 // Radix sort.

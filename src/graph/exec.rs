@@ -80,6 +80,15 @@ fn allocate_outputs(
     Ok(outputs)
 }
 
+/// A recorder for one iteration that starts by zeroing the non-persistent outputs.
+fn begin_iteration<'a>(gpu: &'a GpuContext, cleared: &[Resource]) -> Recorder<'a> {
+    let mut recorder = Recorder::new(gpu);
+    for resource in cleared {
+        recorder.encoder().clear_buffer(&resource.buffer, 0, None);
+    }
+    recorder
+}
+
 /// A node's error, placed at the node in its graph file.
 fn in_node(node: &super::ValidNode, error: Error) -> Error {
     Error::Other(format!(
@@ -203,10 +212,7 @@ impl PreparedGraph {
 
     /// Records and submits one iteration of every node, in schedule order.
     pub fn iterate(&mut self, gpu: &GpuContext, iteration: u64, seed: u64) -> Result<(), Error> {
-        let mut recorder = Recorder::new(gpu);
-        for resource in &self.cleared {
-            recorder.encoder().clear_buffer(&resource.buffer, 0, None);
-        }
+        let mut recorder = begin_iteration(gpu, &self.cleared);
         let ctx = ExecCtx {
             gpu,
             iteration,
@@ -377,10 +383,7 @@ impl Standalone {
         iteration: u64,
         seed: u64,
     ) -> Result<(), Error> {
-        let mut recorder = Recorder::new(gpu);
-        for resource in &self.cleared {
-            recorder.encoder().clear_buffer(&resource.buffer, 0, None);
-        }
+        let mut recorder = begin_iteration(gpu, &self.cleared);
         let ctx = ExecCtx {
             gpu,
             iteration,

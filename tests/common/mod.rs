@@ -77,3 +77,4 @@ pub fn relmse(image: &Image, reference: &Image) -> f64 {
     image.relmse(reference).unwrap_or_else(|e| panic!("{e}"))
 }
 pub mod pass_harness;
+pub mod rng;

@@ -179,8 +179,14 @@ pub fn write_hit_points(gpu: &GpuContext, resource: &Resource, points: &[GpuHitP
 
 /// A photon-hits resource holding `hits` (room for at least one), as photon_trace writes them.
 pub fn photon_hits_resource(gpu: &GpuContext, hits: &[GpuPhotonHit]) -> Resource {
+    photon_hits_resource_with(gpu, hits, hits.len() as u32)
+}
+
+/// A photon-hits resource whose header counts the first `count` of `hits` (the rest lie past
+/// the count, where a gather must not look).
+pub fn photon_hits_resource_with(gpu: &GpuContext, hits: &[GpuPhotonHit], count: u32) -> Resource {
     let header = PhotonHitsHeader {
-        count: hits.len() as u32,
+        count,
         ..Default::default()
     };
     let mut bytes = bytemuck::bytes_of(&header).to_vec();
