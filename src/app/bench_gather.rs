@@ -13,7 +13,7 @@ use crate::gpu::radix_sort::RadixSort;
 use crate::gpu::shaders::ShaderLibrary;
 use crate::graph::exec::{Standalone, Wiring};
 use crate::graph::pass::{Pass, PassKind, Resource, Shared};
-use crate::passes::hit_points::{GpuHitPoint, HIT_POINTS, HitPointsHeader};
+use crate::passes::hit_points::{GpuHitPoint, HIT_POINTS, HitPointsHeader, PHOTON_HITS};
 use crate::passes::photon_trace::{PhotonMode, PhotonTrace, PhotonTraceParams};
 use crate::passes::{self, SceneResources};
 use crate::scene::Scene;
@@ -125,32 +125,17 @@ fn photon_hits(bench: &Bench<'_>) -> Result<Resource, Error> {
     Ok(run.output("photon_hits")?.clone())
 }
 
-/// Milliseconds of one structure node (build + gather), and of its refit-only path when the
-/// hit points are kept, if it has one.
-fn structure_ms(
+/// Milliseconds of one run of a structure node over `hit_points` and `photon_hits`.
+fn node_ms(
     bench: &Bench<'_>,
     kind: &PassKind,
-    hit_points: &Resource,
-    photon_hits: &Resource,
-) -> Result<(f64, Option<f64>), Error> {
-    let inputs = [("hit_points", hit_points), ("photon_hits", photon_hits)];
-    let params_error = |e: ron::error::SpannedError| Error::Other(format!("{}: {e}", kind.name));
-    let mut pass = (kind.construct)("()").map_err(params_error)?;
-    let run = bench.prepare(kind, &mut *pass, &inputs, &Wiring::default())?;
-    let build = bench.median_ms(&run, &mut *pass)?;
-    drop((run, pass));
-    let refit = if kind.name == passes::hit_point_bvh_lbvh::KIND.name {
-        let mut pass = (kind.construct)("()").map_err(params_error)?;
-        let kept = Wiring {
-            kept_inputs: vec!["hit_points"],
-            ..Default::default()
-        };
-        let run = bench.prepare(kind, &mut *pass, &inputs, &kept)?;
-        Some(bench.median_ms(&run, &mut *pass)?)
-    } else {
-        None
-    };
-    Ok((build, refit))
+    inputs: &[(&'static str, &Resource)],
+    wiring: &Wiring,
+) -> Result<f64, Error> {
+    let mut pass =
+        (kind.construct)("()").map_err(|e| Error::Other(format!("{}: {e}", kind.name)))?;
+    let run = bench.prepare(kind, &mut *pass, inputs, wiring)?;
+    bench.median_ms(&run, &mut *pass)
 }
 
 /// The structures compared, in table order.
@@ -160,7 +145,13 @@ const STRUCTURES: &[&PassKind] = &[
     &passes::hit_point_grid::KIND,
 ];
 
-/// One table row: every structure's build + gather at `count` hit points.
+/// Whether `kind` has a cheaper path for kept hit points worth its own column.
+fn refits(kind: &PassKind) -> bool {
+    kind.name == passes::hit_point_bvh_lbvh::KIND.name
+}
+
+/// One table row at `count` hit points: per structure its build alone (no photon hits), its
+/// build + gather, and for the LBVH its refit + gather with kept hit points.
 fn row(
     bench: &Bench<'_>,
     scene: &Scene,
@@ -170,11 +161,26 @@ fn row(
     let points = surface_hit_points(scene, count);
     let hit_points = hit_point_resource(bench.gpu, &points)?;
     drop(points);
+    // Zeroed, so it holds no hit: the gather then only launches and returns.
+    let no_hits = Resource::allocate(
+        bench.gpu,
+        "bench no photon hits",
+        PHOTON_HITS,
+        photon_hits.len,
+    )?;
+    let with_hits = [("hit_points", &hit_points), ("photon_hits", photon_hits)];
+    let without = [("hit_points", &hit_points), ("photon_hits", &no_hits)];
+    let kept = Wiring {
+        kept_inputs: vec!["hit_points"],
+        ..Default::default()
+    };
     let mut line = format!("| {count} |");
     for kind in STRUCTURES {
-        let (build, refit) = structure_ms(bench, kind, &hit_points, photon_hits)?;
-        line.push_str(&format!(" {build:.0} |"));
-        if let Some(refit) = refit {
+        let build = node_ms(bench, kind, &without, &Wiring::default())?;
+        let full = node_ms(bench, kind, &with_hits, &Wiring::default())?;
+        line.push_str(&format!(" {build:.0} | {full:.0} |"));
+        if refits(kind) {
+            let refit = node_ms(bench, kind, &with_hits, &kept)?;
             line.push_str(&format!(" {refit:.0} |"));
         }
     }
@@ -228,18 +234,21 @@ pub fn run(adapter: Option<&str>, locate: fn(&str) -> PathBuf) -> Result<String,
     let mut header = String::from("| hit points |");
     let mut rule = String::from("|---|");
     for kind in STRUCTURES {
-        header.push_str(&format!(" {} build + gather |", kind.name));
-        rule.push_str("---|");
-        if kind.name == passes::hit_point_bvh_lbvh::KIND.name {
-            header.push_str(" hit_point_bvh_lbvh refit + gather (kept hit points) |");
+        header.push_str(&format!(" {0} build | {0} build + gather |", kind.name));
+        rule.push_str("---|---|");
+        if refits(kind) {
+            header.push_str(&format!(
+                " {} refit + gather (kept hit points) |",
+                kind.name
+            ));
             rule.push_str("---|");
         }
     }
     let mut out = format!(
         "\n### hit-point structures, adapter: {} (host: {cores} CPU cores)\n\n\
-         Hit points on the glass Cornell box's surfaces; milliseconds per node run (build, then \
-         the gather of {} caustic photon hits from {PHOTONS} photons), each waited for (median \
-         of {REPEATS} after a warm-up).\n\n{header}\n{rule}\n",
+         Hit points on the glass Cornell box's surfaces; milliseconds per node run, each waited \
+         for (median of {REPEATS} after a warm-up): its build alone (no photon hits), and its \
+         build then the gather of {} caustic photon hits from {PHOTONS} photons.\n\n{header}\n{rule}\n",
         gpu.adapter_label(),
         hits[0]
     );
