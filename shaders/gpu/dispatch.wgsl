@@ -2,7 +2,7 @@
 
 // One-dimensional work spread over a two-dimensional grid of workgroups, because a dispatch
 // dimension is limited to 65535 workgroups (about 16.7M invocations at 256 per workgroup) and
-// the builders must handle more. src/gpu/radix_sort.rs (`workgroup_grid`) chooses the grid.
+// the builders must handle more. src/gpu/dispatch.rs (`workgroup_grid`) chooses the grid.
 
 const WORKGROUP_SIZE: u32 = 256u;
 

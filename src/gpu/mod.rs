@@ -10,6 +10,7 @@ use wgpu::util::DeviceExt;
 
 mod adapter;
 pub mod binding;
+pub mod dispatch;
 pub mod layout;
 pub mod radix_sort;
 pub mod shaders;

@@ -5,6 +5,7 @@
 
 use std::num::NonZeroU64;
 
+use super::dispatch::workgroup_grid;
 use super::shaders::{ShaderFile, ShaderLibrary};
 use super::{GpuContext, GpuError};
 
@@ -15,25 +16,22 @@ const PASSES: u32 = u32::BITS / RADIX_BITS;
 const RADIX: u64 = 1 << RADIX_BITS;
 /// Pairs per workgroup (`BLOCK` in the shader).
 const BLOCK: u32 = 4096;
-/// `SortParams` in the shader.
-const PARAMS_BYTES: u64 = 16;
-/// Most workgroups a dispatch may have in one dimension (WebGPU's default limit).
-const MAX_GROUPS_PER_DIMENSION: u32 = 65535;
-
-/// A dispatch grid of at least `groups` workgroups: one row while it fits, else rows of the
-/// widest allowed size (kernels flatten the grid with `common::dispatch` and skip the excess).
-pub fn workgroup_grid(groups: u32) -> [u32; 3] {
-    if groups <= MAX_GROUPS_PER_DIMENSION {
-        [groups, 1, 1]
-    } else {
-        [
-            MAX_GROUPS_PER_DIMENSION,
-            groups.div_ceil(MAX_GROUPS_PER_DIMENSION),
-            1,
-        ]
-    }
+/// One pass's parameters (`SortParams` in the shader).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct SortParams {
+    count: u32,
+    shift: u32,
+    blocks: u32,
+    _pad: u32,
 }
 
+const PARAMS_BYTES: u64 = std::mem::size_of::<SortParams>() as u64;
+
+/// `SortParams` against its WGSL twin (tests/shaders.rs checks it).
+pub const LAYOUTS: &[super::layout::StructLayout] = &[crate::struct_layout!(
+    SortParams => "SortParams" in SHADER, { count, shift, blocks }
+)];
 /// The ping-pong partners of the caller's buffers and the histogram, sized for `capacity` pairs.
 struct Scratch {
     capacity: u32,
@@ -124,9 +122,14 @@ impl RadixSort {
     fn params_bytes(&self, count: u32, blocks: u32) -> Vec<u8> {
         let mut bytes = vec![0u8; (self.params_stride * PASSES as u64) as usize];
         for pass in 0..PASSES {
-            let words = [count, pass * RADIX_BITS, blocks, 0];
+            let params = SortParams {
+                count,
+                shift: pass * RADIX_BITS,
+                blocks,
+                _pad: 0,
+            };
             let at = (pass as u64 * self.params_stride) as usize;
-            bytes[at..at + PARAMS_BYTES as usize].copy_from_slice(bytemuck::cast_slice(&words));
+            bytes[at..at + PARAMS_BYTES as usize].copy_from_slice(bytemuck::bytes_of(&params));
         }
         bytes
     }

@@ -4,7 +4,7 @@
 
 use crate::Error;
 use crate::gpu::binding::{Access, bind_buffers};
-use crate::gpu::radix_sort::workgroup_grid;
+use crate::gpu::dispatch::workgroup_grid;
 use crate::gpu::shaders::ShaderFile;
 use crate::graph::pass::{PrepareCtx, Recorder};
 use crate::passes::SceneResources;

@@ -12,7 +12,8 @@ use serde::Deserialize;
 
 use crate::Error;
 use crate::gpu::binding::{Access, bind_buffers};
-use crate::gpu::radix_sort::{RadixSort, workgroup_grid};
+use crate::gpu::dispatch::workgroup_grid;
+use crate::gpu::radix_sort::RadixSort;
 use crate::gpu::shaders::ShaderFile;
 use crate::graph::pass::{
     ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, parse_params,
@@ -25,6 +26,18 @@ use crate::shader_file;
 const SHADER: ShaderFile = shader_file!("shaders/passes/lbvh.wgsl");
 /// `WORKGROUP_SIZE` in shaders/gpu/dispatch.wgsl.
 const WORKGROUP: u32 = 256;
+
+/// `LbvhParams` in the shader.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParams {
+    /// Hit-point slots (leaves).
+    count: u32,
+    _pad: [u32; 3],
+}
+
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout =
+    crate::struct_layout!(GpuParams => "LbvhParams" in SHADER, { count });
 
 static SLOTS: &[SlotDecl] = &[
     SlotDecl::input("hit_points", HIT_POINTS),
@@ -39,7 +52,7 @@ pub const KIND: PassKind = PassKind {
     description: "hit-point BVH built on the GPU (Morton codes, radix sort, Karras); BVH gather",
     slots: SLOTS,
     shaders: &[SHADER, BVH_GATHER, crate::gpu::radix_sort::SHADER],
-    layouts: &[],
+    layouts: &[PARAMS_LAYOUT],
     construct,
 };
 
@@ -174,9 +187,13 @@ impl Pass for HitPointBvhLbvh {
             words(count as u64),
             storage | wgpu::BufferUsages::COPY_DST,
         )?;
+        let params = GpuParams {
+            count,
+            _pad: [0; 3],
+        };
         let params = gpu.create_buffer_init(
             "lbvh params",
-            bytemuck::cast_slice(&[count, 0, 0, 0]),
+            bytemuck::bytes_of(&params),
             wgpu::BufferUsages::UNIFORM,
         )?;
         let (layout, bind_group) = bind_buffers(

@@ -20,8 +20,8 @@ use serde::Deserialize;
 
 use crate::Error;
 use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu::dispatch::workgroup_grid;
 use crate::gpu::layout::StructLayout;
-use crate::gpu::radix_sort::workgroup_grid;
 use crate::gpu::shaders::ShaderFile;
 use crate::graph::pass::{
     ExecCtx, Pass, PassKind, PrepareCtx, Recorder, ResourceKind, Size, SlotDecl, parse_params,
