@@ -203,6 +203,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         .unwrap_or_else(|| bundled("scenes/cornell_box.ron"));
     let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron"));
     OutputFormat::of(&args.out)?;
+    // A missing or read-only folder is found now, not after the render.
+    hppm::image::check_writable(&args.out)?;
     let scene = scene::load(&scene_path)?;
     let features = scene.features();
     eprintln!("scene: {features}");
@@ -234,6 +236,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         seconds: args.time,
         photons: args.photons,
     };
+    budget.check()?;
     let mut renderer = Renderer::new(&gpu, &scene, graph, width, height, args.seed)?;
     for pruned in renderer.pruned() {
         eprintln!("{pruned}");
@@ -242,6 +245,11 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         renderer.enable_profiling()?;
     }
     let cancel = cancel_flag();
+    // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
+    eprintln!(
+        "rendering {width}x{height} through {} (Ctrl-C stops and writes the image so far)",
+        graph_path.display()
+    );
     let bar = progress_bar(budget);
     let summary = renderer.run(budget, &cancel, |r, seconds| {
         let spp = r.samples_per_pixel();
@@ -358,6 +366,7 @@ fn show_graph(file: &Path, dot: bool, scene_path: Option<&Path>) -> Result<(), E
             println!("{pruned}");
         }
     }
+    graph.check_transport(&passes::paths::CLASSES)?;
     if dot {
         print!("{}", graph.to_dot());
     } else {
@@ -442,7 +451,21 @@ fn bench_gather(args: &BenchArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// On a headless machine Mesa's Vulkan and EGL drivers try to reach a Wayland compositor while
+/// wgpu opens them, and libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set" when
+/// the variable is missing: two lines a user reads as errors of the render. Pointing it at the
+/// temporary folder lets the (failing, harmless) connection attempt stay quiet.
+fn quiet_headless_wayland_probe() {
+    let valid = std::env::var_os("XDG_RUNTIME_DIR")
+        .is_some_and(|dir| Path::new(&dir).is_absolute() && Path::new(&dir).is_dir());
+    if !valid {
+        // SAFETY: called first thing in `main`, before any other thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+}
+
 fn main() -> ExitCode {
+    quiet_headless_wayland_probe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),

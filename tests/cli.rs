@@ -130,7 +130,7 @@ fn interrupt_writes_the_image_so_far() {
     let dir = std::env::temp_dir().join(format!("hppm-cli-int-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("partial.exr");
-    let child = Command::new(env!("CARGO_BIN_EXE_hppm"))
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hppm"))
         .args(["render", "--time", "120", "--size", "32x32", "--out"])
         .arg(&path)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
@@ -138,13 +138,25 @@ fn interrupt_writes_the_image_so_far() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("spawn hppm");
-    std::thread::sleep(std::time::Duration::from_secs(4));
+    // The handler is installed once the device is open and the pipelines are compiled, which
+    // takes a machine-dependent time: wait for the line that says so, not for a fixed time.
+    let mut err = String::new();
+    let mut reader = std::io::BufReader::new(child.stderr.take().expect("stderr"));
+    loop {
+        let mut line = String::new();
+        let read = std::io::BufRead::read_line(&mut reader, &mut line).expect("read stderr");
+        assert!(read > 0, "hppm ended before rendering: {err}");
+        err.push_str(&line);
+        if line.starts_with("rendering ") {
+            break;
+        }
+    }
     let killed = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status();
     assert!(killed.is_ok_and(|s| s.success()));
+    std::io::Read::read_to_string(&mut reader, &mut err).expect("read stderr");
     let out = child.wait_with_output().expect("wait");
-    let err = stderr(&out);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("interrupted"), "{err}");
     let image = hppm::image::Image::read_exr(&path).expect("partial image written");
@@ -214,5 +226,88 @@ fn hybrid_render_stops_at_a_photon_budget_and_writes_its_aovs() {
         }
     }
     assert!(radius.mean()[0] > 0.0, "hit points have radii");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Budgets that would render nothing or never end are refused before any work, with exit 1
+/// and a message naming the option.
+#[test]
+fn impossible_budgets_are_refused() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["--spp", "0"], "--spp must be at least 1"),
+        (&["--time", "nan"], "--time must be a positive"),
+        (&["--time=-1"], "--time must be a positive"),
+        (&["--time", "inf"], "--time must be a positive"),
+        (&["--photons", "0"], "--photons must be at least 1"),
+        // pt.ron emits no photons: a photon budget alone would never be met.
+        (
+            &["--photons", "1000", "--graph", "graphs/pt.ron"],
+            "emits no photons",
+        ),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", "--size", "8x8", "--out", "/tmp/hppm-budget.exr"];
+        args.extend_from_slice(extra);
+        let started = std::time::Instant::now();
+        let out = hppm(&args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(
+            err.contains(needle),
+            "{extra:?}: expected {needle:?} in {err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "{extra:?} was not refused at once"
+        );
+    }
+}
+
+/// An output in a folder that does not exist is refused before the render, not after it.
+#[test]
+fn an_unwritable_output_is_found_before_rendering() {
+    let out = hppm(&[
+        "render",
+        "--spp",
+        "100000",
+        "--out",
+        "/nonexistent-hppm-folder/out.exr",
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("/nonexistent-hppm-folder/out.exr"), "{err}");
+    assert!(!err.contains("rendering "), "it rendered first: {err}");
+}
+
+/// A render on a headless machine prints no "XDG_RUNTIME_DIR" line (Mesa's Wayland probe), and
+/// a PNG whose provenance holds non-Latin-1 text (a scene path in Cyrillic) is written, with
+/// the text in an iTXt chunk.
+#[test]
+fn a_headless_render_is_quiet_and_png_text_may_be_any_unicode() {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-утф-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let scene = dir.join("сцена.ron");
+    std::fs::copy(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box.ron"),
+        &scene,
+    )
+    .expect("copy scene");
+    let png = dir.join("кадр.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_hppm"))
+        .arg("render")
+        .arg(&scene)
+        .args(["--spp", "1", "--size", "8x8", "--out"])
+        .arg(&png)
+        .env_remove("XDG_RUNTIME_DIR")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run hppm");
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
+    let bytes = std::fs::read(&png).expect("png written");
+    let has_itxt = bytes.windows(4).any(|w| w == b"iTXt");
+    assert!(has_itxt, "the Cyrillic scene path goes into an iTXt chunk");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1,7 +1,6 @@
 //! `hppm bench`: rays/s and samples/s of the path-tracing graph on the bundled Cornell scenes,
 //! after a warm-up iteration (lavapipe compiles a pipeline at its first dispatch).
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
@@ -98,16 +97,18 @@ pub fn run(
     Ok(())
 }
 
-/// Appends `text` to the Markdown file at `path` (created if missing).
+/// Appends `text` to the Markdown file at `path` (created if missing), by writing the whole
+/// file anew and renaming it into place: an interrupted append leaves the old file.
 pub fn append_markdown(path: &Path, text: &str) -> Result<(), Error> {
-    let io = |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
+    let old = match std::fs::read_to_string(path) {
+        Ok(old) => old,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(source) => {
+            return Err(Error::Io {
+                path: path.to_path_buf(),
+                source,
+            });
+        }
     };
-    let mut file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .map_err(io)?;
-    file.write_all(text.as_bytes()).map_err(io)
+    crate::image::write_file_atomically(path, (old + text).as_bytes())
 }

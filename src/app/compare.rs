@@ -323,7 +323,10 @@ pub fn compare(
     };
     let plot_path = options.out.join("errors.png");
     let title = format!("{} on {}", scene_label(&options.scene), gpu.info.name);
-    plot::error_vs_time(&plot_path, &title, &plot_series(&runs, &peers))?;
+    let series = plot_series(&runs, &peers);
+    crate::image::write_atomically(&plot_path, |temp| {
+        plot::error_vs_time(temp, &title, &series)
+    })?;
     Ok(CompareReport {
         runs,
         peers,
@@ -344,10 +347,7 @@ fn scene_label(path: &Path) -> String {
 }
 
 fn write_file(path: &Path, text: &str) -> Result<(), Error> {
-    std::fs::write(path, text).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    crate::image::write_file_atomically(path, text.as_bytes())
 }
 
 pub fn errors_csv_text(runs: &[GraphRun]) -> String {

@@ -11,7 +11,7 @@ use crate::graph::ValidGraph;
 use crate::graph::exec::PreparedGraph;
 use crate::graph::pass::{Counters, IMAGE, Resource, Shared};
 use crate::image::Image;
-use crate::passes::{SceneResources, scene_meets, shader_library};
+use crate::passes::{SceneResources, paths, scene_meets, shader_library};
 use crate::scene::Scene;
 use crate::scene::gpu_layout::GpuScene;
 
@@ -24,6 +24,30 @@ pub struct Budget {
     pub seconds: Option<f64>,
     /// Photons emitted in total.
     pub photons: Option<u64>,
+}
+
+impl Budget {
+    /// Refuses a budget that would render nothing or never end, before any work.
+    pub fn check(&self) -> Result<(), Error> {
+        let refuse = |m: String| Err(Error::Other(m));
+        if self.spp == Some(0) {
+            return refuse("--spp must be at least 1".into());
+        }
+        if self.photons == Some(0) {
+            return refuse("--photons must be at least 1".into());
+        }
+        if let Some(s) = self.seconds
+            && !(s.is_finite() && s > 0.0)
+        {
+            return refuse(format!(
+                "--time must be a positive, finite number of seconds, got {s}"
+            ));
+        }
+        if self.spp.is_none() && self.seconds.is_none() && self.photons.is_none() {
+            return refuse("no budget: give --spp, --time or --photons".into());
+        }
+        Ok(())
+    }
 }
 
 /// A graph prepared on a device for one scene, ready to iterate.
@@ -54,6 +78,7 @@ impl<'a> Renderer<'a> {
     ) -> Result<Self, Error> {
         let features = scene.features();
         let pruned = graph.prune(|need| scene_meets(&features, need))?;
+        graph.check_transport(&paths::CLASSES)?;
         let shaders = shader_library(gpu.has_float_atomics(), scene)?;
         let mut shared = Shared::default();
         shared.insert(SceneResources::upload(
@@ -168,6 +193,18 @@ impl<'a> Renderer<'a> {
         cancel: &AtomicBool,
         mut progress: impl FnMut(&Self, f64),
     ) -> Result<RunSummary, Error> {
+        budget.check()?;
+        if budget.photons.is_some()
+            && self.photons_per_iteration == 0
+            && budget.spp.is_none()
+            && budget.seconds.is_none()
+        {
+            return Err(Error::Other(
+                "--photons: this graph emits no photons (for this scene, after pruning), so a \
+                 photon budget would never be met; give --spp or --time"
+                    .into(),
+            ));
+        }
         let start = Instant::now();
         let spp_iterations = budget
             .spp

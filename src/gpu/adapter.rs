@@ -2,8 +2,12 @@
 
 use super::GpuError;
 
-fn instance() -> wgpu::Instance {
-    wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+/// An instance of `backends` only: an instance with GL in it initialises EGL even if no GL
+/// adapter is asked for. `WGPU_BACKEND` still narrows the choice.
+fn instance(backends: wgpu::Backends) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    desc.backends &= backends;
+    wgpu::Instance::new(desc)
 }
 
 /// Lower is better: real GPUs first, software rasterisers last; within a type, the native APIs
@@ -24,10 +28,26 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
     (device, backend)
 }
 
-/// All adapters, best first (the order `--adapter INDEX` refers to).
-fn sorted_adapters() -> Vec<wgpu::Adapter> {
-    let mut adapters = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()));
+/// The backends probed unless GL is asked for or nothing else is found.
+const NATIVE: wgpu::Backends = wgpu::Backends::VULKAN
+    .union(wgpu::Backends::METAL)
+    .union(wgpu::Backends::DX12);
+
+fn adapters_of(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
+    let mut adapters = pollster::block_on(instance(backends).enumerate_adapters(backends));
     adapters.sort_by_key(|a| rank(&a.get_info()));
+    adapters
+}
+
+/// Adapters best first, the native APIs' before GL's (the order `--adapter INDEX` refers to).
+/// GL is probed only with `with_gl` or when no native adapter exists: probing it wakes Mesa's
+/// EGL, which prints "XDG_RUNTIME_DIR is invalid or not set" on headless machines, and it
+/// serves worse (no float atomics, 16 storage buffers per stage).
+fn sorted_adapters(with_gl: bool) -> Vec<wgpu::Adapter> {
+    let mut adapters = adapters_of(NATIVE);
+    if with_gl || adapters.is_empty() {
+        adapters.extend(adapters_of(wgpu::Backends::GL));
+    }
     adapters
 }
 
@@ -40,9 +60,9 @@ pub fn adapter_label(info: &wgpu::AdapterInfo) -> String {
     )
 }
 
-/// Name, backend and the optional features hppm uses, best adapter first.
+/// Name, backend and the optional features hppm uses, best adapter first, GL included.
 pub fn list_adapters() -> Vec<(wgpu::AdapterInfo, wgpu::Features, wgpu::Limits)> {
-    sorted_adapters()
+    sorted_adapters(true)
         .into_iter()
         .map(|a| (a.get_info(), a.features(), a.limits()))
         .collect()
@@ -57,17 +77,10 @@ fn describe(adapters: &[wgpu::Adapter]) -> String {
         .join("\n")
 }
 
-pub(super) fn choose(choice: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
-    let mut adapters = sorted_adapters();
-    if adapters.is_empty() {
-        return Err(GpuError::NoAdapter);
-    }
-    let Some(choice) = choice else {
-        return Ok(adapters.swap_remove(0));
-    };
-    let index = match choice.trim().parse::<usize>() {
-        Ok(i) if i < adapters.len() => Some(i),
-        Ok(_) => None,
+/// The adapter `choice` names (an index or part of its label) among `adapters`.
+fn find(adapters: &[wgpu::Adapter], choice: &str) -> Option<usize> {
+    match choice.trim().parse::<usize>() {
+        Ok(i) => (i < adapters.len()).then_some(i),
         Err(_) => {
             let wanted = choice.to_lowercase();
             adapters.iter().position(|a| {
@@ -76,8 +89,27 @@ pub(super) fn choose(choice: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
                     .contains(&wanted)
             })
         }
+    }
+}
+
+pub(super) fn choose(choice: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
+    let mut adapters = sorted_adapters(false);
+    let Some(choice) = choice else {
+        return if adapters.is_empty() {
+            Err(GpuError::NoAdapter)
+        } else {
+            Ok(adapters.swap_remove(0))
+        };
     };
-    match index {
+    if let Some(i) = find(&adapters, choice) {
+        return Ok(adapters.swap_remove(i));
+    }
+    // Not among the native adapters: perhaps a GL one (the indexes continue after them).
+    let mut adapters = sorted_adapters(true);
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter);
+    }
+    match find(&adapters, choice) {
         Some(i) => Ok(adapters.swap_remove(i)),
         None => Err(GpuError::AdapterNotFound {
             requested: choice.to_string(),

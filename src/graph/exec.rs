@@ -118,13 +118,7 @@ impl PreparedGraph {
                         .map(|r| (e.to_slot, r.clone()))
                 })
                 .collect();
-            let consumed: HashSet<&'static str> = graph
-                .edges
-                .iter()
-                .filter(|e| e.from_node == node)
-                .map(|e| e.from_slot)
-                .chain((graph.output.0 == node).then_some(graph.output.1))
-                .collect();
+            let consumed = graph.consumed(node);
             let kept_inputs = graph
                 .inputs_of(node)
                 .filter(|e| kept_outputs(graph, e.from_node).contains(e.from_slot))

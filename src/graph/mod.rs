@@ -6,6 +6,7 @@ pub mod exec;
 pub mod pass;
 mod prune;
 mod source_map;
+pub mod transport;
 mod validate;
 
 use std::fmt;
@@ -80,6 +81,23 @@ pub struct ValidGraph {
 impl ValidGraph {
     pub fn inputs_of(&self, node: usize) -> impl Iterator<Item = &Edge> {
         self.edges.iter().filter(move |e| e.to_node == node)
+    }
+
+    /// Output slots of `node` that feed a node through an input that is not observe-only, and
+    /// the graph's output slot if it is on `node`.
+    pub fn consumed(&self, node: usize) -> std::collections::HashSet<&'static str> {
+        self.edges
+            .iter()
+            .filter(|e| e.from_node == node)
+            .filter(|e| {
+                !self.nodes[e.to_node]
+                    .kind
+                    .slot(e.to_slot)
+                    .is_some_and(|s| s.observe_only)
+            })
+            .map(|e| e.from_slot)
+            .chain((self.output.0 == node).then_some(self.output.1))
+            .collect()
     }
 
     fn slot_name(&self, node: usize, slot: &str) -> String {

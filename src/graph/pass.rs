@@ -7,6 +7,7 @@ use std::any::{Any, TypeId};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
 
+use super::transport::{Transport, TransportCtx};
 use crate::gpu::GpuContext;
 use crate::gpu::layout::StructLayout;
 use crate::gpu::shaders::{ShaderFile, ShaderLibrary};
@@ -93,6 +94,14 @@ pub struct SlotDecl {
     /// (`ppm` keeps one camera pass's hit points). Its producer is told through
     /// [`PrepareCtx::kept`]; values may still be updated in place, the layout may not.
     pub kept: bool,
+    /// Inputs: only looks at the resource (an AOV), so it does not count as a consumer: the
+    /// producer does no work for it and changes nothing because of it.
+    pub observe_only: bool,
+    /// Inputs: at most one consumer of any output may read it through such a slot (an
+    /// estimator shrinks the radii of the hit points it reads; two would shrink one set twice).
+    pub exclusive: bool,
+    /// Outputs: must feed a node (state a consumer needs back, like an estimator's radii).
+    pub required: bool,
 }
 
 impl SlotDecl {
@@ -106,6 +115,9 @@ impl SlotDecl {
             optional: false,
             previous_iteration: false,
             kept: false,
+            observe_only: false,
+            exclusive: false,
+            required: false,
         }
     }
     pub const fn output(name: &'static str, kind: ResourceKind, size: Size) -> Self {
@@ -118,6 +130,9 @@ impl SlotDecl {
             optional: false,
             previous_iteration: false,
             kept: false,
+            observe_only: false,
+            exclusive: false,
+            required: false,
         }
     }
     pub const fn persistent(mut self) -> Self {
@@ -134,6 +149,18 @@ impl SlotDecl {
     }
     pub const fn kept(mut self) -> Self {
         self.kept = true;
+        self
+    }
+    pub const fn observe_only(mut self) -> Self {
+        self.observe_only = true;
+        self
+    }
+    pub const fn exclusive(mut self) -> Self {
+        self.exclusive = true;
+        self
+    }
+    pub const fn required(mut self) -> Self {
+        self.required = true;
         self
     }
 }
@@ -219,8 +246,9 @@ pub struct PrepareCtx<'a> {
     pub inputs: HashMap<&'static str, Resource>,
     /// Empty while the graph asks [`Pass::output_len`]; every output slot when preparing.
     pub outputs: HashMap<&'static str, Resource>,
-    /// Output slots that feed another node or are the graph's output. A pass may skip work for
-    /// the others (`path_trace` records no hit points, and drops nothing, when none are used).
+    /// Output slots that feed another node (not merely one that observes them) or are the
+    /// graph's output. A pass may skip work for the others (`path_trace` records no hit points,
+    /// and drops nothing, when none are used).
     pub consumed: HashSet<&'static str>,
     /// Output slots some consumer keeps ([`SlotDecl::kept`]): write them in the first
     /// iteration only.
@@ -376,6 +404,13 @@ pub trait Pass {
         0
     }
 
+    /// Which light paths output `slot` carries (see graph/transport.rs), given what the inputs
+    /// carry; `None`: the union of the inputs. Sources of light (camera and photon passes)
+    /// answer; pass-throughs need not.
+    fn transport(&self, _slot: &str, _ctx: &TransportCtx<'_>) -> Option<Transport> {
+        None
+    }
+
     /// Counters gathered on the GPU so far (may read back; called rarely).
     fn counters(&self, _gpu: &GpuContext) -> Result<Counters, crate::Error> {
         Ok(Counters::default())
@@ -428,5 +463,23 @@ pub fn params_error(message: String) -> ron::error::SpannedError {
     ron::error::SpannedError {
         code: ron::Error::Message(message),
         span: ron::error::Span { start, end: start },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sizes that do not fit a u64 are an error, never a wrapped small buffer.
+    #[test]
+    fn resource_bytes_overflow_is_refused() {
+        let kind = ResourceKind::new("big", 16, 64);
+        assert_eq!(Resource::bytes(kind, 0), Some(80));
+        assert_eq!(Resource::bytes(kind, 1 << 40), Some((1 << 46) + 16));
+        assert_eq!(Resource::bytes(kind, u64::MAX / 32), None);
+        assert_eq!(
+            Resource::bytes(ResourceKind::new("h", u64::MAX, 1), 1),
+            None
+        );
     }
 }

@@ -136,6 +136,7 @@ pub fn parse_graph(
     let lookup = |name: &str| first_by_name.get(name).copied();
     let (edges, attempted) = connect(&mut report, &map, &parsed, &resolved, lookup);
     check_producers(&mut report, &parsed, &resolved, &attempted, &map);
+    check_exclusive_and_required(&mut report, &parsed, &resolved, &edges, &map);
     let output = check_output(&mut report, &map, &parsed.output, &resolved, lookup);
     let graph = petgraph_of(parsed.nodes.len(), &edges);
     check_cycles(&mut report, &graph, &parsed, &edges);
@@ -428,6 +429,74 @@ fn check_producers(
                     format!(
                         "input \"{}.{}\" has no producer",
                         parsed.nodes[r.index].name, slot.name
+                    ),
+                );
+            }
+        }
+    }
+}
+
+/// An output read through two exclusive inputs (two estimators on one set of hit points), and a
+/// required output that feeds nothing.
+fn check_exclusive_and_required(
+    report: &mut Report,
+    parsed: &GraphFile,
+    resolved: &[Option<Resolved>],
+    edges: &[(Edge, Range<usize>)],
+    map: &SourceMap,
+) {
+    let slot_of = |node: usize, slot: &str| {
+        resolved
+            .get(node)
+            .and_then(|r| r.as_ref())
+            .and_then(|r| r.kind.slot(slot))
+    };
+    let mut exclusive_reader: HashMap<(usize, &str), &Edge> = HashMap::new();
+    for (e, span) in edges {
+        if !slot_of(e.to_node, e.to_slot).is_some_and(|s| s.exclusive) {
+            continue;
+        }
+        match exclusive_reader.get(&(e.from_node, e.from_slot)) {
+            None => {
+                exclusive_reader.insert((e.from_node, e.from_slot), e);
+            }
+            Some(first) => {
+                let name = |n: usize| parsed.nodes[n].name.as_str();
+                report.error(
+                    span.start,
+                    format!(
+                        "\"{}.{}\" already feeds \"{}.{}\"; \"{}.{}\" may have only one such \
+                         reader (two estimators would shrink one set of radii)",
+                        name(e.from_node),
+                        e.from_slot,
+                        name(first.to_node),
+                        first.to_slot,
+                        name(e.to_node),
+                        e.to_slot
+                    ),
+                );
+            }
+        }
+    }
+    for r in resolved.iter().flatten() {
+        for slot in r
+            .kind
+            .slots
+            .iter()
+            .filter(|s| s.dir == SlotDir::Out && s.required)
+        {
+            let feeds = edges
+                .iter()
+                .any(|(e, _)| e.from_node == r.index && e.from_slot == slot.name);
+            if !feeds {
+                let at = map.nodes.get(r.index).map_or(0, |n| n.span.start);
+                report.error(
+                    at,
+                    format!(
+                        "output \"{}.{}\" must feed a node (the {} it carries is needed back)",
+                        parsed.nodes[r.index].name,
+                        slot.name,
+                        slot.kind.name()
                     ),
                 );
             }

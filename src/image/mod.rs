@@ -159,18 +159,10 @@ impl Image {
     /// Writes EXR or PNG by the extension of `path`, through a temporary file renamed into
     /// place, so an interrupted run never leaves a truncated image.
     pub fn write(&self, path: &Path, provenance: &Provenance) -> Result<(), Error> {
-        let temp = temp_path(path);
-        let written = match OutputFormat::of(path)? {
-            OutputFormat::Exr => self.write_exr(&temp, provenance),
-            OutputFormat::Png => self.write_png(&temp, provenance),
-        };
-        if let Err(e) = written {
-            let _ = std::fs::remove_file(&temp);
-            return Err(e);
-        }
-        std::fs::rename(&temp, path).map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
+        let format = OutputFormat::of(path)?;
+        write_atomically(path, |temp| match format {
+            OutputFormat::Exr => self.write_exr(temp, provenance),
+            OutputFormat::Png => self.write_png(temp, provenance),
         })
     }
 
@@ -209,9 +201,14 @@ impl Image {
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         for (key, value) in &provenance.entries {
-            encoder
-                .add_text_chunk(key.clone(), value.clone())
-                .map_err(|e| io_error(path, e))?;
+            // tEXt holds Latin-1 only; a scene path in Cyrillic goes into an iTXt chunk (UTF-8).
+            let latin1 = value.chars().all(|c| (c as u32) < 256);
+            let added = if latin1 {
+                encoder.add_text_chunk(key.clone(), value.clone())
+            } else {
+                encoder.add_itxt_chunk(key.clone(), value.clone())
+            };
+            added.map_err(|e| io_error(path, e))?;
         }
         let mut writer = encoder.write_header().map_err(|e| io_error(path, e))?;
         writer
@@ -245,10 +242,58 @@ impl OutputFormat {
     }
 }
 
+/// A temporary name beside `path` with the same extension (writers that go by the extension
+/// still see it): `out.png` -> `out.1234.tmp.png`.
 fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    let mut name = path.file_stem().unwrap_or_default().to_os_string();
     name.push(format!(".{}.tmp", std::process::id()));
+    if let Some(ext) = path.extension() {
+        name.push(".");
+        name.push(ext);
+    }
     path.with_file_name(name)
+}
+
+/// Writes `path` through `write` on a temporary file beside it, renamed into place only once
+/// complete, so an interrupted or failed write never leaves a truncated or half-old file.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), Error>,
+) -> Result<(), Error> {
+    let temp = temp_path(path);
+    if let Err(e) = write(&temp) {
+        let _ = std::fs::remove_file(&temp);
+        return Err(e);
+    }
+    std::fs::rename(&temp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&temp);
+        Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
+}
+
+/// Writes `bytes` to `path` atomically (see `write_atomically`).
+pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    write_atomically(path, |temp| {
+        std::fs::write(temp, bytes).map_err(|source| Error::Io {
+            path: temp.to_path_buf(),
+            source,
+        })
+    })
+}
+
+/// Fails unless a file can be created in `path`'s folder: checked before a render, so a missing
+/// or read-only folder costs nothing instead of the finished image.
+pub fn check_writable(path: &Path) -> Result<(), Error> {
+    let probe = temp_path(path);
+    let io = |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    std::fs::File::create(&probe).map_err(io)?;
+    std::fs::remove_file(&probe).map_err(io)
 }
 
 /// The sRGB transfer curve, clamped to [0, 1], rounded to 8 bits. NaN maps to 0.

@@ -78,6 +78,41 @@ pub fn shader_library(float_atomics: bool, scene: &Scene) -> Result<ShaderLibrar
     Ok(ShaderLibrary::new(float_atomics, defs, COMMON_MODULES)?)
 }
 
+/// Classes of light paths for the partition check (graph/transport.rs), relative to a camera
+/// path's photon-mapped vertices (its first `merge_depth` diffuse vertices, design.md section
+/// 1). A hybrid counts each exactly once: the camera pass all but `CAUSTIC`, the photon pass
+/// and estimator `CAUSTIC`.
+pub mod paths {
+    use crate::graph::transport::PathClasses;
+
+    /// Paths with no photon-mapped vertex: emission seen directly or through specular vertices,
+    /// and everything when no vertex is photon-mapped.
+    pub const UNMERGED: u32 = 1;
+    /// Light reaching a photon-mapped vertex straight from the light (`L D`).
+    pub const DIRECT: u32 = 2;
+    /// Light reaching a photon-mapped vertex through specular vertices only (`L S+ D`).
+    pub const CAUSTIC: u32 = 4;
+    /// Light reaching a photon-mapped vertex after another diffuse vertex (`L ... D D`).
+    pub const INDIRECT: u32 = 8;
+    pub const ALL: u32 = UNMERGED | DIRECT | CAUSTIC | INDIRECT;
+
+    pub const CLASSES: PathClasses<'static> = PathClasses {
+        all: ALL,
+        names: &[
+            "paths without a photon-mapped vertex",
+            "direct light at photon-mapped vertices (L D)",
+            "caustics at photon-mapped vertices (L S+ D)",
+            "indirect light at photon-mapped vertices (L ... D D)",
+        ],
+    };
+}
+
+/// A path-length rule as the partition check compares them.
+pub(crate) fn depth_rule(max_depth: Option<u32>) -> crate::graph::transport::Depth {
+    use crate::graph::transport::Depth;
+    max_depth.map_or(Depth::Scene, Depth::Segments)
+}
+
 /// A mirror or dielectric surface: caustic photons need one to become caustic photons.
 pub const SPECULAR_SURFACE: SceneNeed = SceneNeed {
     name: "specular_surface",

@@ -14,14 +14,15 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::graph::pass::{
-    Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, parse_params,
+    Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, params_error,
+    parse_params,
 };
+use crate::graph::transport::{Transport, TransportCtx};
 use crate::passes::SceneResources;
 use crate::passes::hit_points::{
     DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, RadiusRule,
 };
-use crate::passes::resolve_depths;
-use crate::scene::gpu_layout::UNBOUNDED;
+use crate::passes::{depth_rule, resolve_depths};
 use crate::shader_file;
 
 const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/path_trace.wgsl");
@@ -50,8 +51,25 @@ pub const KIND: PassKind = PassKind {
 };
 
 fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
-    Ok(Box::new(PathTrace::new(parse_params(params)?)))
+    let params: PathTraceParams = parse_params(params)?;
+    let spp = params.samples_per_iteration;
+    if !(1..=MAX_SAMPLES_PER_ITERATION).contains(&spp) {
+        return Err(params_error(format!(
+            "samples_per_iteration must lie in 1..={MAX_SAMPLES_PER_ITERATION}, got {spp} \
+             (an iteration is one dispatch, which Ctrl-C cannot interrupt; more iterations cost \
+             nothing extra)"
+        )));
+    }
+    if params.max_depth == Some(0) {
+        return Err(params_error(
+            "max_depth must be at least 1 (1: emitters seen directly)".into(),
+        ));
+    }
+    Ok(Box::new(PathTrace::new(params)))
 }
+
+/// Most camera samples per pixel in one iteration.
+pub const MAX_SAMPLES_PER_ITERATION: u32 = 64;
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -91,18 +109,17 @@ pub enum MergeDepth {
     Max,
 }
 
-/// Hit-point slots per pixel for `merge_depth: max` when the path depth is unbounded.
-const MAX_MERGE_SLOTS: u32 = 16;
+/// Most hit-point slots per pixel. Photon-mapping fewer vertices than a path has keeps the
+/// partition exact (the camera drops light only at the vertices it records), so deeper
+/// vertices are simply path traced; the cap keeps `pixels x slots` buffers bounded.
+pub const MAX_MERGE_SLOTS: u32 = 16;
 
 impl MergeDepth {
     /// Hit-point slots per pixel: a diffuse vertex needs at least one segment before it and one
-    /// after it, so a path of `max_depth` segments has at most `max_depth - 1`.
+    /// after it, so a path of `max_depth` segments has at most `max_depth - 1`; and at most
+    /// `MAX_MERGE_SLOTS`.
     pub fn slots(self, max_depth: u32) -> u32 {
-        let possible = if max_depth == UNBOUNDED {
-            MAX_MERGE_SLOTS
-        } else {
-            max_depth.saturating_sub(1)
-        };
+        let possible = max_depth.saturating_sub(1).min(MAX_MERGE_SLOTS);
         match self {
             MergeDepth::Depth(d) => d.min(possible),
             MergeDepth::Max => possible,
@@ -295,6 +312,23 @@ impl Pass for PathTrace {
 
     fn samples_per_iteration(&self) -> u32 {
         self.params.samples_per_iteration
+    }
+
+    fn transport(&self, slot: &str, ctx: &TransportCtx<'_>) -> Option<Transport> {
+        use crate::passes::paths::{ALL, CAUSTIC, UNMERGED};
+        if slot != "radiance" {
+            return Some(Transport::none());
+        }
+        let merges =
+            ctx.consumed.contains("hit_points") && self.params.merge_depth != MergeDepth::Depth(0);
+        let paths = match (merges, self.params.trace_beyond) {
+            (false, _) => ALL,
+            // What photon mapping adds at the photon-mapped vertices is dropped here.
+            (true, true) => ALL & !CAUSTIC,
+            // Paths stop at their first photon-mapped vertex.
+            (true, false) => UNMERGED,
+        };
+        Some(ctx.source(paths, depth_rule(self.params.max_depth)))
     }
 
     fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {

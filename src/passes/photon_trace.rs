@@ -10,10 +10,11 @@ use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::graph::pass::{
     Counters, ExecCtx, Pass, PassKind, PrepareCtx, Recorder, SceneNeed, Size, SlotDecl,
-    parse_params,
+    params_error, parse_params,
 };
+use crate::graph::transport::{Transport, TransportCtx};
 use crate::passes::hit_points::PHOTON_HITS;
-use crate::passes::{SPECULAR_SURFACE, SceneResources, resolve_depths};
+use crate::passes::{SPECULAR_SURFACE, SceneResources, depth_rule, resolve_depths};
 use crate::shader_file;
 
 const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/photon_trace.wgsl");
@@ -49,7 +50,16 @@ pub const KIND: PassKind = PassKind {
 };
 
 fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
-    Ok(Box::new(PhotonTrace::new(parse_params(params)?)))
+    let params: PhotonTraceParams = parse_params(params)?;
+    if params.photons_per_iteration == Some(0) {
+        return Err(params_error(
+            "photons_per_iteration must be at least 1 (leave it out for the default)".into(),
+        ));
+    }
+    if params.max_depth == Some(0) {
+        return Err(params_error("max_depth must be at least 1".into()));
+    }
+    Ok(Box::new(PhotonTrace::new(params)))
 }
 
 /// Where photons are deposited.
@@ -251,6 +261,15 @@ impl Pass for PhotonTrace {
             PhotonMode::Caustic => &[SPECULAR_SURFACE],
             PhotonMode::All => &[],
         }
+    }
+
+    fn transport(&self, _slot: &str, ctx: &TransportCtx<'_>) -> Option<Transport> {
+        use crate::passes::paths::{CAUSTIC, DIRECT, INDIRECT};
+        let paths = match self.params.mode {
+            PhotonMode::Caustic => CAUSTIC,
+            PhotonMode::All => DIRECT | CAUSTIC | INDIRECT,
+        };
+        Some(ctx.source(paths, depth_rule(self.params.max_depth)))
     }
 
     fn photons_per_iteration(&self) -> u64 {

@@ -6,13 +6,15 @@
 
 use crate::graph::pass::{IMAGE, Pass, PassKind, Size, SlotDecl};
 use crate::passes::hit_points::{DEPOSITS, HIT_POINT_RADII, HIT_POINTS};
-use crate::passes::sppm::{Merge, MergeParams, PARAMS_LAYOUT, SHADER};
+use crate::passes::sppm::{Merge, MergeParams, PARAMS_LAYOUT, SHADER, STATS_LAYOUT};
 
 static SLOTS: &[SlotDecl] = &[
-    SlotDecl::input("hit_points", HIT_POINTS).kept(),
+    SlotDecl::input("hit_points", HIT_POINTS).kept().exclusive(),
     SlotDecl::input("deposits", DEPOSITS),
     SlotDecl::output("radiance", IMAGE, Size::Pixels),
-    SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points")).persistent(),
+    SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points"))
+        .persistent()
+        .required(),
 ];
 
 pub const KIND: PassKind = PassKind {
@@ -20,7 +22,7 @@ pub const KIND: PassKind = PassKind {
     description: "progressive photon mapping: hit points of one camera pass, photon passes repeat",
     slots: SLOTS,
     shaders: &[SHADER],
-    layouts: &[PARAMS_LAYOUT],
+    layouts: &[PARAMS_LAYOUT, STATS_LAYOUT],
     construct,
 };
 

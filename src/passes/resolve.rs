@@ -21,7 +21,10 @@ const WORKGROUP: u32 = 8;
 static SLOTS: &[SlotDecl] = &[
     SlotDecl::input("pt", IMAGE),
     SlotDecl::input("caustic", IMAGE).optional(),
-    SlotDecl::input("hit_points", HIT_POINTS).optional(),
+    // Only for the radius AOV: it must not make the camera pass record hit points.
+    SlotDecl::input("hit_points", HIT_POINTS)
+        .optional()
+        .observe_only(),
     SlotDecl::output("combined", IMAGE, Size::Pixels),
     SlotDecl::output("radius", IMAGE, Size::Pixels),
 ];

@@ -24,19 +24,38 @@ use crate::shader_file;
 
 pub(crate) const SHADER: ShaderFile = shader_file!("shaders/passes/merge.wgsl");
 const WORKGROUP: u32 = 8;
-/// Bytes of one slot's N, tau and photon total (`SlotStats` in merge.wgsl).
-const SLOT_STATS_BYTES: u64 = 32;
+/// One slot's N, tau and photon total (`SlotStats` in merge.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuSlotStats {
+    tau_per_r2: [f32; 3],
+    n: f32,
+    tau_carry: [f32; 3],
+    discarded: u32,
+    photons_low: u32,
+    photons_high: u32,
+    _pad: [u32; 2],
+}
+
+const SLOT_STATS_BYTES: u64 = std::mem::size_of::<GpuSlotStats>() as u64;
 
 static SLOTS: &[SlotDecl] = &[
-    SlotDecl::input("hit_points", HIT_POINTS),
+    SlotDecl::input("hit_points", HIT_POINTS).exclusive(),
     SlotDecl::input("deposits", DEPOSITS),
     SlotDecl::output("radiance", IMAGE, Size::Pixels),
-    SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points")).persistent(),
+    SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points"))
+        .persistent()
+        .required(),
 ];
 
 /// `GpuParams` against `MergeParams` in the shader.
 pub(crate) const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "MergeParams" in SHADER, {
-    alpha, inv_iterations, slots_per_pixel, width, height
+    alpha, inv_iterations, slots_per_pixel, width, height, one
+});
+
+/// `GpuSlotStats` against `SlotStats` in the shader.
+pub(crate) const STATS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuSlotStats => "SlotStats" in SHADER, {
+    tau_per_r2, n, tau_carry, discarded, photons_low, photons_high
 });
 
 pub const KIND: PassKind = PassKind {
@@ -44,7 +63,7 @@ pub const KIND: PassKind = PassKind {
     description: "stochastic progressive photon mapping: per-pixel N, R, tau over iterations",
     slots: SLOTS,
     shaders: &[SHADER],
-    layouts: &[PARAMS_LAYOUT],
+    layouts: &[PARAMS_LAYOUT, STATS_LAYOUT],
     construct,
 };
 
@@ -74,8 +93,13 @@ impl MergeParams {
             .is_some_and(|r| !(r.is_finite() && r > 0.0))
         {
             Some("initial_radius must be a positive finite number".to_string())
-        } else if !(params.radius_pixels.is_finite() && params.radius_pixels > 0.0) {
-            Some("radius_pixels must be a positive finite number".to_string())
+        } else if !(params.radius_pixels > 0.0 && params.radius_pixels <= MAX_RADIUS_PIXELS) {
+            // A radius of many pixels gathers every photon into every hit point: hours per
+            // iteration, and a blurred caustic.
+            Some(format!(
+                "radius_pixels must lie in (0, {MAX_RADIUS_PIXELS}], got {}",
+                params.radius_pixels
+            ))
         } else {
             None
         };
@@ -85,6 +109,9 @@ impl MergeParams {
         }
     }
 }
+
+/// Largest first search radius in pixel footprints.
+pub const MAX_RADIUS_PIXELS: f32 = 64.0;
 
 impl Default for MergeParams {
     fn default() -> Self {
@@ -104,7 +131,9 @@ struct GpuParams {
     slots_per_pixel: u32,
     width: u32,
     height: u32,
-    _pad: [u32; 3],
+    /// 1.0: keeps the shader compiler from folding the compensated sum away (merge.wgsl).
+    one: f32,
+    _pad: [u32; 2],
 }
 
 struct Prepared {
@@ -139,19 +168,19 @@ impl Merge {
         let Some(p) = &self.prepared else {
             return Ok(Vec::new());
         };
-        let words: Vec<[u32; 8]> = gpu.read_pod(&p.stats, p.slots as usize)?;
+        let stats: Vec<GpuSlotStats> = gpu.read_pod(&p.stats, p.slots as usize)?;
         let radii = read_radii(gpu, &p.radii)?;
-        Ok(words
+        Ok(stats
             .iter()
             .zip(&radii)
-            .map(|(w, radius)| {
+            .map(|(s, radius)| {
                 // The kernel keeps tau / R^2 (merge.wgsl says why).
                 let r2 = radius * radius;
                 SlotStats {
-                    tau: [0, 1, 2].map(|c| f32::from_bits(w[c]) * r2),
-                    n: f32::from_bits(w[3]),
-                    photons: (w[5] as u64) << 32 | w[4] as u64,
-                    discarded: w[6],
+                    tau: s.tau_per_r2.map(|t| t * r2),
+                    n: s.n,
+                    photons: (s.photons_high as u64) << 32 | s.photons_low as u64,
+                    discarded: s.discarded,
                 }
             })
             .collect())
@@ -253,7 +282,8 @@ impl Pass for Merge {
             slots_per_pixel: p.slots_per_pixel,
             width: p.width,
             height: p.height,
-            _pad: [0; 3],
+            one: 1.0,
+            _pad: [0; 2],
         };
         ctx.gpu
             .queue
