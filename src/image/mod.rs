@@ -306,3 +306,35 @@ fn linear_to_srgb8(x: f32) -> u8 {
     };
     (s * 255.0 + 0.5) as u8
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A write that fails halfway leaves the old file as it was and no temporary file behind;
+    /// one that succeeds replaces it whole.
+    #[test]
+    fn atomic_writes_replace_whole_files_or_nothing() {
+        let dir = std::env::temp_dir().join(format!("hppm-atomic-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("errors.csv");
+        std::fs::write(&path, "old").expect("old file");
+        let failed = write_atomically(&path, |temp| {
+            std::fs::write(temp, "half").expect("partial write");
+            Err(Error::Other("disk full".into()))
+        });
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read_to_string(&path).expect("read"), "old");
+        let left: Vec<_> = std::fs::read_dir(&dir).expect("list").flatten().collect();
+        assert_eq!(left.len(), 1, "a temporary file was left behind");
+        write_file_atomically(&path, b"new").expect("write");
+        assert_eq!(std::fs::read_to_string(&path).expect("read"), "new");
+        // Writers that pick the format by extension see the real one.
+        assert!(
+            temp_path(Path::new("a/errors.png"))
+                .to_string_lossy()
+                .ends_with(".png")
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
