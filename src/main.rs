@@ -333,6 +333,9 @@ fn info() -> Result<(), Error> {
     for (i, (info, features, limits)) in adapters.iter().enumerate() {
         println!("{i}: {}", hppm::gpu::adapter_label(info));
         println!("   driver: {} {}", info.driver, info.driver_info);
+        if let Some(warning) = hppm::gpu::old_lavapipe_warning(info) {
+            println!("   {warning}");
+        }
         let has = |f: wgpu::Features| if features.contains(f) { "yes" } else { "no" };
         println!(
             "   float32 atomics: {}   timestamp queries: {}   subgroups: {}",

@@ -117,3 +117,47 @@ pub(super) fn choose(choice: Option<&str>) -> Result<wgpu::Adapter, GpuError> {
         }),
     }
 }
+
+/// Mesa's version in an adapter's driver string ("llvmpipe Mesa 22.3.6 (LLVM 15.0.6)").
+pub fn mesa_version(info: &wgpu::AdapterInfo) -> Option<(u32, u32)> {
+    mesa_version_in(&format!("{} {}", info.driver, info.driver_info))
+}
+
+fn mesa_version_in(text: &str) -> Option<(u32, u32)> {
+    let after = text.split("Mesa ").nth(1)?;
+    let mut parts = after.split(|c: char| !c.is_ascii_digit());
+    let major = parts.next()?.parse().ok()?;
+    let minor = parts.next()?.parse().ok()?;
+    Some((major, minor))
+}
+
+/// Mesa whose lavapipe is much faster for hppm's kernels than older ones.
+pub const FAST_LAVAPIPE_MESA: u32 = 25;
+
+/// A warning for lavapipe from a Mesa older than `FAST_LAVAPIPE_MESA`.
+pub fn old_lavapipe_warning(info: &wgpu::AdapterInfo) -> Option<String> {
+    let software = info.device_type == wgpu::DeviceType::Cpu;
+    let (major, minor) = mesa_version(info)?;
+    (software && info.backend == wgpu::Backend::Vulkan && major < FAST_LAVAPIPE_MESA).then(|| {
+        format!(
+            "warning: lavapipe from Mesa {major}.{minor}: Mesa {FAST_LAVAPIPE_MESA} or newer runs \
+             hppm about 2.7x faster (BENCHMARKS.md); on Debian 12 it is in bookworm-backports \
+             (`.ci/install-lavapipe` installs it)"
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn mesa_versions_are_read_from_driver_strings() {
+        use super::mesa_version_in as v;
+        assert_eq!(v("llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"), Some((22, 3)));
+        assert_eq!(
+            v(" 4.5 (Core Profile) Mesa 25.0.7-2~bpo12+1"),
+            Some((25, 0))
+        );
+        assert_eq!(v("NVIDIA 550.54"), None);
+        assert_eq!(v("Mesa "), None);
+    }
+}

@@ -16,7 +16,7 @@ pub mod radix_sort;
 pub mod shaders;
 pub mod timer;
 
-pub use adapter::{adapter_label, list_adapters};
+pub use adapter::{adapter_label, list_adapters, mesa_version, old_lavapipe_warning};
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
