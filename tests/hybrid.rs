@@ -165,8 +165,8 @@ fn hybrid_renders_the_point_light_caustic_that_path_tracing_misses() {
     );
 }
 
-/// Ray offsets, initial radii (pixel footprints), the radius floor and the aiming sphere are all
-/// relative to the scene: scaled by 1e3 or 1e-3 the hybrid renders the same image (same seed,
+/// Ray offsets (relative to each hit point's magnitude), initial radii (pixel footprints), the
+/// radius floor and the aiming sphere are all relative to the scene: scaled by 1e3 or 1e-3 the hybrid renders the same image (same seed,
 /// so only float rounding differs; a photon near a radius boundary may land on the other side).
 #[test]
 fn hybrid_is_scale_invariant() {

@@ -139,8 +139,8 @@ fn converges_to_mitsuba_on_cornell_glass_sphere() {
     );
 }
 
-/// Ray offsets are relative to the scene's extent: scaling the whole scene by 1e3 or 1e-3 gives
-/// the same image (same seed, so only float rounding differs).
+/// Ray offsets are error bounds relative to each hit point's magnitude: scaling the whole scene by
+/// 1e3 or 1e-3 gives the same image (same seed, so only float rounding differs).
 #[test]
 fn glass_scene_is_scale_invariant() {
     let gpu = gpu();

@@ -193,7 +193,6 @@ fn cpu_caustic_deposits(
     photons: u32,
 ) -> Vec<(u32, [f64; 3])> {
     let bvh = build_sah(&scene_boxes(scene), 4);
-    let epsilon = GpuScene::new(scene, 32, 32).uniform.epsilon;
     let light = scene.point_lights[0];
     let seed = ((PHOTON_SEED ^ (PHOTON_SEED >> 32)) as u32) ^ 0x9e37_79b9;
     let flux = light.intensity * (4.0 * std::f32::consts::PI) * (1.0 / photons as f32);
@@ -225,7 +224,11 @@ fn cpu_caustic_deposits(
                     dir = 2.0 * wi.dot(normal) * normal - wi;
                     after_specular = true;
                     let side = if dir.dot(normal) >= 0.0 { 1.0 } else { -1.0 };
-                    origin = position + side * epsilon * normal;
+                    // The shaders leave a surface by its rounding-error bound (offset_ray_origin
+                    // in shaders/common/scene.wgsl), a few roundoffs of the position's
+                    // magnitude; the model leaves it by as much.
+                    let offset = 4.0 * f32::EPSILON * position.abs().max_element();
+                    origin = position + side * offset * normal;
                 }
                 _ => {
                     if after_specular {

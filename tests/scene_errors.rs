@@ -104,6 +104,24 @@ const CASES: &[(&str, &str, usize, &[&str])] = &[
         7,
         &["sphere", "uniformly"],
     ),
+    (
+        "beyond_extent.ron",
+        "beyond_extent.ron",
+        6,
+        &["this shape", "1.0e20", "1e15", "f32"],
+    ),
+    (
+        "below_extent.ron",
+        "below_extent.ron",
+        1,
+        &["extent", "5.0e-20", "1e-15 to 1e15"],
+    ),
+    (
+        "beyond_extent.xml",
+        "beyond_extent.xml",
+        6,
+        &["this shape", "1.0e20", "1e15"],
+    ),
 ];
 
 #[test]

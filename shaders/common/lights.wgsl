@@ -1,12 +1,20 @@
 #define_import_path common::lights
 
-#import common::scene::{scene_info, lights, light_cdf, triangles, spheres, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT}
+#import common::scene::{scene_info, lights, light_cdf, triangles, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, SurfacePoint, triangle_point}
+#ifdef SPHERES
+#import common::scene::{spheres, sphere_point}
+#endif
 #import common::sampling::{sample_triangle_barycentrics, sample_uniform_sphere}
 
 struct LightSample {
     // Unit direction from the shading point to the light.
     dir: vec3<f32>,
     distance: f32,
+    // The point sampled on the light, its normal and error bound: the far end of the shadow ray
+    // (zero normal and error for a point light).
+    position: vec3<f32>,
+    normal: vec3<f32>,
+    error: vec3<f32>,
     // Radiance arriving along `dir` (area lights), or intensity / distance^2 (point lights).
     radiance: vec3<f32>,
     // Solid-angle density of this sample including the light choice; for point lights, the
@@ -31,25 +39,17 @@ fn pick_light(u: f32) -> u32 {
     return lo;
 }
 
-// A point on an area light with its front-facing normal.
-struct LightPoint {
-    position: vec3<f32>,
-    normal: vec3<f32>,
-}
-
-fn sample_area_light_point(light: Light, u: vec2<f32>) -> LightPoint {
+// A point on an area light with its front-facing normal and error bound.
+fn sample_area_light_point(light: Light, u: vec2<f32>) -> SurfacePoint {
 #ifdef SPHERES
     if light.kind == LIGHT_SPHERE {
-        let sphere = spheres[light.prim];
-        let d = sample_uniform_sphere(u);
-        let normal = select(d, -d, sphere.flip_normals != 0u);
-        return LightPoint(sphere.center + sphere.radius * d, normal);
+        // sample_uniform_sphere's direction is not exactly unit (its cosines and sines are a few
+        // ulp off, or worse): sphere_point reprojects it onto the sphere.
+        return sphere_point(spheres[light.prim], sample_uniform_sphere(u));
     }
 #endif
     let tri = triangles[light.prim];
-    let b = sample_triangle_barycentrics(u);
-    let position = tri.vertex + b.x * tri.edge_a + b.y * tri.edge_b;
-    return LightPoint(position, normalize(cross(tri.edge_a, tri.edge_b)));
+    return triangle_point(tri.vertex, tri.edge_a, tri.edge_b, sample_triangle_barycentrics(u));
 }
 
 // Solid-angle density of reaching area light `index` at distance `dist`, where the direction
@@ -76,6 +76,9 @@ fn sample_point_light(light: Light, from_point: vec3<f32>) -> LightSample {
     let dist = sqrt(dist2);
     result.dir = to_light / dist;
     result.distance = dist;
+    result.position = light.position;
+    result.normal = vec3<f32>(0.0);
+    result.error = vec3<f32>(0.0);
     result.radiance = light.radiance / dist2;
     result.pdf = light.select_prob;
     result.is_delta = true;
@@ -108,6 +111,9 @@ fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
     }
     result.dir = to_light / dist;
     result.distance = dist;
+    result.position = point.position;
+    result.normal = point.normal;
+    result.error = point.error;
     // One-sided emitters: nothing leaves the back.
     let cos_light = -dot(result.dir, point.normal);
     result.pdf = area_light_pdf(index, dist, cos_light);

@@ -9,7 +9,7 @@
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
 #import common::sampling::{INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, occluded, surface_at, offset_origin}
+#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, unoccluded, surface_at, spawn_origin}
 #import common::camera::camera_direction
 #import common::lights::{sample_light, area_light_pdf}
 #import common::bsdf::reflect_about
@@ -94,8 +94,7 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
 fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
-    let origin = surface.position + scene_info.epsilon * surface.normal;
-    let ls = sample_light(origin, u_pick, u);
+    let ls = sample_light(surface.position, u_pick, u);
     if !ls.valid {
         return vec3<f32>(0.0);
     }
@@ -104,7 +103,7 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, u32>, ra
         return vec3<f32>(0.0);
     }
     *rays += 1u;
-    if occluded(origin, ls.dir, ls.distance - 2.0 * scene_info.epsilon) {
+    if !unoccluded(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal) {
         return vec3<f32>(0.0);
     }
     var weight = 1.0;
@@ -191,7 +190,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, ray
             break;
 #endif
         }
-        path.origin = offset_origin(surface.position, surface.normal, path.dir);
+        path.origin = spawn_origin(surface, path.dir);
         if max_component(path.throughput) <= 0.0 {
             break;
         }

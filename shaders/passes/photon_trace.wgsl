@@ -14,7 +14,7 @@
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_origin}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_ray_origin, spawn_origin}
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
@@ -181,7 +181,7 @@ fn emit_photon(rng: ptr<function, u32>) -> Photon {
         photon.dir = sample_cosine_hemisphere(point.normal, u_direction);
         photon.flux = light.radiance * (PI * light.area / light.select_prob);
     }
-    photon.origin = offset_origin(point.position, point.normal, photon.dir);
+    photon.origin = offset_ray_origin(point.position, point.error, point.normal, photon.dir);
     return normalised(photon);
 }
 
@@ -250,7 +250,7 @@ fn trace_photon(start: Photon, rng: ptr<function, u32>) -> u32 {
             break;
 #endif
         }
-        photon.origin = offset_origin(surface.position, surface.normal, photon.dir);
+        photon.origin = spawn_origin(surface, photon.dir);
         if segments >= params.rr_depth {
             let survive = min(max_component(photon.flux) / initial, 0.95);
             if rng_next_f32(rng) >= survive {

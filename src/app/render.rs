@@ -76,6 +76,9 @@ impl<'a> Renderer<'a> {
         height: u32,
         seed: u64,
     ) -> Result<Self, Error> {
+        // The loaders refuse these already; a scene made or scaled in code must not render black
+        // without a word either.
+        scene.check_extent()?;
         let features = scene.features();
         let pruned = graph.prune(|need| scene_meets(&features, need))?;
         graph.check_transport(&paths::CLASSES)?;

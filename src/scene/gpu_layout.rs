@@ -21,10 +21,6 @@ pub const NO_LIGHT: u32 = u32::MAX;
 /// `max_depth` / `rr_depth` meaning "unbounded" / "never".
 pub const UNBOUNDED: u32 = u32::MAX;
 
-/// Ray offsets are this fraction of the scene's extent, so a scene scaled by 1e-3 or 1e3
-/// renders the same image.
-const RELATIVE_EPSILON: f32 = 3e-5;
-
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuTriangle {
@@ -87,7 +83,7 @@ pub struct GpuSceneUniform {
     pub camera_forward: [f32; 3],
     pub height: u32,
     pub bounds_min: [f32; 3],
-    pub epsilon: f32,
+    pub _pad_bounds: u32,
     pub bounds_max: [f32; 3],
     pub scene_radius: f32,
     pub num_triangles: u32,
@@ -161,7 +157,10 @@ fn collect_lights(scene: &Scene) -> Vec<(GpuLight, f32)> {
     };
     for (i, t) in scene.triangles.iter().enumerate() {
         let radiance = emission(t.material);
-        let area = 0.5 * (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).length();
+        // In f64: the cross product's squared length is a length to the fourth, which
+        // overflows f32 for scenes past about 1e9.
+        let [a, b, c] = t.v.map(|v| v.as_dvec3());
+        let area = (0.5 * (b - a).cross(c - a).length()) as f32;
         if radiance.max_element() > 0.0 && area > 0.0 {
             lights.push(area_light(LIGHT_TRIANGLE, i as u32, radiance, area));
         }
@@ -283,14 +282,10 @@ impl GpuScene {
 
         let (lo, hi) = scene.bounds();
         let scene_radius = 0.5 * (hi - lo).length();
-        let extent = scene_radius
-            .max(lo.abs().max_element())
-            .max(hi.abs().max_element());
         let mut uniform = camera_uniform(scene, width, height);
         uniform.bounds_min = lo.to_array();
         uniform.bounds_max = hi.to_array();
         uniform.scene_radius = scene_radius;
-        uniform.epsilon = RELATIVE_EPSILON * extent.max(f32::MIN_POSITIVE);
         uniform.num_triangles = triangles.len() as u32;
         uniform.num_spheres = spheres.len() as u32;
         uniform.num_lights = lights.len() as u32;
@@ -298,8 +293,11 @@ impl GpuScene {
         uniform.rr_depth = scene.integrator.rr_depth.unwrap_or(UNBOUNDED);
         if let Some((center, radius)) = specular_bounds(scene) {
             uniform.specular_center = center.to_array();
-            // Padded so that rounding never lets a specular surface poke out of the sphere.
-            uniform.specular_radius = radius * (1.0 + 1e-4) + uniform.epsilon;
+            // Padded so that rounding never lets a specular surface poke out of the sphere: the
+            // GPU's points on those surfaces are within a few roundoffs of their magnitude, at
+            // most |center| + radius (shaders/common/scene.wgsl, triangle_point and
+            // sphere_point), far inside 1e-4 of it.
+            uniform.specular_radius = radius + 1e-4 * (radius + center.abs().max_element());
         }
 
         Self {

@@ -686,6 +686,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                  or a zero scale)",
             ));
         }
+        let reach = camera.origin.abs().max_element() as f64;
+        if let Some(message) = super::beyond_extent("the camera", reach) {
+            return Err(self.error(node, message));
+        }
         Ok(())
     }
 
@@ -960,11 +964,16 @@ impl<'a, 'input> Reader<'a, 'input> {
                 .unwrap_or(false),
         };
         self.scene.materials.push(material);
+        let (triangles, spheres) = (self.scene.triangles.len(), self.scene.spheres.len());
         match kind.as_str() {
             "rectangle" => self.push_mesh(mesh::rectangle(), &common),
             "cube" => self.push_mesh(mesh::cube(), &common),
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
             _ => self.read_obj(&mut props, &common, node)?,
+        }
+        let reach = self.scene.reach_since(triangles, spheres);
+        if let Some(message) = super::beyond_extent("this shape", reach) {
+            return Err(self.error(node, message));
         }
         self.finish(props, node)
     }
@@ -1121,6 +1130,10 @@ impl<'a, 'input> Reader<'a, 'input> {
             None => Vec3::ONE,
         };
         self.finish(props, node)?;
+        let reach = position.abs().max_element() as f64;
+        if let Some(message) = super::beyond_extent("this point light", reach) {
+            return Err(self.error(node, message));
+        }
         self.scene.point_lights.push(PointLight {
             position,
             intensity,

@@ -181,6 +181,56 @@ impl Scene {
         (lo, hi)
     }
 
+    /// How large the scene is for f32 arithmetic: the larger of the largest coordinate
+    /// magnitude and the half-diagonal of the bounds of its shapes, point lights and camera
+    /// origin (in f64, which cannot overflow). `None` when there is nothing to render.
+    pub fn extent(&self) -> Option<f64> {
+        if self.triangles.is_empty() && self.spheres.is_empty() && self.point_lights.is_empty() {
+            return None;
+        }
+        let (lo, hi) = self.bounds();
+        let (lo, hi) = (
+            lo.as_dvec3().min(self.camera.origin.as_dvec3()),
+            hi.as_dvec3().max(self.camera.origin.as_dvec3()),
+        );
+        let largest = lo.abs().max(hi.abs()).max_element();
+        Some(largest.max(0.5 * (hi - lo).length()))
+    }
+
+    /// Refuses a scene whose [`extent`](Self::extent) is outside [`EXTENT_RANGE`], which it
+    /// could only render black or wrong. At line 1 of the file: it is the whole scene's size
+    /// (the loaders name the shape when one shape alone reaches too far).
+    pub fn check_extent(&self) -> Result<(), SceneError> {
+        let Some(extent) = self.extent() else {
+            return Ok(());
+        };
+        let (min, max) = EXTENT_RANGE;
+        if extent >= min as f64 && extent <= max as f64 {
+            return Ok(());
+        }
+        Err(SceneError::at(
+            Location::new(&self.source, 1, 1),
+            format!(
+                "the scene's extent (largest coordinate or half-diagonal, camera included) is \
+                 {extent:.1e}, outside the supported range {min:.0e} to {max:.0e}: {}",
+                EXTENT_REASON
+            ),
+        ))
+    }
+
+    /// The largest coordinate magnitude of the triangles from index `triangles` on and the
+    /// spheres from index `spheres` on (a shape a loader has just added), in f64.
+    pub(crate) fn reach_since(&self, triangles: usize, spheres: usize) -> f64 {
+        let tri = self.triangles[triangles..]
+            .iter()
+            .flat_map(|t| t.v)
+            .map(|v| v.abs().max_element() as f64);
+        let sph = self.spheres[spheres..]
+            .iter()
+            .map(|s| s.center.abs().max_element() as f64 + s.radius as f64);
+        tri.chain(sph).fold(0.0, f64::max)
+    }
+
     /// The scene uniformly scaled by `s` about the origin. Point-light intensities scale by s^2
     /// so irradiance, and hence the image, stays the same (area emission is radiance, which
     /// does not change with scale).
@@ -249,7 +299,7 @@ impl Scene {
     }
 
     /// Checks what every loader must guarantee: finite numbers, valid material indices, a
-    /// camera that looks somewhere.
+    /// camera that looks somewhere, an extent f32 can render.
     pub fn validate(&self) -> Result<(), SceneError> {
         let fail = |message: String| {
             Err(SceneError::File {
@@ -320,7 +370,7 @@ impl Scene {
                 return fail(format!("point light {i} has a non-finite number"));
             }
         }
-        Ok(())
+        self.check_extent()
     }
 }
 
@@ -355,6 +405,30 @@ pub fn similarity_scale(m: glam::Mat4) -> Option<f32> {
         && columns[1].dot(columns[2]).abs() <= tolerance
         && columns[2].dot(columns[0]).abs() <= tolerance;
     (scale > 0.0 && scale.is_finite() && uniform && orthogonal).then_some(scale)
+}
+
+/// The scene extents ([`Scene::extent`]) the loaders and the renderer accept. Rendering in f32
+/// was measured to hold from an extent of about 4e-18 to 4e18 (the Cornell box scaled by 1e-18
+/// to 1e18 renders the unscaled image, through every graph; tests/offsets.rs): beyond, squared
+/// distances and areas overflow f32 (squares past 3.4e38) or sink into denormals (below
+/// 1.2e-38) and the image goes black. Three orders of magnitude are kept from both ends, also
+/// for GPUs that flush denormals to zero (a photon's flux is an area over the photon count).
+pub const EXTENT_RANGE: (f32, f32) = (1e-15, 1e15);
+
+/// Why scenes are limited to [`EXTENT_RANGE`], for the messages.
+pub(crate) const EXTENT_REASON: &str = "rendering is in f32, whose squared distances and areas \
+    overflow near 1e19 and underflow near 1e-19; scale the scene";
+
+/// The message for a shape (or light, or camera) of the loader's that reaches `reach` from the
+/// origin, if that is beyond [`EXTENT_RANGE`].
+pub(crate) fn beyond_extent(what: &str, reach: f64) -> Option<String> {
+    let max = EXTENT_RANGE.1;
+    (reach.is_finite() && reach > max as f64).then(|| {
+        format!(
+            "{what} reaches {reach:.1e} from the origin, beyond the supported scene extent \
+             {max:.0e}: {EXTENT_REASON}"
+        )
+    })
 }
 
 /// Largest film side any loader accepts (and `--size`), a sanity bound against typos.

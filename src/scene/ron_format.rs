@@ -281,8 +281,18 @@ impl<'a> Builder<'a> {
             spheres: Vec::new(),
             point_lights: Vec::new(),
         };
+        if let Some(message) =
+            super::beyond_extent("the camera", scene.camera.origin.abs().max_element() as f64)
+        {
+            return Err(self.at(self.field("camera"), message));
+        }
         for (i, shape) in file.shapes.iter().enumerate() {
+            let (triangles, spheres) = (scene.triangles.len(), scene.spheres.len());
             self.add_shape(&mut scene, &file.materials, i, shape)?;
+            let reach = scene.reach_since(triangles, spheres);
+            if let Some(message) = super::beyond_extent("this shape", reach) {
+                return Err(self.at(self.element("shapes", i), message));
+            }
         }
         for (i, light) in file.point_lights.iter().enumerate() {
             let intensity = Vec3::from(light.intensity);
@@ -292,8 +302,13 @@ impl<'a> Builder<'a> {
                     "point light intensity must not be negative",
                 ));
             }
+            let position = Vec3::from(light.position);
+            let reach = position.abs().max_element() as f64;
+            if let Some(message) = super::beyond_extent("this point light", reach) {
+                return Err(self.at(self.element("point_lights", i), message));
+            }
             scene.point_lights.push(PointLight {
-                position: light.position.into(),
+                position,
                 intensity,
             });
         }
