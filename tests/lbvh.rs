@@ -1,7 +1,7 @@
 //! The GPU hit-point BVH (`hit_point_bvh_lbvh`) and the radix sort under it, on lavapipe: the
 //! sort against a stable CPU sort, the tree's structure and range queries against brute force,
-//! refit-only against the same checks after radii shrink, and whole renders against the CPU SAH
-//! builder's.
+//! refit-only against the same checks after radii shrink, every internal box against the exact
+//! union of its leaves', and whole renders against the CPU SAH builder's.
 
 mod common;
 
@@ -390,6 +390,168 @@ fn refit_only_keeps_the_shape_and_follows_shrinking_radii() {
     h.run(&mut never, 0, 1);
     h.run(&mut never, 1, 1);
     assert_eq!(never.builds(), BuildCounts { full: 2, refit: 0 });
+}
+
+// ---------------------------------------------------------------------------------------------
+// Exact bounds: each internal box is the union of its leaves', bit for bit.
+
+/// `FAR` in shaders/passes/lbvh.wgsl: the empty box is (FAR, -FAR).
+const FAR: f32 = 3.0e38;
+
+/// f32 bits in an order where unsigned comparison is float comparison, as the refit's atomics
+/// combine them, so that the union below is the one the GPU must give to the bit.
+fn ordered(x: f32) -> u32 {
+    let bits = x.to_bits();
+    if bits & 0x8000_0000 != 0 {
+        !bits
+    } else {
+        bits | 0x8000_0000
+    }
+}
+
+/// The box of node `i` as ordered words (lo, hi), after checking that every internal node
+/// below it holds exactly the union of its children's boxes, so of its leaves'.
+fn exact_union(name: &str, nodes: &[BvhNode], i: usize) -> ([u32; 3], [u32; 3]) {
+    let node = &nodes[i];
+    let lo = node.min.map(ordered);
+    let hi = node.max.map(ordered);
+    if node.count > 0 {
+        return (lo, hi);
+    }
+    let mut union = ([ordered(FAR); 3], [ordered(-FAR); 3]);
+    for child in [node.left_or_first as usize, node.left_or_first as usize + 1] {
+        let (child_lo, child_hi) = exact_union(name, nodes, child);
+        for a in 0..3 {
+            union.0[a] = union.0[a].min(child_lo[a]);
+            union.1[a] = union.1[a].max(child_hi[a]);
+        }
+    }
+    assert_eq!(
+        (lo, hi),
+        union,
+        "{name}: node {i} holds ({:?}, {:?}), its leaves' union is ({:?}, {:?})",
+        node.min,
+        node.max,
+        union.0.map(from_ordered),
+        union.1.map(from_ordered)
+    );
+    (lo, hi)
+}
+
+fn from_ordered(word: u32) -> f32 {
+    f32::from_bits(if word & 0x8000_0000 != 0 {
+        word & 0x7fff_ffff
+    } else {
+        !word
+    })
+}
+
+fn check_exact(name: &str, nodes: &[BvhNode], points: &[GpuHitPoint]) {
+    check_structure(name, nodes, points);
+    if !nodes.is_empty() {
+        exact_union(name, nodes, 0);
+    }
+}
+
+/// Radii as a shuffled sequence of distinct values, so which leaf widens an ancestor, and in
+/// which order the leaves arrive there, is unrelated to their place in the tree.
+fn shuffled(rng: &mut Rng, mut values: Vec<f32>) -> Vec<f32> {
+    for i in (1..values.len()).rev() {
+        values.swap(i, rng.next_u32() as usize % (i + 1));
+    }
+    values
+}
+
+#[test]
+fn refit_gives_every_node_exactly_the_union_of_its_leaves() {
+    let gpu = gpu();
+    let (scene, lo, hi) = scene_and_bounds();
+    let h = PassHarness::new(&gpu, &scene, (32, 32), gpu.has_float_atomics());
+    let extent = (hi - lo).max_element();
+    let mut rng = Rng(23);
+    let mut cases: Vec<(&str, Vec<GpuHitPoint>)> = Vec::new();
+
+    // One Morton code: every invocation climbs the same spine of ancestors, from many
+    // workgroups at once, and a leaf keeps climbing while its radius is the largest yet.
+    let centre = lo.lerp(hi, 0.6);
+    let radii = shuffled(
+        &mut rng,
+        (0..40_000)
+            .map(|i| 0.01 * extent * (1.0 + i as f32 * 1e-4))
+            .collect(),
+    );
+    let coincident = radii.iter().map(|&r| hit_point(centre, r)).collect();
+    cases.push(("coincident, shuffled radii", coincident));
+
+    // Radii over four decades, a quarter of the slots empty: some deep leaves must widen the
+    // root, and most stop low.
+    let mut spread: Vec<GpuHitPoint> = (0..100_000)
+        .map(|_| hit_point(rng.in_box(lo, hi), extent * rng.log_uniform(1e-5, 0.1)))
+        .collect();
+    spread
+        .iter_mut()
+        .step_by(4)
+        .for_each(|hp| hp.pixel = NO_PIXEL);
+    cases.push(("log-uniform radii", spread));
+
+    // On a line along x: the y and z words of an ancestor are widened only by its largest
+    // radius, the x words by its end points, so a leaf often changes some words and not others.
+    let line = (0..30_000)
+        .map(|_| {
+            let mut p = centre;
+            p.x = lo.x + (hi.x - lo.x) * rng.unit();
+            hit_point(p, 0.001 * extent * (1.0 + 20.0 * rng.unit()))
+        })
+        .collect();
+    cases.push(("on a line", line));
+
+    // Below and around one workgroup, and the single leaf, which is the root.
+    for n in [1, 2, 3, 255, 257] {
+        let small = (0..n)
+            .map(|_| hit_point(rng.in_box(lo, hi), 0.05 * extent * (0.1 + rng.unit())))
+            .collect();
+        cases.push(("small", small));
+    }
+
+    for (name, points) in &cases {
+        // Each build may see another interleaving of the workgroups.
+        for attempt in 0..3 {
+            let nodes = build_on_gpu(&h, points);
+            let n = points.len();
+            check_exact(&format!("{name} ({n}), build {attempt}"), &nodes, points);
+        }
+    }
+
+    // Refit-only, radii shrinking for some slots and growing for others: every box must be
+    // recomputed from the empty box, not widened from the last iteration's.
+    let spread = cases
+        .iter()
+        .position(|(name, _)| *name == "log-uniform radii");
+    let mut points = cases.swap_remove(spread.expect("case")).1;
+    let hit_points = hit_point_resource(&gpu, &points);
+    let no_photons = photon_hits_resource(&gpu, &[]);
+    let inputs = [("hit_points", &hit_points), ("photon_hits", &no_photons)];
+    let kept = Wiring {
+        kept_inputs: vec!["hit_points"],
+        ..Default::default()
+    };
+    let mut bvh = HitPointBvhLbvh::new(LbvhParams::default());
+    let tree = h.prepare_wired(&LBVH, &mut bvh, &inputs, &kept)["tree"].clone();
+    h.run(&mut bvh, 0, 1);
+    check_exact("refit-only, built", &read_tree(&gpu, &tree), &points);
+    for iteration in 1..4 {
+        for hp in points.iter_mut() {
+            hp.radius *= 0.2 + 1.6 * rng.unit();
+        }
+        write_hit_points(&gpu, &hit_points, &points);
+        h.run(&mut bvh, iteration, 1);
+        check_exact(
+            &format!("refit-only, iteration {iteration}"),
+            &read_tree(&gpu, &tree),
+            &points,
+        );
+    }
+    assert_eq!(bvh.builds(), BuildCounts { full: 1, refit: 3 });
 }
 
 #[test]

@@ -2,8 +2,9 @@
 // "Fast BVH Construction on GPUs": sort by Morton code; hierarchy after Karras 2012,
 // "Maximizing Parallelism in the Construction of BVHs, Octrees, and k-d Trees"), written in the
 // layout photon_trace.wgsl traverses. Driven by src/passes/hit_point_bvh_lbvh.rs:
-//   morton_codes, radix sort (radix_sort.wgsl), emit_hierarchy, then refit; while the hit
-//   points keep their positions only refit runs again, with the current radii.
+//   morton_codes, radix sort (radix_sort.wgsl), emit_hierarchy, then the bounds in three
+//   dispatches (reset_bounds, refit, finish_bounds); while the hit points keep their positions
+//   only those three run again, with the current radii.
 //
 // Every slot of the HitPoints buffer gets a leaf, so the tree has 2n - 1 nodes for n slots and
 // its shape depends only on n and the keys. A slot without a hit point (pixel NO_PIXEL, or no
@@ -37,9 +38,10 @@ struct LbvhParams {
     pad_c: u32,
 }
 
-// HitPointNode with the bounds as atomic words: refit reads boxes that invocations of other
-// workgroups wrote, and WGSL gives no ordering across workgroups except through atomics. The
-// layout (32 bytes) is that of HitPointNode.
+// HitPointNode with the bounds as atomic words. From reset_bounds to finish_bounds an internal
+// node's words hold ordered bits (see ordered_bits), which refit's invocations combine with
+// atomicMin/atomicMax; otherwise they hold f32 bits. The layout (32 bytes) is that of
+// HitPointNode, so the gather reads the same buffer as a HitPointTree.
 struct AtomicNode {
     lo: array<atomic<u32>, 3>,
     left_or_first: u32,
@@ -70,8 +72,6 @@ struct Box {
 // Node slot and parent (internal node index) of leaf k at k, of internal node i at count + i.
 @group(1) @binding(5) var<storage, read_write> node_slots: array<u32>;
 @group(1) @binding(6) var<storage, read_write> parents: array<u32>;
-// Children of internal node i that have finished their bounds.
-@group(1) @binding(7) var<storage, read_write> visits: array<atomic<u32>>;
 
 fn has_hit_point(slot: u32) -> bool {
     return hit_points.points[slot].pixel != NO_PIXEL && hit_points.points[slot].radius > 0.0;
@@ -213,29 +213,74 @@ fn store_box(slot: u32, b: Box) {
     atomicStore(&tree.nodes[slot].hi[2], bitcast<u32>(b.hi.z));
 }
 
-fn load_box(slot: u32) -> Box {
-    let lo = vec3<u32>(
-        atomicLoad(&tree.nodes[slot].lo[0]),
-        atomicLoad(&tree.nodes[slot].lo[1]),
-        atomicLoad(&tree.nodes[slot].lo[2]),
-    );
-    let hi = vec3<u32>(
-        atomicLoad(&tree.nodes[slot].hi[0]),
-        atomicLoad(&tree.nodes[slot].hi[1]),
-        atomicLoad(&tree.nodes[slot].hi[2]),
-    );
-    return Box(bitcast<vec3<f32>>(lo), bitcast<vec3<f32>>(hi));
+// f32 bits to a u32 with the same order (for all but NaNs; -0 sorts below +0): negatives have
+// the sign bit set and compare reversed as magnitudes, so all their bits flip; non-negatives
+// only get the sign bit, which puts them above every negative. Unsigned atomicMin/atomicMax on
+// these words are then min/max of the floats, which WGSL has no atomics for.
+fn ordered_bits(x: f32) -> u32 {
+    let bits = bitcast<u32>(x);
+    return select(bits | 0x80000000u, ~bits, (bits & 0x80000000u) != 0u);
 }
 
-// One invocation per leaf: writes the leaf's box, then climbs. At each internal node the first
-// child to arrive stops and the second, whose sibling's box is then written, stores the union,
-// so every node is computed once, after both its children (Karras 2012, section 4).
-// Caveat: Karras orders the sibling's box before the counter with a device-wide fence; WGSL has
-// none outside control barriers, and its atomics are relaxed. Here boxes and counters are all
-// atomics (coherent, never served stale from a non-coherent cache), and the ordering between a
-// box's stores and the counter's increment rests on the device not reordering one invocation's
-// atomics to different words: true on lavapipe, where the tests run, but not promised by the
-// WGSL memory model.
+fn from_ordered_bits(word: u32) -> f32 {
+    return bitcast<f32>(select(~word, word & 0x7fffffffu, (word & 0x80000000u) != 0u));
+}
+
+// The slot of internal node i (the root, internal node 0, is slot 0).
+fn internal_slot(node: u32) -> u32 {
+    return node_slots[params.count + node];
+}
+
+// One invocation per internal node: the empty box in ordered bits, which every union starts
+// from. Its own dispatch, because WebGPU orders whole dispatches (every store of one is
+// visible to the next) and nothing finer across workgroups.
+@compute @workgroup_size(256)
+fn reset_bounds(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let node = flat_invocation(group, groups, local);
+    if node + 1u >= params.count {
+        return;
+    }
+    let slot = internal_slot(node);
+    let lo = ordered_bits(FAR);
+    let hi = ordered_bits(-FAR);
+    for (var a = 0u; a < 3u; a++) {
+        atomicStore(&tree.nodes[slot].lo[a], lo);
+        atomicStore(&tree.nodes[slot].hi[a], hi);
+    }
+}
+
+// One invocation per leaf: writes the leaf's box (as f32; nothing else writes a leaf), then
+// climbs towards the root, folding the box into each ancestor's ordered words with atomicMin
+// on the 3 lo words and atomicMax on the 3 hi words.
+//
+// Why this is exact under WGSL's memory model, where atomics are relaxed and one invocation's
+// accesses to different words may be seen in any order by another: no invocation reads a value
+// another one wrote, except through a read-modify-write. The RMWs on one word are totally
+// ordered (the word's modification order) and each reads the value the previous one left, so a
+// word ends as the min (max) of its reset value and the operands of all RMWs on it, whatever
+// the interleaving. Every operand is the box of a leaf below the node, so what remains to show is that
+// every valid leaf below it is bounded by the reset value or some operand, despite the early
+// stop: an invocation stops climbing at the first node where none of its 6 RMWs changed its
+// word (each read a value at least as tight as its operand).
+//
+// Claim, per word w and internal node N: for each valid leaf L below N, the reset value or
+// the operand of some RMW on N.w is at least as tight as L.w. At L's parent, L's own RMW is
+// one. From N to its parent P: if the reset value is at least as tight as L.w, it is P's
+// reset value too. Otherwise let m be the tightest operand on N.w (at least as tight as L.w
+// by the claim, tighter than the reset value) and R the first RMW in N.w's modification order
+// with operand m. The reset value and every earlier operand are looser than m, so R read a
+// looser value and changed N.w, so R's invocation did not stop at N: it made an RMW with
+// operand m on P.w. So the early stop only drops operands that another invocation carries on,
+// and after the dispatch each word is exactly the min (max) over the reset value and the
+// valid leaves below it.
+//
+// Leaves without a hit point carry the reset values themselves (the empty box), which change
+// nothing, so they do not climb. No invocation waits for another, so nothing rests on
+// forward progress between workgroups either.
 @compute @workgroup_size(256)
 fn refit(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -253,18 +298,46 @@ fn refit(
         store_box(0u, leaf_box(0u));
         return;
     }
-    store_box(node_slots[leaf], leaf_box(values[leaf]));
+    let slot = values[leaf];
+    let b = leaf_box(slot);
+    store_box(node_slots[leaf], b);
+    if !has_hit_point(slot) {
+        return;
+    }
+    let lo = vec3<u32>(ordered_bits(b.lo.x), ordered_bits(b.lo.y), ordered_bits(b.lo.z));
+    let hi = vec3<u32>(ordered_bits(b.hi.x), ordered_bits(b.hi.y), ordered_bits(b.hi.z));
     var node = parents[leaf];
     loop {
-        if atomicAdd(&visits[node], 1u) == 0u {
-            return;
+        let at = internal_slot(node);
+        var changed = false;
+        for (var a = 0u; a < 3u; a++) {
+            changed = changed | (atomicMin(&tree.nodes[at].lo[a], lo[a]) > lo[a]);
+            changed = changed | (atomicMax(&tree.nodes[at].hi[a], hi[a]) < hi[a]);
         }
-        let left = load_box(2u * node + 1u);
-        let right = load_box(2u * node + 2u);
-        store_box(node_slots[params.count + node], Box(min(left.lo, right.lo), max(left.hi, right.hi)));
-        if node == 0u {
+        if !changed || node == 0u {
             return;
         }
         node = parents[params.count + node];
+    }
+}
+
+// One invocation per internal node, in its own dispatch after refit (so after all its RMWs):
+// the ordered words back to f32, the layout the gather reads.
+@compute @workgroup_size(256)
+fn finish_bounds(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let node = flat_invocation(group, groups, local);
+    if node + 1u >= params.count {
+        return;
+    }
+    let slot = internal_slot(node);
+    for (var a = 0u; a < 3u; a++) {
+        let lo = from_ordered_bits(atomicLoad(&tree.nodes[slot].lo[a]));
+        let hi = from_ordered_bits(atomicLoad(&tree.nodes[slot].hi[a]));
+        atomicStore(&tree.nodes[slot].lo[a], bitcast<u32>(lo));
+        atomicStore(&tree.nodes[slot].hi[a], bitcast<u32>(hi));
     }
 }

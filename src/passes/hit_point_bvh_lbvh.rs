@@ -87,7 +87,9 @@ pub struct BuildCounts {
 struct Pipelines {
     morton_codes: wgpu::ComputePipeline,
     emit_hierarchy: wgpu::ComputePipeline,
+    reset_bounds: wgpu::ComputePipeline,
     refit: wgpu::ComputePipeline,
+    finish_bounds: wgpu::ComputePipeline,
 }
 
 struct Prepared {
@@ -99,7 +101,6 @@ struct Prepared {
     count: u32,
     keys: wgpu::Buffer,
     values: wgpu::Buffer,
-    visits: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     pipelines: Pipelines,
     sort: RadixSort,
@@ -154,7 +155,9 @@ fn create_pipelines(
     Ok(Pipelines {
         morton_codes: pipeline("morton_codes")?,
         emit_hierarchy: pipeline("emit_hierarchy")?,
+        reset_bounds: pipeline("reset_bounds")?,
         refit: pipeline("refit")?,
+        finish_bounds: pipeline("finish_bounds")?,
     })
 }
 
@@ -182,11 +185,6 @@ impl Pass for HitPointBvhLbvh {
         let values = gpu.create_buffer("lbvh values", words(count as u64), storage)?;
         let node_slots = gpu.create_buffer("lbvh node slots", words(2 * count as u64), storage)?;
         let parents = gpu.create_buffer("lbvh parents", words(2 * count as u64), storage)?;
-        let visits = gpu.create_buffer(
-            "lbvh visits",
-            words(count as u64),
-            storage | wgpu::BufferUsages::COPY_DST,
-        )?;
         let params = GpuParams {
             count,
             _pad: [0; 3],
@@ -207,7 +205,6 @@ impl Pass for HitPointBvhLbvh {
                 (Access::ReadWrite, &tree.buffer),
                 (Access::ReadWrite, &node_slots),
                 (Access::ReadWrite, &parents),
-                (Access::ReadWrite, &visits),
             ],
         );
         let pipelines = create_pipelines(&ctx, &scene.layout, &layout)?;
@@ -226,7 +223,6 @@ impl Pass for HitPointBvhLbvh {
             count,
             keys,
             values,
-            visits,
             bind_group,
             pipelines,
             sort,
@@ -245,6 +241,7 @@ impl Pass for HitPointBvhLbvh {
         };
         let scene = &p.scene;
         let per_leaf = workgroup_grid(p.count.div_ceil(WORKGROUP));
+        let per_internal = workgroup_grid((p.count - 1).div_ceil(WORKGROUP));
         if full {
             let codes = &p.pipelines.morton_codes;
             recorder.dispatch(
@@ -255,7 +252,6 @@ impl Pass for HitPointBvhLbvh {
             );
             p.sort
                 .record(ctx.gpu, recorder.encoder(), &p.keys, &p.values, p.count)?;
-            let per_internal = workgroup_grid((p.count - 1).div_ceil(WORKGROUP));
             let emit = &p.pipelines.emit_hierarchy;
             recorder.dispatch(
                 "lbvh hierarchy",
@@ -267,9 +263,20 @@ impl Pass for HitPointBvhLbvh {
         } else {
             self.builds.refit += 1;
         }
-        recorder.encoder().clear_buffer(&p.visits, 0, None);
-        let refit = &p.pipelines.refit;
-        recorder.dispatch("lbvh refit", refit, &[scene, &p.bind_group], per_leaf);
+        // Three dispatches because only whole dispatches are ordered (see refit in
+        // shaders/passes/lbvh.wgsl).
+        let bounds = [
+            ("lbvh reset bounds", &p.pipelines.reset_bounds, per_internal),
+            ("lbvh refit", &p.pipelines.refit, per_leaf),
+            (
+                "lbvh finish bounds",
+                &p.pipelines.finish_bounds,
+                per_internal,
+            ),
+        ];
+        for (label, pipeline, grid) in bounds {
+            recorder.dispatch(label, pipeline, &[scene, &p.bind_group], grid);
+        }
         p.gather.record(recorder, "hit_point_bvh_lbvh gather");
         Ok(())
     }
