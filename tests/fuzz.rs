@@ -1,9 +1,9 @@
-//! Seeded fuzzing of the two user-written inputs, graph files and scene files (issue 7): each
-//! bundled file is mutated (truncated, two tokens swapped, a value of the wrong type, a huge or
-//! non-finite number, a token dropped) and written to disk under its own extension. Every
+//! Seeded fuzzing of the user-written inputs, graph files, scene files and OBJ meshes (issue 7):
+//! each bundled file is mutated (truncated, two tokens swapped, a value of the wrong type, a huge
+//! or non-finite number, a token dropped) and written to disk under its own extension. Every
 //! mutant must either load, or fail with an error that names the mutant's file and a line
-//! (`file:line:col`); a panic fails the test. A sample of the mutants that load is rendered
-//! (tiny image, one iteration) and must give a finite image or a clear error.
+//! (`file:line:col`); a panic fails the test. Every mutant that loads is rendered (4x4, one
+//! iteration) and must give a finite image or a clear error.
 
 mod common;
 
@@ -14,9 +14,8 @@ use hppm::app::render::Renderer;
 
 /// Mutants per kind of input; the issue asks for at least 200 in all.
 const MUTANTS_PER_FILE: usize = 40;
-/// Every how many loadable mutants one is rendered (rendering compiles pipelines). Rendering all
-/// of 600 mutants per file (1,425 renders) ran clean once; CI renders a spread sample.
-const RENDER_EVERY: usize = 3;
+/// Side of the image every loadable mutant is rendered at, for one iteration.
+const RENDER_SIZE: u32 = 4;
 
 const GRAPHS: &[&str] = &[
     "graphs/pt.ron",
@@ -33,6 +32,14 @@ const SCENES: &[&str] = &[
     "tests/refs/scenes/cornell_glass_sphere/scene.xml",
     "tests/refs/scenes/point_light_caustic/scene.xml",
     "tests/refs/scenes/cornell_diffuse_obj/scene.xml",
+];
+
+/// The bundled meshes: the OBJ twin of cornell_diffuse and one that uses every OBJ form the
+/// loader accepts (groups, `vt`, `vn`, each corner form, negative indices, polygons).
+const OBJS: &[&str] = &[
+    "tests/refs/scenes/cornell_diffuse_obj/short_box.obj",
+    "tests/refs/scenes/cornell_diffuse_obj/unit_cube.obj",
+    "tests/data/scenes/fuzz_mesh.obj",
 ];
 
 /// A deterministic pseudo-random stream (no extra dependency).
@@ -189,6 +196,7 @@ fn mutants(files: &[&str], dir: &Path, seed: u64) -> Vec<(PathBuf, String)> {
 
 #[test]
 fn mutated_graph_files_load_or_name_their_file_and_line() {
+    let start = std::time::Instant::now();
     let gpu = gpu();
     let dir = Dir::new("graphs");
     let scene = load_scene("tests/refs/scenes/cornell_glass_sphere/scene.xml");
@@ -205,19 +213,20 @@ fn mutated_graph_files_load_or_name_their_file_and_line() {
             }
             Ok(graph) => {
                 loaded += 1;
-                if loaded % RENDER_EVERY == 1 {
-                    rendered += 1;
-                    render_tiny(&gpu, &scene, graph, &how);
-                }
+                rendered += render_tiny(&gpu, &scene, graph, &how) as usize;
             }
         }
     }
-    eprintln!("graph mutants: {loaded} loaded ({rendered} rendered), {failed} refused");
+    eprintln!(
+        "graph mutants: {loaded} loaded ({rendered} rendered), {failed} refused ({:.1} s)",
+        start.elapsed().as_secs_f64()
+    );
     assert!(loaded + failed >= 200 && failed > 100 && loaded > 0);
 }
 
 #[test]
 fn mutated_scene_files_load_or_name_their_file_and_line() {
+    let start = std::time::Instant::now();
     let gpu = gpu();
     let dir = Dir::new("scenes");
     // The OBJ scene refers to its meshes by relative path.
@@ -241,32 +250,101 @@ fn mutated_scene_files_load_or_name_their_file_and_line() {
             }
             Ok(scene) => {
                 loaded += 1;
-                if loaded % RENDER_EVERY == 1 {
-                    rendered += 1;
-                    render_tiny(&gpu, &scene, load_graph("graphs/hybrid.ron"), &how);
+                rendered +=
+                    render_tiny(&gpu, &scene, load_graph("graphs/hybrid.ron"), &how) as usize;
+            }
+        }
+    }
+    eprintln!(
+        "scene mutants: {loaded} loaded ({rendered} rendered), {failed} refused ({:.1} s)",
+        start.elapsed().as_secs_f64()
+    );
+    assert!(loaded + failed >= 200 && failed > 100 && loaded > 0);
+}
+
+/// Whole-file OBJ errors, which have no line to name: they must name the file.
+const WHOLE_FILE_OBJ_ERRORS: &[&str] = &["the OBJ file has no faces"];
+
+/// `message` names `file` and a line, or `file` and one of the whole-file OBJ errors.
+fn names_obj_file_and_line(message: &str, file: &Path) -> bool {
+    names_file_and_line(message, file)
+        || (message.contains(&format!("{}: ", file.display()))
+            && WHOLE_FILE_OBJ_ERRORS.iter().any(|e| message.contains(e)))
+}
+
+/// OBJ mutants, each loaded twice: as a bare `.obj` scene (default camera and point light) and as
+/// the mesh of a copy of `cornell_diffuse_obj/scene.xml`. Either way it loads (and renders
+/// finite) or the error names the mutant's file and line. Would catch: a parser panic (tobj or
+/// our line checks), an error that loses the OBJ's name or line behind the XML's, a NaN or
+/// infinite vertex reaching the GPU, a mesh the renderer cannot survive.
+#[test]
+fn mutated_obj_files_load_or_name_their_file_and_line() {
+    let start = std::time::Instant::now();
+    let gpu = gpu();
+    let dir = Dir::new("obj");
+    let xml = std::fs::read_to_string(repo_path("tests/refs/scenes/cornell_diffuse_obj/scene.xml"))
+        .expect("read scene");
+    for mesh in ["unit_cube.obj", "short_box.obj"] {
+        assert!(xml.contains(mesh), "scene.xml refers to {mesh}");
+        std::fs::copy(
+            repo_path(&format!("tests/refs/scenes/cornell_diffuse_obj/{mesh}")),
+            dir.0.join(mesh),
+        )
+        .expect("copy mesh");
+    }
+    let (mut loaded, mut failed, mut rendered) = (0, 0, 0);
+    for (k, (path, how)) in mutants(OBJS, &dir.0, 13).into_iter().enumerate() {
+        let name = path.file_name().and_then(|n| n.to_str()).expect("name");
+        let scene_xml = dir.0.join(format!("scene_{k}.xml"));
+        std::fs::write(&scene_xml, xml.replace("short_box.obj", name)).expect("write scene");
+        for (file, what) in [(&path, "bare OBJ"), (&scene_xml, "in scene.xml")] {
+            let how = format!("{how} ({what})");
+            match hppm::scene::load(file) {
+                Err(error) => {
+                    failed += 1;
+                    let message = error.to_string();
+                    assert!(
+                        names_obj_file_and_line(&message, &path),
+                        "{how}: error without the OBJ's file and line:\n{message}"
+                    );
+                }
+                Ok(scene) => {
+                    loaded += 1;
+                    rendered +=
+                        render_tiny(&gpu, &scene, load_graph("graphs/hybrid.ron"), &how) as usize;
                 }
             }
         }
     }
-    eprintln!("scene mutants: {loaded} loaded ({rendered} rendered), {failed} refused");
-    assert!(loaded + failed >= 200 && failed > 100 && loaded > 0);
+    eprintln!(
+        "OBJ mutants ({} files x {MUTANTS_PER_FILE}, each bare and in scene.xml): {loaded} loaded \
+         ({rendered} rendered), {failed} refused ({:.1} s)",
+        OBJS.len(),
+        start.elapsed().as_secs_f64()
+    );
+    assert!(loaded + failed >= 200 && failed > 50 && loaded > 0);
 }
 
-/// One iteration at 8x8: a finite image, or an error (never a panic).
+/// One iteration at `RENDER_SIZE` squared: a finite image, or an error (never a panic). Returns
+/// whether it rendered.
 fn render_tiny(
     gpu: &hppm::gpu::GpuContext,
     scene: &hppm::scene::Scene,
     graph: hppm::graph::ValidGraph,
     how: &str,
-) {
-    match Renderer::new(gpu, scene, graph, 8, 8, 1) {
-        Err(e) => eprintln!("{how}: renderer refused: {e}"),
+) -> bool {
+    match Renderer::new(gpu, scene, graph, RENDER_SIZE, RENDER_SIZE, 1) {
+        Err(e) => {
+            eprintln!("{how}: renderer refused: {e}");
+            false
+        }
         Ok(mut r) => {
             let image = render_to(&mut r, 1);
             assert!(
                 image.pixels.iter().flatten().all(|v| v.is_finite()),
                 "{how}: NaN or Inf in the image"
             );
+            true
         }
     }
 }
@@ -281,4 +359,14 @@ fn tokens_concatenate_back_and_the_line_check_needs_a_line() {
     assert!(!names_file_and_line("/tmp/g.ron: unknown field", file));
     assert!(!names_file_and_line("/tmp/g.ron:0:1: x", file));
     assert!(!names_file_and_line("other.ron:3:7: x", file));
+    let obj = Path::new("/tmp/m.obj");
+    assert!(names_obj_file_and_line(
+        "/tmp/m.obj: the OBJ file has no faces",
+        obj
+    ));
+    assert!(!names_obj_file_and_line("/tmp/m.obj: invalid OBJ: x", obj));
+    assert!(!names_obj_file_and_line(
+        "/tmp/s.xml:60:5: the OBJ file has no faces",
+        obj
+    ));
 }
