@@ -36,6 +36,9 @@ const SEEDS: u64 = 8;
 const DIFFUSE: &str = "tests/refs/scenes/cornell_diffuse/scene.xml";
 const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const POINT_LIGHT: &str = "tests/refs/scenes/point_light_caustic/scene.xml";
+const WATER: &str = "tests/refs/scenes/water_glass/scene.xml";
+/// The water_glass reference's own noise as relMSE (../shared/refs/README.md: 314,624 spp).
+const WATER_REFERENCE_RELMSE: f64 = 1.4e-4;
 
 /// Own noise of the Mitsuba path-traced references, as relMSE (tests/refs/README.md). The
 /// estimate of `neighbour_relmse` finds 0.58x and 0.59x of these figures in the images.
@@ -546,4 +549,33 @@ fn photon_graphs_are_unbiased_on_the_point_light_caustic() {
         &renders.combined,
         "plane outside the caustic",
     );
+}
+
+/// water_glass (a drinking glass of index 1.5 holding water of index 1.33, separated by a 4 mm
+/// air gap, on a table under an area light) through the hybrid. Would catch: an energy loss or
+/// gain of a few percent of the image or the lit surfaces, and in the caustic the glass throws
+/// on the table (where an independent hybrid render's photon-mapped part is at least half the
+/// reference) the caustic dropped or counted twice: light through nested dielectrics, where an
+/// S vertex miscounted at one of the four interfaces would show.
+///
+/// It fails today, which is why it is ignored (run it with `-- --ignored`): the hybrid's image
+/// is 0.46% darker than Mitsuba's (8 seeds x 2 spp: mean -0.00160, SE 0.00027, bound 0.00121,
+/// 1.3x the bound), and `pt` is as dark (8 seeds x 8 spp: -0.78% +- 0.41%), so the loss is in
+/// what both share (the dielectric interfaces, the OBJ meshes), not in the partition. Open.
+#[test]
+#[ignore = "hppm renders water_glass 0.46% darker than Mitsuba (pt too); open, see the doc comment"]
+fn the_hybrid_is_unbiased_on_the_water_glass() {
+    let gpu = gpu();
+    let scene = load_scene(WATER);
+    let reference = reference("water_glass");
+    let regions = vec![
+        Region::all(&reference),
+        surfaces(&scene, &reference),
+        glass_caustic(&gpu, &scene, &reference),
+    ];
+    let target = Target::new("water_glass", WATER_REFERENCE_RELMSE, regions);
+    let graph = "graphs/hybrid.ron";
+    let renders = timed(graph, || render_seeds(&gpu, &scene, graph, 2, 600));
+    target.assert_unbiased(graph, &renders.combined, &["image", "surfaces", "caustic"]);
+    target.assert_faults_flagged(graph, &renders, &["image", "surfaces"], "caustic");
 }
