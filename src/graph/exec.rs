@@ -59,14 +59,16 @@ fn kept_outputs(graph: &ValidGraph, node: usize) -> HashSet<&'static str> {
         .collect()
 }
 
-/// Every output of a pass, allocated by its slot's size rule: (slot, resource, persistent).
+/// Every output of a pass, allocated by its slot's size rule; the non-persistent ones are also
+/// added to `cleared`, which the graph zeroes before every iteration.
 fn allocate_outputs(
     ctx: &PrepareCtx<'_>,
     kind: &PassKind,
     label: &str,
     pass: &dyn Pass,
-) -> Result<Vec<(&'static str, Resource, bool)>, Error> {
-    let mut outputs = Vec::new();
+    cleared: &mut Vec<Resource>,
+) -> Result<HashMap<&'static str, Resource>, Error> {
+    let mut outputs = HashMap::new();
     for slot in kind.slots.iter().filter(|s| s.dir == SlotDir::Out) {
         let len = match slot.size {
             Size::Pixels => ctx.pixels(),
@@ -75,7 +77,10 @@ fn allocate_outputs(
         };
         let label = format!("{label}.{}", slot.name);
         let resource = Resource::allocate(ctx.gpu, &label, slot.kind, len)?;
-        outputs.push((slot.name, resource, slot.persistent));
+        if !slot.persistent {
+            cleared.push(resource.clone());
+        }
+        outputs.insert(slot.name, resource);
     }
     Ok(outputs)
 }
@@ -144,12 +149,10 @@ impl PreparedGraph {
         for &node in &order {
             let ctx = context(&graph, node, &resources);
             let valid = &graph.nodes[node];
-            let outputs = allocate_outputs(&ctx, valid.kind, &valid.name, &*valid.pass)
-                .map_err(|e| in_node(valid, e))?;
-            for (slot, resource, persistent) in outputs {
-                if !persistent {
-                    cleared.push(resource.clone());
-                }
+            let outputs =
+                allocate_outputs(&ctx, valid.kind, &valid.name, &*valid.pass, &mut cleared)
+                    .map_err(|e| in_node(valid, e))?;
+            for (slot, resource) in outputs {
                 resources.insert((node, slot), resource);
             }
         }
@@ -178,11 +181,8 @@ impl PreparedGraph {
     }
 
     /// The resource of output `slot` of `node`.
-    pub fn resource(&self, node: usize, slot: &str) -> Option<&Resource> {
-        self.resources
-            .iter()
-            .find(|((n, s), _)| *n == node && *s == slot)
-            .map(|(_, r)| r)
+    pub fn resource(&self, node: usize, slot: &'static str) -> Option<&Resource> {
+        self.resources.get(&(node, slot))
     }
 
     /// The resource the graph's output slot holds.
@@ -347,14 +347,8 @@ impl Standalone {
             width: size.0,
             height: size.1,
         };
-        let mut outputs = HashMap::new();
         let mut cleared = Vec::new();
-        for (slot, resource, persistent) in allocate_outputs(&ctx, kind, kind.name, pass)? {
-            if !persistent {
-                cleared.push(resource.clone());
-            }
-            outputs.insert(slot, resource);
-        }
+        let outputs = allocate_outputs(&ctx, kind, kind.name, pass, &mut cleared)?;
         ctx.outputs = outputs.clone();
         pass.prepare(ctx)?;
         gpu.check_errors()?;
