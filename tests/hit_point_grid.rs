@@ -8,76 +8,57 @@ mod common;
 
 use std::collections::HashSet;
 
-use common::pass_harness::{hit_point_resource, photon_hits_resource_with};
+use common::pass_harness::{PassHarness, hit_point_resource, photon_hits_resource_with};
 use common::rng::Rng;
 use common::*;
 
 use glam::Vec3;
 use hppm::gpu::GpuContext;
-use hppm::gpu::shaders::ShaderLibrary;
-use hppm::graph::exec::{Standalone, Wiring};
-use hppm::graph::pass::Shared;
-use hppm::passes::SceneResources;
 use hppm::passes::hit_point_grid::{
     CELLS_PER_HIT_POINT, GRID_INFO_BYTES, GridInfo, KIND, bucket_count,
 };
 use hppm::passes::hit_points::{GpuHitPoint, GpuPhotonHit, NO_PIXEL};
 use hppm::scene::Scene;
-use hppm::scene::gpu_layout::{GpuScene, UNBOUNDED};
+use hppm::scene::gpu_layout::UNBOUNDED;
 
 const SCENE: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const SIZE: (u32, u32) = (32, 32);
 
-/// The scene on the device and the shaders composed for it, as a render shares them.
+/// The node alone on the scene's shared resources, and the scene's bounds.
 struct Harness<'a> {
-    gpu: &'a GpuContext,
-    shared: Shared,
-    shaders: ShaderLibrary,
+    pass: PassHarness<'a>,
     bounds_min: Vec3,
     bounds_max: Vec3,
 }
 
 impl<'a> Harness<'a> {
     fn new(gpu: &'a GpuContext, scene: &Scene, float_atomics: bool) -> Self {
-        let gpu_scene = GpuScene::new(scene, SIZE.0, SIZE.1);
-        let mut shared = Shared::default();
-        shared.insert(SceneResources::upload(gpu, &gpu_scene).expect("scene upload"));
+        let pass = PassHarness::new(gpu, scene, SIZE, float_atomics);
+        let uniform = pass.scene().uniform;
         Self {
-            gpu,
-            shared,
-            shaders: hppm::passes::shader_library(float_atomics, scene).expect("shaders"),
-            bounds_min: Vec3::from(gpu_scene.uniform.bounds_min),
-            bounds_max: Vec3::from(gpu_scene.uniform.bounds_max),
+            pass,
+            bounds_min: Vec3::from(uniform.bounds_min),
+            bounds_max: Vec3::from(uniform.bounds_max),
         }
     }
 
     /// Runs `hit_point_grid` alone once over `points` and the first `count` of `hits` (the
     /// rest lie in the buffer past the header's count and must be ignored).
     fn run(&self, points: &[GpuHitPoint], hits: &[GpuPhotonHit], count: u32) -> Outcome {
-        let gpu = self.gpu;
+        let gpu = self.pass.gpu;
         let hit_points = hit_point_resource(gpu, points);
         let photon_hits = photon_hits_resource_with(gpu, hits, count);
         let mut pass = (KIND.construct)("()").expect("params");
         let inputs = [("hit_points", &hit_points), ("photon_hits", &photon_hits)];
-        let run = Standalone::prepare(
-            gpu,
-            &self.shaders,
-            &self.shared,
-            SIZE,
-            &KIND,
-            &mut *pass,
-            &inputs,
-            &Wiring::default(),
-        )
-        .expect("prepare");
+        let out = self.pass.prepare(&KIND, &mut *pass, &inputs);
         // Two iterations: the second must rebuild from a grid the first left behind.
-        run.run(gpu, &mut *pass, 0, 1).expect("iteration 0");
-        run.run(gpu, &mut *pass, 1, 1).expect("iteration 1");
-        let deposits = run.output("deposits").expect("deposits");
+        self.pass.run(&mut *pass, 0, 1);
+        self.pass.run(&mut *pass, 1, 1);
+        let deposits = &out["deposits"];
         let cells: Vec<[u32; 4]> = gpu
             .read_pod(&deposits.buffer, points.len())
             .expect("deposits readback");
-        let grid = run.output("grid").expect("grid");
+        let grid = &out["grid"];
         let bytes = gpu
             .read_buffer(&grid.buffer, 0, GRID_INFO_BYTES + 4 * grid.len)
             .expect("grid readback");

@@ -214,6 +214,24 @@ fn build_on_gpu(h: &PassHarness<'_>, points: &[GpuHitPoint]) -> Vec<BvhNode> {
     read_tree(h.gpu, &tree)
 }
 
+/// Prepares `bvh` over `points` (no photon hits) as a graph wires it when the `ppm` estimator
+/// keeps the camera's hit points; returns the hit points and the tree.
+fn prepare_kept(
+    h: &PassHarness<'_>,
+    bvh: &mut HitPointBvhLbvh,
+    points: &[GpuHitPoint],
+) -> (Resource, Resource) {
+    let hit_points = hit_point_resource(h.gpu, points);
+    let no_photons = photon_hits_resource(h.gpu, &[]);
+    let inputs = [("hit_points", &hit_points), ("photon_hits", &no_photons)];
+    let kept = Wiring {
+        kept_inputs: vec!["hit_points"],
+        ..Default::default()
+    };
+    let tree = h.prepare_wired(&LBVH, bvh, &inputs, &kept)["tree"].clone();
+    (hit_points, tree)
+}
+
 fn scene_and_bounds() -> (Scene, Vec3, Vec3) {
     let scene = load_scene(SCENE);
     let (lo, hi) = scene.bounds();
@@ -355,16 +373,8 @@ fn refit_only_keeps_the_shape_and_follows_shrinking_radii() {
             hp
         })
         .collect();
-    let hit_points = hit_point_resource(&gpu, &points);
-    let no_photons = photon_hits_resource(&gpu, &[]);
-    let inputs = [("hit_points", &hit_points), ("photon_hits", &no_photons)];
-    // As a graph wires it when the `ppm` estimator keeps the camera's hit points.
-    let kept = Wiring {
-        kept_inputs: vec!["hit_points"],
-        ..Default::default()
-    };
     let mut bvh = HitPointBvhLbvh::new(LbvhParams::default());
-    let tree = h.prepare_wired(&LBVH, &mut bvh, &inputs, &kept)["tree"].clone();
+    let (hit_points, tree) = prepare_kept(&h, &mut bvh, &points);
     h.run(&mut bvh, 0, 1);
     let built = read_tree(&gpu, &tree);
     check_tree("built", &built, &points, &queries);
@@ -386,7 +396,7 @@ fn refit_only_keeps_the_shape_and_follows_shrinking_radii() {
     let mut never = HitPointBvhLbvh::new(LbvhParams {
         refit_only: RefitOnly::Never,
     });
-    h.prepare_wired(&LBVH, &mut never, &inputs, &kept);
+    prepare_kept(&h, &mut never, &points);
     h.run(&mut never, 0, 1);
     h.run(&mut never, 1, 1);
     assert_eq!(never.builds(), BuildCounts { full: 2, refit: 0 });
@@ -528,15 +538,8 @@ fn refit_gives_every_node_exactly_the_union_of_its_leaves() {
         .iter()
         .position(|(name, _)| *name == "log-uniform radii");
     let mut points = cases.swap_remove(spread.expect("case")).1;
-    let hit_points = hit_point_resource(&gpu, &points);
-    let no_photons = photon_hits_resource(&gpu, &[]);
-    let inputs = [("hit_points", &hit_points), ("photon_hits", &no_photons)];
-    let kept = Wiring {
-        kept_inputs: vec!["hit_points"],
-        ..Default::default()
-    };
     let mut bvh = HitPointBvhLbvh::new(LbvhParams::default());
-    let tree = h.prepare_wired(&LBVH, &mut bvh, &inputs, &kept)["tree"].clone();
+    let (hit_points, tree) = prepare_kept(&h, &mut bvh, &points);
     h.run(&mut bvh, 0, 1);
     check_exact("refit-only, built", &read_tree(&gpu, &tree), &points);
     for iteration in 1..4 {
