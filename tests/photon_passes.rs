@@ -16,7 +16,6 @@ use hppm::graph::pass::{ExecCtx, Pass, Recorder, Resource};
 use hppm::passes::hit_point_bvh_sah::{self, HitPointBvhSah};
 use hppm::passes::hit_points::{DEPOSITS, GpuHitPoint, NO_PIXEL, build_tree};
 use hppm::passes::photon_trace::{self, PhotonMode, PhotonTrace, PhotonTraceParams};
-use hppm::passes::sppm::read_radii;
 use hppm::passes::sppm::{self, Merge, MergeParams};
 use hppm::scene::Scene;
 use hppm::scene::bvh::{build_sah, closest_hit, scene_boxes};
@@ -576,7 +575,7 @@ fn merge_matches_the_progressive_update_in_f64() {
             h.run(&mut merge, it as u64, 0);
         }
         let stats = merge.slot_stats(&gpu).expect("stats");
-        let radii = read_radii(&gpu, &out["radii"]).expect("readback");
+        let radii: Vec<f32> = out["radii"].read(&gpu).expect("readback");
         let radiance: Vec<[f32; 4]> = gpu
             .read_pod(&out["radiance"].buffer, (width * height) as usize)
             .expect("readback");
@@ -707,7 +706,7 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
         recorder.flush().expect("flush");
     }
     let stats = merge.slot_stats(&gpu).expect("stats");
-    let gpu_radii = read_radii(&gpu, &out["radii"]).expect("readback");
+    let gpu_radii: Vec<f32> = out["radii"].read(&gpu).expect("readback");
     let radiance: Vec<[f32; 4]> = gpu
         .read_pod(&out["radiance"].buffer, count)
         .expect("readback");

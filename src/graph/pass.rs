@@ -212,6 +212,24 @@ impl Resource {
     }
 }
 
+impl Resource {
+    /// Its `len` elements read back as `T` (past the header), for passes that need them on
+    /// the CPU and for tests. `T` must be the kind's element.
+    pub fn read<T: bytemuck::Pod>(&self, gpu: &GpuContext) -> Result<Vec<T>, crate::Error> {
+        let bytes = self.len * self.kind.element_bytes;
+        if std::mem::size_of::<T>() as u64 != self.kind.element_bytes {
+            return Err(crate::Error::Other(format!(
+                "{} holds {}-byte elements, not {}",
+                self.kind.name,
+                self.kind.element_bytes,
+                std::any::type_name::<T>()
+            )));
+        }
+        let read = gpu.read_buffer(&self.buffer, self.kind.header_bytes, bytes)?;
+        Ok(bytemuck::pod_collect_to_vec(&read[..bytes as usize]))
+    }
+}
+
 /// What the render shares with every pass (the scene on the GPU, say), keyed by type, so that
 /// the graph carries it without naming it.
 #[derive(Default)]

@@ -13,8 +13,7 @@ use crate::graph::pass::{
 };
 use crate::passes::gather::{BVH_GATHER, Gather};
 use crate::passes::hit_points::{
-    DEPOSITS, HIT_POINT_TREE, HIT_POINTS, PHOTON_HITS, build_tree, read_hit_points, tree_bytes_of,
-    tree_nodes,
+    DEPOSITS, HIT_POINT_TREE, HIT_POINTS, PHOTON_HITS, build_tree, tree_bytes_of, tree_nodes,
 };
 
 static SLOTS: &[SlotDecl] = &[
@@ -82,7 +81,7 @@ impl Pass for HitPointBvhSah {
         };
         // Submit this iteration's camera pass; the readback is queued after it and waits for both.
         recorder.submit();
-        let points = read_hit_points(ctx.gpu, &p.hit_points.buffer, p.hit_points.len)?;
+        let points = p.hit_points.read(ctx.gpu)?;
         let nodes = build_tree(&points);
         // Ordered before the rest of the iteration, which is submitted after this write.
         ctx.gpu

@@ -5,8 +5,6 @@
 
 use glam::Vec3;
 
-use crate::Error;
-use crate::gpu::GpuContext;
 use crate::gpu::layout::StructLayout;
 use crate::graph::pass::ResourceKind;
 use crate::passes::gather::BVH_GATHER;
@@ -166,18 +164,6 @@ pub fn tree_nodes(slots: u64) -> u64 {
 /// Size in bytes of a tree buffer able to hold a BVH over `capacity` hit points.
 pub fn tree_bytes(capacity: u64) -> u64 {
     TREE_HEADER_BYTES + (2 * capacity.max(1) - 1) * std::mem::size_of::<BvhNode>() as u64
-}
-
-/// Reads the hit points of a `HitPoints` buffer back.
-pub fn read_hit_points(
-    gpu: &GpuContext,
-    buffer: &wgpu::Buffer,
-    len: u64,
-) -> Result<Vec<GpuHitPoint>, Error> {
-    let bytes = gpu.read_buffer(buffer, HEADER_BYTES, len * HIT_POINT_BYTES)?;
-    Ok(bytemuck::pod_collect_to_vec(
-        &bytes[..(len * HIT_POINT_BYTES) as usize],
-    ))
 }
 
 /// The bounding box of a hit point's search sphere, padded a little so that no point the

@@ -169,7 +169,7 @@ impl Merge {
             return Ok(Vec::new());
         };
         let stats: Vec<GpuSlotStats> = gpu.read_pod(&p.stats, p.slots as usize)?;
-        let radii = read_radii(gpu, &p.radii)?;
+        let radii: Vec<f32> = p.radii.read(gpu)?;
         Ok(stats
             .iter()
             .zip(&radii)
@@ -196,17 +196,6 @@ pub struct SlotStats {
     pub discarded: u32,
 }
 
-/// The radius of every slot of a `radii` resource (0: not chosen yet). Reads back.
-pub fn read_radii(gpu: &GpuContext, radii: &Resource) -> Result<Vec<f32>, Error> {
-    let bytes = gpu.read_buffer(
-        &radii.buffer,
-        HIT_POINT_RADII.header_bytes,
-        radii.len * HIT_POINT_RADII.element_bytes,
-    )?;
-    let bytes = &bytes[..(radii.len * HIT_POINT_RADII.element_bytes) as usize];
-    Ok(bytemuck::pod_collect_to_vec(bytes))
-}
-
 impl Pass for Merge {
     fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), Error> {
         let gpu = ctx.gpu;
@@ -215,15 +204,6 @@ impl Pass for Merge {
         let deposits = ctx.input("deposits")?;
         let radiance = ctx.output("radiance")?;
         let radii = ctx.output("radii")?;
-        // The gather must search with the radii this node shrinks; if they do not reach the
-        // camera pass, it would keep the first radii while the estimate divides by smaller ones.
-        if !ctx.consumed.contains("radii") {
-            return Err(Error::Other(
-                "its radii feed nothing: connect them to the camera pass that records its hit \
-                 points (e.g. \"estimate.radii -> camera.radii\")"
-                    .into(),
-            ));
-        }
         let slots_per_pixel = (hit_points.len / ctx.pixels().max(1)) as u32;
         let rule = RadiusRule::new(
             self.params.initial_radius.unwrap_or(0.0),
