@@ -558,16 +558,13 @@ fn photon_graphs_are_unbiased_on_the_point_light_caustic() {
 /// reference) the caustic dropped or counted twice: light through nested dielectrics, where an
 /// S vertex miscounted at one of the four interfaces would show.
 ///
-/// It fails today, which is why it is ignored (run it with `-- --ignored`): the hybrid's image
-/// is 0.46% darker than Mitsuba's (8 seeds x 2 spp: mean -0.00160, SE 0.00027, bound 0.00121,
-/// 1.3x the bound), -0.44% at 8 spp and -0.39% at 32 spp per seed, `hybrid_all_depths` -0.52%,
-/// while `pt` is unbiased (8 seeds x 32 spp: -0.06%, SE 0.21%). So some light the camera pass
-/// leaves to photon mapping is not added back. The likely cause: the glass's bottom face lies
-/// in the table's plane (y = 0); with glass and water lifted 2 mm the hybrid is +0.16% (SE
-/// 0.04%), so at the coplanar contact camera and photon paths resolve the tie differently.
-/// Open (issue 16's note).
+/// The glass's bottom face lies in the table's plane (y = 0). Until photons gave such ties to
+/// the surface facing them (traverse's `front_wins_ties`, shaders/common/scene.wgsl), about
+/// half the photons reaching the contact left through the glass's bottom, and the hybrid was
+/// 0.46% darker than Mitsuba (8 seeds x 2 spp: 1.3x the bound) while `pt` was unbiased; now
+/// -0.16% at 0.44x the bound (and at 8 x 32 spp -0.13%, SE 0.03%, 0.95x that run's bound,
+/// the caustic +1.7%, SE 1.1%: the sppm kernel's blur after 32 iterations).
 #[test]
-#[ignore = "the hybrid renders water_glass 0.4-0.5% darker than Mitsuba and pt; open, see the doc comment"]
 fn the_hybrid_is_unbiased_on_the_water_glass() {
     let gpu = gpu();
     let scene = load_scene(WATER);

@@ -14,7 +14,9 @@ use hppm::gpu::GpuContext;
 use hppm::graph::exec::Wiring;
 use hppm::graph::pass::{ExecCtx, Pass, Recorder, Resource};
 use hppm::passes::hit_point_bvh_sah::{self, HitPointBvhSah};
-use hppm::passes::hit_points::{DEPOSITS, GpuHitPoint, NO_PIXEL, build_tree};
+use hppm::passes::hit_points::{
+    DEPOSITS, GpuHitPoint, GpuPhotonHit, NO_PIXEL, PhotonHitsHeader, build_tree,
+};
 use hppm::passes::photon_trace::{self, PhotonMode, PhotonTrace, PhotonTraceParams};
 use hppm::passes::sppm::{self, Merge, MergeParams};
 use hppm::scene::Scene;
@@ -399,6 +401,111 @@ fn aimed_caustic_photons_gather_the_same_flux() {
     }
 }
 
+/// Caustic photon hits of iteration 0 (photon_trace alone, unaimed): (count, flux summed over
+/// RGB) of those landing within `half` of the origin in x and z of the frame `tilt` turns.
+fn caustic_hits_near_origin(
+    gpu: &GpuContext,
+    scene: &Scene,
+    photons: u32,
+    tilt: glam::Quat,
+    half: f32,
+) -> (u32, f64) {
+    let h = PassHarness::new(gpu, scene, (16, 16), gpu.has_float_atomics());
+    let mut pass = PhotonTrace::new(PhotonTraceParams {
+        mode: PhotonMode::Caustic,
+        photons_per_iteration: Some(photons),
+        aim: false,
+        ..Default::default()
+    });
+    let photon_hits = h.prepare(&photon_trace::KIND, &mut pass, &[])["photon_hits"].clone();
+    h.run(&mut pass, 0, PHOTON_SEED);
+    let header_bytes = std::mem::size_of::<PhotonHitsHeader>();
+    let header: PhotonHitsHeader = bytemuck::pod_read_unaligned(
+        &gpu.read_buffer(&photon_hits.buffer, 0, header_bytes as u64)
+            .expect("readback")[..header_bytes],
+    );
+    assert_eq!(header.dropped, 0, "the photon hits buffer overflowed");
+    let hits: Vec<GpuPhotonHit> = photon_hits.read(gpu).expect("readback");
+    hits[..header.count as usize]
+        .iter()
+        .filter(|hit| {
+            let local = tilt.inverse() * Vec3::from(hit.position);
+            local.x.abs() < half && local.z.abs() < half
+        })
+        .fold((0, 0.0), |(n, flux), hit| {
+            (
+                n + 1,
+                flux + hit.flux.iter().map(|&c| c as f64).sum::<f64>(),
+            )
+        })
+}
+
+/// A glass slab standing on a diffuse floor (its bottom face in the floor's plane, as a drinking
+/// glass on a table) under a point light: every photon refracted through the top lands on the
+/// floor beneath, exactly as where the slab has no bottom face at all. The whole set is tilted,
+/// so that the two planes agree only up to rounding and ties fall either way, as they do with
+/// meshes; it is built with the floor first and last. Would catch photons leaving through the
+/// coplanar contact (a tie between the slab's bottom and the floor going to the slab), which
+/// lost about half of them here and darkened the caustic under water_glass's glass by 0.4% of
+/// the image.
+#[test]
+fn photons_land_on_a_surface_a_dielectric_stands_on() {
+    let gpu = gpu();
+    let (axis, degrees) = (Vec3::new(0.8, 0.3, 0.5).normalize(), 27.0f32);
+    let tilt = glam::Quat::from_axis_angle(axis, degrees.to_radians());
+    let light = tilt * Vec3::new(0.1, 1.2, -0.05);
+    let turn = format!(
+        "Rotate(axis: ({}, {}, {}), degrees: {degrees})",
+        axis.x, axis.y, axis.z
+    );
+    let floor = format!(
+        r#"(shape: Rectangle, material: "floor", to_world: [Matrix((3, 0, 0, 0,  0, 0, 1, 0,  0, -3, 0, 0,  0, 0, 0, 1)), {turn}]),"#
+    );
+    let scene_with = |first: &str, second: &str| {
+        ron_scene(
+            "slab_on_floor.ron",
+            &format!(
+                r#"(
+            camera: (origin: (0, 3, 3), target: (0, 0, 0), up: (0, 1, 0), fov_x: 40, width: 16, height: 16),
+            materials: {{ "floor": Diffuse(reflectance: (0.5, 0.5, 0.5)), "glass": Dielectric(int_ior: 1.5) }},
+            shapes: [ {first} {second} ],
+            point_lights: [(position: ({}, {}, {}), intensity: (1, 1, 1))],
+        )"#,
+                light.x, light.y, light.z
+            ),
+        )
+    };
+    // y in [0, 0.2], |x|, |z| <= 1.5; photons landing within 1 of the origin entered the top
+    // within 1.2 of it and never met a side.
+    let slab = format!(
+        r#"(shape: Cube, material: "glass", to_world: [Scale((1.5, 0.1, 1.5)), Translate((0, 0.1, 0)), {turn}]),"#
+    );
+    let top_only = format!(
+        r#"(shape: Rectangle, material: "glass", to_world: [Matrix((1.5, 0, 0, 0,  0, 0, 1, 0.2,  0, -1.5, 0, 0,  0, 0, 0, 1)), {turn}]),"#
+    );
+    let photons = 1 << 18;
+    let (n_open, flux_open) =
+        caustic_hits_near_origin(&gpu, &scene_with(&floor, &top_only), photons, tilt, 1.0);
+    assert!(
+        n_open > 20_000,
+        "the light must send photons through the slab"
+    );
+    for (order, scene) in [
+        ("floor first", scene_with(&floor, &slab)),
+        ("floor last", scene_with(&slab, &floor)),
+    ] {
+        let (n, flux) = caustic_hits_near_origin(&gpu, &scene, photons, tilt, 1.0);
+        eprintln!(
+            "slab on the floor ({order}): {n} photons ({flux:.5}); top face only: {n_open} ({flux_open:.5})"
+        );
+        let rel = (flux - flux_open).abs() / flux_open;
+        assert!(
+            rel < 2e-3,
+            "{order}: {n} photons land under the slab, {n_open} without its bottom face: flux differs by {rel}"
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Emitted power.
 
@@ -425,13 +532,11 @@ fn photons_carry_the_lights_power() {
     ];
     for float_atomics in [gpu.has_float_atomics(), false] {
         let h = PassHarness::new(&gpu, &scene, (16, 16), float_atomics);
-        let hit_points = hit_point_resource_with(&gpu, 1, &[hit_point(Vec3::ZERO, 0.0)]);
         let mut photons = PhotonTrace::new(PhotonTraceParams {
             mode: PhotonMode::All,
             photons_per_iteration: Some(1 << 18),
             ..Default::default()
         });
-        let _ = &hit_points;
         h.prepare(&photon_trace::KIND, &mut photons, &[]);
         h.run(&mut photons, 0, 1);
         let emitted = photons.emitted_flux(&gpu).expect("readback");

@@ -215,8 +215,33 @@ fn safe_inverse(dir: vec3<f32>) -> vec3<f32> {
     return 1.0 / d;
 }
 
+// Two hits closer than this along a ray count as one place (coplanar faces): the distances of
+// two triangles in one plane differ by a few roundoffs of the coordinates' magnitude.
+fn tie_span(origin: vec3<f32>, t: f32) -> f32 {
+    let o = abs(origin);
+    return 1e-5 * (t + max(max(o.x, o.y), o.z));
+}
+
+// Whether the ray meets the front (the geometric normal's side) of `prim` at distance `t`.
+fn faces_ray(prim: u32, origin: vec3<f32>, dir: vec3<f32>, t: f32) -> bool {
+#ifdef SPHERES
+    if prim >= scene_info.num_triangles {
+        let sphere = spheres[prim - scene_info.num_triangles];
+        let outward = dot(dir, origin + t * dir - sphere.center) < 0.0;
+        return outward != (sphere.flip_normals != 0u);
+    }
+#endif
+    return dot(dir, cross(triangles[prim].edge_a, triangles[prim].edge_b)) < 0.0;
+}
+
 // Closest hit along the ray within (0, t_max). With `any_hit`, returns at the first hit found.
-fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Hit {
+// With `front_wins_ties`, of two coplanar hits the one whose front faces the ray wins: where a
+// dielectric's face lies on a diffuse surface (a glass standing on a table), a photon arriving
+// at the contact lands on the table, as the reverse of a camera path leaving the table (which
+// starts on the table's front side, past the contact) does. Otherwise the tie goes to whichever
+// triangle rounds closer, and photons lost through the contact would darken the caustic the
+// camera pass leaves to them.
+fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_wins_ties: bool) -> Hit {
     var hit = Hit(t_max, NO_HIT);
     let inv_dir = safe_inverse(dir);
     var stack: array<u32, BVH_STACK_SIZE>;
@@ -235,7 +260,11 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Hit
             for (var i = 0u; i < node.count; i++) {
                 let prim = prim_indices[node.left_or_first + i];
                 let t = intersect_prim(prim, origin, dir);
-                if t < hit.t {
+                if front_wins_ties && t < T_INFINITE && abs(t - hit.t) <= tie_span(origin, hit.t) {
+                    if hit.prim == NO_HIT || (faces_ray(prim, origin, dir, t) && !faces_ray(hit.prim, origin, dir, hit.t)) {
+                        hit = Hit(t, prim);
+                    }
+                } else if t < hit.t {
                     hit = Hit(t, prim);
                     if any_hit {
                         return hit;
@@ -245,8 +274,10 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Hit
         } else {
             let left = node.left_or_first;
             let right = left + 1u;
-            let t_left = intersect_box(bvh_nodes[left].min, bvh_nodes[left].max, origin, inv_dir, hit.t);
-            let t_right = intersect_box(bvh_nodes[right].min, bvh_nodes[right].max, origin, inv_dir, hit.t);
+            // A tie may lie in a box a hair beyond the closest hit so far.
+            let reach = select(hit.t, hit.t + tie_span(origin, hit.t), front_wins_ties && hit.prim != NO_HIT);
+            let t_left = intersect_box(bvh_nodes[left].min, bvh_nodes[left].max, origin, inv_dir, reach);
+            let t_right = intersect_box(bvh_nodes[right].min, bvh_nodes[right].max, origin, inv_dir, reach);
             let near_first = t_left <= t_right;
             let near = select(right, left, near_first);
             let far = select(left, right, near_first);
@@ -274,11 +305,16 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool) -> Hit
 }
 
 fn intersect_scene(origin: vec3<f32>, dir: vec3<f32>) -> Hit {
-    return traverse(origin, dir, T_INFINITE, false);
+    return traverse(origin, dir, T_INFINITE, false, false);
+}
+
+// The closest hit of a photon (see traverse's `front_wins_ties`).
+fn intersect_photon(origin: vec3<f32>, dir: vec3<f32>) -> Hit {
+    return traverse(origin, dir, T_INFINITE, false, true);
 }
 
 fn occluded(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
-    return traverse(origin, dir, t_max, true).prim != NO_HIT;
+    return traverse(origin, dir, t_max, true, false).prim != NO_HIT;
 }
 
 // --- Ray offsets: pbrt-v4's floating-point error bounds (Pharr, Jakob and Humphreys, "Physically

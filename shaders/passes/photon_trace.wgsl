@@ -14,7 +14,7 @@
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_ray_origin, spawn_origin}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_photon, surface_at, offset_ray_origin, spawn_origin}
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
@@ -209,7 +209,7 @@ fn trace_photon(start: Photon, rng: ptr<function, u32>) -> u32 {
     var segments = 0u;
     while segments < max_segments {
         segments += 1u;
-        let hit = intersect_scene(photon.origin, photon.dir);
+        let hit = intersect_photon(photon.origin, photon.dir);
         if hit.prim == NO_HIT {
             break;
         }
