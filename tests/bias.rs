@@ -450,6 +450,7 @@ fn every_graph_is_unbiased_on_the_glass_sphere() {
         ("graphs/hybrid.ron", 300),
         ("graphs/hybrid_ppm.ron", 400),
         ("graphs/hybrid_all_depths.ron", 500),
+        ("graphs/hybrid_deep_caustics.ron", 550),
     ] {
         let renders = timed(graph, || render_seeds(&gpu, &scene, graph, 2, seed));
         target.assert_unbiased(graph, &renders.combined, &all);

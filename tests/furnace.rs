@@ -30,10 +30,11 @@ mod common;
 use common::*;
 use hppm::app::render::Renderer;
 
-const GRAPHS: [&str; 4] = [
+const GRAPHS: [&str; 5] = [
     "graphs/hybrid.ron",
     "graphs/hybrid_ppm.ron",
     "graphs/hybrid_all_depths.ron",
+    "graphs/hybrid_deep_caustics.ron",
     "graphs/ppm_only.ron",
 ];
 

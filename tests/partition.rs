@@ -55,6 +55,7 @@ fn the_bundled_graphs_count_every_path_once() {
         "graphs/hybrid_all_depths.ron",
         "graphs/hybrid_lbvh.ron",
         "graphs/hybrid_grid.ron",
+        "graphs/hybrid_deep_caustics.ron",
         "graphs/ppm_only.ron",
     ] {
         check(graph, &[]).unwrap_or_else(|e| panic!("{graph}: {e}"));
@@ -70,6 +71,19 @@ fn photons_in_mode_all_with_a_continuing_camera_count_twice() {
         &[("mode: Caustic", "mode: All")],
         // The resolve node's line: where both reach one image.
         13,
+        &["counted twice", "direct light", "\"camera\"", "\"photons\""],
+    );
+}
+
+/// A photon grid of photons in mode All, looked up past the hit points: the camera would add
+/// direct and indirect light there that it also path traces (and sppm adds at the hit points).
+#[test]
+fn a_photon_grid_of_all_photons_counts_twice() {
+    refused(
+        "graphs/hybrid_deep_caustics.ron",
+        &[("mode: Caustic", "mode: All")],
+        // The camera node's line: where its own light and the grid's meet.
+        9,
         &["counted twice", "direct light", "\"camera\"", "\"photons\""],
     );
 }

@@ -19,6 +19,7 @@
 #import common::hit_points::NO_PIXEL
 #import common::gather::{hit_points, photon_hits, photon_hit_count, gather_at}
 #import gpu::dispatch::{WORKGROUP_SIZE, flat_invocation}
+#import common::spatial_hash::{grid_cell, cell_hash}
 
 // Radii are padded before they bound boxes, so that no photon the f32 distance test in
 // gather_at accepts falls outside its hit point's box by rounding (as sphere_box does)...
@@ -33,9 +34,8 @@ const MAX_BOX_RADIUS: f32 = 1e30;
 const CELL_MARGIN: f32 = 0.015625;
 // Smallest cell edge as a fraction of the largest coordinate magnitude (also see `setup`).
 const MIN_CELL_FRACTION: f32 = 6.103515625e-5; // 2^-14
-// Cell coordinates are clamped here before the i32 conversion; hit points never come near it
-// (their coordinates are below 2^15 by the MIN_CELL_FRACTION rule), photons far away may.
-const CELL_LIMIT: f32 = 1073741824.0; // 2^30
+// Cell coordinates are clamped at common::spatial_hash's CELL_LIMIT; hit points never come near
+// it (their coordinates are below 2^15 by the MIN_CELL_FRACTION rule), photons far away may.
 // Beyond any finite f32 but the largest: photons at FAR or farther (infinite, NaN) are skipped.
 const FAR: f32 = 3.0e38;
 
@@ -92,20 +92,11 @@ fn box_radius(slot: u32) -> f32 {
 // The cell of `x`: monotone in each coordinate (subtraction, multiplication by a positive
 // number, floor and clamp all are), which the one-cell lookup relies on.
 fn cell_of(x: vec3<f32>) -> vec3<i32> {
-    let c = floor((x - scene_info.bounds_min) * grid.info.inv_cell);
-    return vec3<i32>(clamp(c, vec3<f32>(-CELL_LIMIT), vec3<f32>(CELL_LIMIT)));
+    return grid_cell(x, scene_info.bounds_min, grid.info.inv_cell);
 }
 
-// Teschner et al. 2003's spatial hash, then murmur3's finaliser: the table is a power of two,
-// so the bucket is the low bits, which the products alone leave depending on low bits only.
 fn bucket_of(c: vec3<i32>) -> u32 {
-    var h = (u32(c.x) * 73856093u) ^ (u32(c.y) * 19349663u) ^ (u32(c.z) * 83492791u);
-    h ^= h >> 16u;
-    h *= 0x85ebca6bu;
-    h ^= h >> 13u;
-    h *= 0xc2b2ae35u;
-    h ^= h >> 16u;
-    return h & params.bucket_mask;
+    return cell_hash(c) & params.bucket_mask;
 }
 
 @compute @workgroup_size(WORKGROUP_SIZE)

@@ -8,15 +8,16 @@
 // With `trace_beyond` 0 (photon mapping only) a path stops at its first photon-mapped vertex.
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
-#import common::sampling::{INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
+#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, unoccluded, surface_at, spawn_origin}
 #import common::camera::camera_direction
 #import common::lights::{sample_light, area_light_pdf}
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
 #import common::bsdf::sample_dielectric
 #endif
-#import common::hit_points::{HitPoint, HitPointBuffer, RadiusBuffer, NO_PIXEL, initial_radius}
+#import common::hit_points::{HitPoint, HitPointBuffer, RadiusBuffer, PhotonHitsIn, NO_PIXEL, initial_radius}
+#import common::photon_grid::{PhotonGridInfo, photon_cell, photon_bucket}
 
 struct PathTraceParams {
     sample_base: u32,
@@ -31,6 +32,16 @@ struct PathTraceParams {
     record: u32,
     // 1: continue paths past photon-mapped vertices (hybrid); 0: stop there (photon mapping only).
     trace_beyond: u32,
+    // 1: look caustics up in the photon grid at diffuse vertices past the hit points.
+    lookups: u32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
+}
+
+struct PhotonGridIn {
+    info: PhotonGridInfo,
+    words: array<u32>,
 }
 
 @group(1) @binding(0) var<uniform> params: PathTraceParams;
@@ -40,6 +51,9 @@ struct PathTraceParams {
 @group(1) @binding(3) var<storage, read_write> hit_points: HitPointBuffer;
 // The estimator's radii as of the previous iteration (0: none yet, take the rule's first).
 @group(1) @binding(4) var<storage, read> radii: RadiusBuffer;
+// This iteration's caustic photon hits and the grid over them (stand-ins when not looking up).
+@group(1) @binding(5) var<storage, read> photons: PhotonHitsIn;
+@group(1) @binding(6) var<storage, read> photon_grid: PhotonGridIn;
 
 const COUNTER_RAYS: u32 = 0u;
 const COUNTER_DISCARDED: u32 = 2u;
@@ -113,6 +127,46 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, u32>, ra
     return albedo * INV_PI * cos_i * ls.radiance * weight / ls.pdf;
 }
 
+// Caustic flux arriving per unit area at `surface` from the front, by this iteration's photons
+// within the grid's radius whose whole path (`depth` camera segments + theirs) obeys max_depth:
+// their flux sum over the disc's area (Knaus & Zwicker's estimate, with a constant kernel).
+fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
+    let info = photon_grid.info;
+    let r2 = info.radius * info.radius;
+    let lo = photon_cell(info, surface.position - vec3<f32>(info.radius));
+    let hi = min(photon_cell(info, surface.position + vec3<f32>(info.radius)), lo + vec3<i32>(1));
+    let links = info.bucket_mask + 1u;
+    let words = arrayLength(&photon_grid.words);
+    var flux = vec3<f32>(0.0);
+    for (var z = lo.z; z <= hi.z; z++) {
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                let cell = vec3<i32>(x, y, z);
+                var link = photon_grid.words[photon_bucket(info, cell)];
+                // A list is at most every photon hit long; the bound keeps a corrupt one finite.
+                for (var steps = 0u; link != 0u && steps < info.count; steps++) {
+                    let hit = photons.hits[link - 1u];
+                    let next = links + link - 1u;
+                    link = select(0u, photon_grid.words[next], next < words);
+                    // Buckets hold other cells' lists too: take each photon in its own cell only.
+                    if any(photon_cell(info, hit.position) != cell) {
+                        continue;
+                    }
+                    let d = hit.position - surface.position;
+                    if !(dot(d, d) <= r2) || dot(hit.wi, surface.normal) <= 0.0 {
+                        continue;
+                    }
+                    if hit.remaining != UNBOUNDED && depth > hit.remaining {
+                        continue;
+                    }
+                    flux += hit.flux;
+                }
+            }
+        }
+    }
+    return flux / (PI * r2);
+}
+
 fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
     var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
     var result = vec3<f32>(0.0);
@@ -154,8 +208,14 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, ray
                 break;
             }
             path.diffuse_vertices += 1u;
-            path.after_merge = path.diffuse_vertices <= params.merge_depth;
-            if path.after_merge {
+            let at_hit_point = path.diffuse_vertices <= params.merge_depth;
+            // Past the hit points the photon grid adds the caustic, which the path then drops.
+            let looked_up = params.lookups != 0u && !at_hit_point;
+            path.after_merge = at_hit_point || looked_up;
+            if looked_up {
+                result += path.throughput * material.albedo * INV_PI * caustic_irradiance(surface, depth);
+            }
+            if at_hit_point {
                 let weight = path.throughput * material.albedo * INV_PI;
                 if sink.enabled && max_component(weight) > 0.0 {
                     record_hit_point(sink, path.diffuse_vertices - 1u, surface, wo, depth, weight, path.travelled);

@@ -38,6 +38,8 @@ pub struct Transport {
     pub depth: Depth,
     /// (classes, node) for every source that contributes.
     sources: Vec<(u32, usize)>,
+    /// Classes that [`Transport::and`] found on both sides: counted twice.
+    twice: u32,
 }
 
 impl Transport {
@@ -47,7 +49,38 @@ impl Transport {
             paths: 0,
             depth: Depth::Any,
             sources: Vec::new(),
+            twice: 0,
         }
+    }
+
+    /// The same light under other class names: classes in `from` become `to` (a node that turns
+    /// what it receives into another class, as a photon map looked up at other vertices does).
+    pub fn relabel(&self, from: u32, to: u32) -> Self {
+        let rename = |paths: u32| {
+            if paths & from != 0 {
+                (paths & !from) | to
+            } else {
+                paths
+            }
+        };
+        Self {
+            paths: rename(self.paths),
+            depth: self.depth,
+            sources: self.sources.iter().map(|&(p, n)| (rename(p), n)).collect(),
+            twice: self.twice,
+        }
+    }
+
+    /// This light and `other`'s in one output (a node that is a source and also passes on what
+    /// an input carries). A class on both sides is counted twice, which the check reports.
+    pub fn and(mut self, other: &Transport) -> Self {
+        self.twice |= self.paths & other.paths;
+        self.paths |= other.paths;
+        self.sources.extend(other.sources.iter().copied());
+        if self.depth == Depth::Any {
+            self.depth = other.depth;
+        }
+        self
     }
 }
 
@@ -68,6 +101,7 @@ impl TransportCtx<'_> {
             paths,
             depth,
             sources: vec![(paths, self.node)],
+            twice: 0,
         }
     }
 }
@@ -182,6 +216,17 @@ impl Walk<'_, '_> {
             Some(t) => t,
             None => self.union(node, inputs),
         };
+        if t.twice != 0 {
+            let by = self.node_names(&t.sources, t.twice);
+            self.error(
+                node,
+                format!(
+                    "{} would be counted twice (by {})",
+                    self.classes.describe(t.twice),
+                    by.join(" and ")
+                ),
+            );
+        }
         self.memo.insert((node, slot), t.clone());
         t
     }

@@ -7,6 +7,7 @@ pub mod hit_point_bvh_sah;
 pub mod hit_point_grid;
 pub mod hit_points;
 pub mod path_trace;
+pub mod photon_grid;
 pub mod photon_trace;
 pub mod ppm;
 pub mod resolve;
@@ -32,6 +33,7 @@ pub fn registry() -> &'static [PassKind] {
         hit_point_bvh_lbvh::KIND,
         hit_point_grid::KIND,
         photon_trace::KIND,
+        photon_grid::KIND,
         sppm::KIND,
         ppm::KIND,
         resolve::KIND,
@@ -50,6 +52,8 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/bsdf.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
+    shader_file!("shaders/common/spatial_hash.wgsl"),
+    shader_file!("shaders/common/photon_grid.wgsl"),
 ];
 
 /// Shader defs that compile in code for scene features; without them that code is left out.
@@ -92,9 +96,13 @@ pub mod paths {
     pub const DIRECT: u32 = 2;
     /// Light reaching a photon-mapped vertex through specular vertices only (`L S+ D`).
     pub const CAUSTIC: u32 = 4;
-    /// Light reaching a photon-mapped vertex after another diffuse vertex (`L ... D D`).
+    /// Light reaching a photon-mapped vertex after another diffuse vertex (`L ... D D`), except
+    /// `DEEP_CAUSTIC`.
     pub const INDIRECT: u32 = 8;
-    pub const ALL: u32 = UNMERGED | DIRECT | CAUSTIC | INDIRECT;
+    /// Caustics (`L S+ D`) at the diffuse vertices past a camera path's photon-mapped ones (all
+    /// of them when it has none): path traced, or looked up in a `photon_grid`.
+    pub const DEEP_CAUSTIC: u32 = 16;
+    pub const ALL: u32 = UNMERGED | DIRECT | CAUSTIC | INDIRECT | DEEP_CAUSTIC;
 
     pub const CLASSES: PathClasses<'static> = PathClasses {
         all: ALL,
@@ -103,6 +111,7 @@ pub mod paths {
             "direct light at photon-mapped vertices (L D)",
             "caustics at photon-mapped vertices (L S+ D)",
             "indirect light at photon-mapped vertices (L ... D D)",
+            "caustics at diffuse vertices past the photon-mapped ones (L S+ D ... D E)",
         ],
     };
 }

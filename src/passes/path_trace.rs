@@ -20,8 +20,9 @@ use crate::graph::pass::{
 use crate::graph::transport::{Transport, TransportCtx};
 use crate::passes::SceneResources;
 use crate::passes::hit_points::{
-    DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, RadiusRule,
+    DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, PHOTON_HITS, RadiusRule,
 };
+use crate::passes::photon_grid::PHOTON_GRID;
 use crate::passes::{depth_rule, resolve_depths};
 use crate::shader_file;
 
@@ -34,11 +35,15 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::input("radii", HIT_POINT_RADII)
         .optional()
         .previous_iteration(),
+    // Both or neither: this iteration's caustic photons and a `photon_grid` over them, looked up
+    // at diffuse vertices past the hit points in place of path tracing their caustics.
+    SlotDecl::input("photon_hits", PHOTON_HITS).optional(),
+    SlotDecl::input("photon_grid", PHOTON_GRID).optional(),
 ];
 
 /// `GpuParams` against `PathTraceParams` in the shader.
 const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PathTraceParams" in SHADER, {
-    sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond
+    sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond, lookups
 });
 
 pub const KIND: PassKind = PassKind {
@@ -156,6 +161,8 @@ struct GpuParams {
     merge_depth: u32,
     record: u32,
     trace_beyond: u32,
+    lookups: u32,
+    _pad: [u32; 3],
 }
 
 struct Prepared {
@@ -171,6 +178,8 @@ struct Prepared {
     merge_slots: u32,
     /// A consumer keeps the hit points: record them in the first iteration only.
     keep_hit_points: bool,
+    /// A photon grid is connected: look caustics up past the hit points.
+    lookups: bool,
 }
 
 pub struct PathTrace {
@@ -252,6 +261,38 @@ impl Pass for PathTrace {
                 &own_radii
             }
         };
+        let lookups = match (ctx.inputs.get("photon_hits"), ctx.inputs.get("photon_grid")) {
+            (Some(hits), Some(grid)) => Some((hits.buffer.clone(), grid.buffer.clone())),
+            (None, None) => None,
+            _ => {
+                return Err(Error::Other(
+                    "path_trace: connect both photon_hits and photon_grid (the grid lists the \
+                     hits it is built from), or neither"
+                        .into(),
+                ));
+            }
+        };
+        let no_lookups;
+        let (photon_hits, photon_grid) = match &lookups {
+            Some((hits, grid)) => (&**hits, &**grid),
+            None => {
+                // Unread stand-ins of the least size the bindings take.
+                let bytes = (PHOTON_HITS.header_bytes + PHOTON_HITS.element_bytes) as usize;
+                no_lookups = (
+                    gpu.create_buffer_init(
+                        "path_trace no photons",
+                        &vec![0; bytes],
+                        wgpu::BufferUsages::STORAGE,
+                    )?,
+                    gpu.create_buffer_init(
+                        "path_trace no photon grid",
+                        &vec![0; (PHOTON_GRID.header_bytes + 16) as usize],
+                        wgpu::BufferUsages::STORAGE,
+                    )?,
+                );
+                (&no_lookups.0, &no_lookups.1)
+            }
+        };
         let (layout, bind_group) = bind_buffers(
             &gpu.device,
             "path_trace",
@@ -261,6 +302,8 @@ impl Pass for PathTrace {
                 (Access::ReadWrite, &counters),
                 (Access::ReadWrite, &hit_points.buffer),
                 (Access::Read, radii),
+                (Access::Read, photon_hits),
+                (Access::Read, photon_grid),
             ],
         );
         let pipeline =
@@ -278,6 +321,7 @@ impl Pass for PathTrace {
             rr_depth,
             merge_slots,
             keep_hit_points: ctx.kept.contains("hit_points"),
+            lookups: lookups.is_some(),
         });
         Ok(())
     }
@@ -297,6 +341,8 @@ impl Pass for PathTrace {
             merge_depth: p.merge_slots,
             record: record as u32,
             trace_beyond: self.params.trace_beyond as u32,
+            lookups: p.lookups as u32,
+            _pad: [0; 3],
         };
         ctx.gpu
             .queue
@@ -315,7 +361,7 @@ impl Pass for PathTrace {
     }
 
     fn transport(&self, slot: &str, ctx: &TransportCtx<'_>) -> Option<Transport> {
-        use crate::passes::paths::{ALL, CAUSTIC, UNMERGED};
+        use crate::passes::paths::{ALL, CAUSTIC, DEEP_CAUSTIC, UNMERGED};
         if slot != "radiance" {
             return Some(Transport::none());
         }
@@ -328,7 +374,12 @@ impl Pass for PathTrace {
             // Paths stop at their first photon-mapped vertex.
             (true, false) => UNMERGED,
         };
-        Some(ctx.source(paths, depth_rule(self.params.max_depth)))
+        let depth = depth_rule(self.params.max_depth);
+        match ctx.inputs.get("photon_grid") {
+            // The grid's photons add the deeper caustics the camera then drops.
+            Some(grid) => Some(ctx.source(paths & !DEEP_CAUSTIC, depth).and(grid)),
+            None => Some(ctx.source(paths, depth)),
+        }
     }
 
     fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {

@@ -264,10 +264,11 @@ impl Pass for PhotonTrace {
     }
 
     fn transport(&self, _slot: &str, ctx: &TransportCtx<'_>) -> Option<Transport> {
-        use crate::passes::paths::{CAUSTIC, DIRECT, INDIRECT};
+        use crate::passes::paths::{CAUSTIC, DEEP_CAUSTIC, DIRECT, INDIRECT};
         let paths = match self.params.mode {
             PhotonMode::Caustic => CAUSTIC,
-            PhotonMode::All => DIRECT | CAUSTIC | INDIRECT,
+            // Everything that reaches a hit point, deeper caustics included.
+            PhotonMode::All => DIRECT | CAUSTIC | INDIRECT | DEEP_CAUSTIC,
         };
         Some(ctx.source(paths, depth_rule(self.params.max_depth)))
     }

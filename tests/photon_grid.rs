@@ -1,0 +1,215 @@
+//! `photon_grid` run alone on synthetic photon hits: its lists against a CPU mirror of its cells
+//! and hash, its radius against Knaus & Zwicker's schedule, and range queries through its
+//! lists (walked the way path_trace.wgsl's `caustic_irradiance` walks them) against all pairs.
+//! The camera's use of it is checked by whole renders: the furnace matrix (tests/furnace.rs)
+//! and the glass-sphere bias test (tests/bias.rs) run graphs/hybrid_deep_caustics.ron.
+
+mod common;
+
+use std::collections::HashSet;
+
+use common::pass_harness::{PassHarness, photon_hits_resource_with};
+use common::*;
+use glam::Vec3;
+use hppm::passes::hit_points::GpuPhotonHit;
+use hppm::passes::photon_grid::{self, PhotonGrid, PhotonGridInfo, PhotonGridParams};
+
+/// shaders/common/spatial_hash.wgsl's `grid_cell` from the grid's centre (`photon_cell`).
+fn cell_of(info: &PhotonGridInfo, p: Vec3) -> [i32; 3] {
+    let limit = 1073741824.0f32;
+    std::array::from_fn(|i| {
+        ((p[i] - info.center[i]) * info.inv_cell)
+            .floor()
+            .clamp(-limit, limit) as i32
+    })
+}
+
+/// shaders/common/spatial_hash.wgsl's `cell_hash`, masked as `photon_bucket` does.
+fn bucket_of(info: &PhotonGridInfo, c: [i32; 3]) -> u32 {
+    let u = c.map(|v| v as u32);
+    let mut h =
+        u[0].wrapping_mul(73856093) ^ u[1].wrapping_mul(19349663) ^ u[2].wrapping_mul(83492791);
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x85eb_ca6b);
+    h ^= h >> 13;
+    h = h.wrapping_mul(0xc2b2_ae35);
+    h ^= h >> 16;
+    h & info.bucket_mask
+}
+
+struct Built {
+    info: PhotonGridInfo,
+    words: Vec<u32>,
+}
+
+impl Built {
+    /// The photon indices on bucket `b`'s list, in list order.
+    fn list(&self, b: u32) -> Vec<u32> {
+        let links = self.info.bucket_mask as usize + 1;
+        let mut out = Vec::new();
+        let mut link = self.words[b as usize];
+        while link != 0 {
+            assert!(out.len() <= self.info.count as usize, "bucket {b}: a cycle");
+            out.push(link - 1);
+            link = self.words[links + link as usize - 1];
+        }
+        out
+    }
+
+    /// Photons within `r` of `x`, through the (at most 2 x 2 x 2) cells the sphere's box spans.
+    fn query(&self, hits: &[GpuPhotonHit], x: Vec3) -> HashSet<u32> {
+        let r = self.info.radius;
+        let lo = cell_of(&self.info, x - Vec3::splat(r));
+        let hi = cell_of(&self.info, x + Vec3::splat(r));
+        let mut found = HashSet::new();
+        for z in lo[2]..=hi[2].min(lo[2] + 1) {
+            for y in lo[1]..=hi[1].min(lo[1] + 1) {
+                for xc in lo[0]..=hi[0].min(lo[0] + 1) {
+                    let cell = [xc, y, z];
+                    for i in self.list(bucket_of(&self.info, cell)) {
+                        let p = Vec3::from(hits[i as usize].position);
+                        if cell_of(&self.info, p) == cell && (p - x).length_squared() <= r * r {
+                            assert!(found.insert(i), "photon {i} found twice");
+                        }
+                    }
+                }
+            }
+        }
+        found
+    }
+}
+
+fn photon(p: Vec3) -> GpuPhotonHit {
+    GpuPhotonHit {
+        position: p.into(),
+        remaining: 8,
+        wi: [0.0, 1.0, 0.0],
+        flux: [1.0, 1.0, 1.0],
+        ..Default::default()
+    }
+}
+
+/// Clustered and scattered photons in [-2, 2] x [0, 1.5] x [-2, 2], a NaN and an infinite one,
+/// and hits past the header's count that the grid must not list.
+fn synthetic_hits() -> (Vec<GpuPhotonHit>, u32) {
+    let mut rng = Lcg(7);
+    let mut hits = Vec::new();
+    for i in 0..6000 {
+        let p = if i % 3 == 0 {
+            Vec3::new(0.3, 0.0, -0.2) + 0.05 * rng.vec3()
+        } else {
+            Vec3::new(2.0 * rng.signed(), 1.5 * rng.unit(), 2.0 * rng.signed())
+        };
+        hits.push(photon(p));
+    }
+    hits.push(photon(Vec3::new(f32::NAN, 0.0, 0.0)));
+    hits.push(photon(Vec3::new(f32::INFINITY, 0.0, 0.0)));
+    let count = hits.len() as u32;
+    for _ in 0..100 {
+        hits.push(photon(Vec3::new(0.3, 0.0, -0.2)));
+    }
+    (hits, count)
+}
+
+struct Lcg(u64);
+
+impl Lcg {
+    fn unit(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn signed(&mut self) -> f32 {
+        2.0 * self.unit() - 1.0
+    }
+    fn vec3(&mut self) -> Vec3 {
+        Vec3::new(self.signed(), self.signed(), self.signed())
+    }
+}
+
+/// Would catch: a photon listed twice or not at all (a caustic looked up twice or lost), one
+/// listed under the wrong bucket, a listed NaN or a hit past the count, a cell edge too small for
+/// the 2-cells-per-axis walk (photons within the radius missed), a radius off the schedule.
+#[test]
+fn the_photon_grid_lists_every_photon_once_and_finds_all_within_its_radius() {
+    let gpu = gpu();
+    let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
+    let h = PassHarness::new(&gpu, &scene, (16, 16), gpu.has_float_atomics());
+    let (hits, count) = synthetic_hits();
+    let input = photon_hits_resource_with(&gpu, &hits, count);
+    let params = PhotonGridParams {
+        radius: 0.03,
+        alpha: 0.7,
+    };
+    let mut pass = PhotonGrid::new(params);
+    let out = h.prepare(&photon_grid::KIND, &mut pass, &[("photon_hits", &input)]);
+    let iteration = 7;
+    h.run(&mut pass, iteration, 1);
+    let grid = &out["grid"];
+    let header_bytes = std::mem::size_of::<PhotonGridInfo>();
+    let info: PhotonGridInfo = bytemuck::pod_read_unaligned(
+        &gpu.read_buffer(&grid.buffer, 0, header_bytes as u64)
+            .expect("readback")[..header_bytes],
+    );
+    let built = Built {
+        info,
+        words: grid.read(&gpu).expect("readback"),
+    };
+
+    let u = &h.scene().uniform;
+    let expected_radius =
+        0.03 * u.scene_radius as f64 * photon_grid::radius_scale(0.7f32 as f64, iteration);
+    assert!(
+        (info.radius as f64 - expected_radius).abs() <= 1e-6 * expected_radius,
+        "radius {} against the schedule's {expected_radius}",
+        info.radius
+    );
+    assert_eq!(info.count, count);
+    for i in 0..3 {
+        assert_eq!(info.center[i], 0.5 * (u.bounds_min[i] + u.bounds_max[i]));
+    }
+    assert!(
+        1.0 / info.inv_cell >= 2.0 * info.radius,
+        "cells narrower than a sphere"
+    );
+
+    let mut listed = vec![0u32; hits.len()];
+    for b in 0..=info.bucket_mask {
+        for i in built.list(b) {
+            listed[i as usize] += 1;
+            let p = Vec3::from(hits[i as usize].position);
+            assert_eq!(
+                bucket_of(&info, cell_of(&info, p)),
+                b,
+                "photon {i} in the wrong bucket"
+            );
+        }
+    }
+    for (i, &n) in listed.iter().enumerate() {
+        let finite = Vec3::from(hits[i].position).is_finite() && (i as u32) < count;
+        assert_eq!(n, finite as u32, "photon {i} listed {n} times");
+    }
+
+    let mut rng = Lcg(99);
+    let mut found_total = 0;
+    for q in 0..400 {
+        let x = if q % 2 == 0 {
+            Vec3::new(0.3, 0.0, -0.2) + 0.06 * rng.vec3()
+        } else {
+            Vec3::new(2.0 * rng.signed(), 1.5 * rng.unit(), 2.0 * rng.signed())
+        };
+        let r2 = info.radius * info.radius;
+        let brute: HashSet<u32> = (0..count)
+            .filter(|&i| (Vec3::from(hits[i as usize].position) - x).length_squared() <= r2)
+            .collect();
+        let found = built.query(&hits, x);
+        assert_eq!(found, brute, "query {q} at {x}");
+        found_total += found.len();
+    }
+    assert!(
+        found_total > 2000,
+        "the queries must find photons ({found_total})"
+    );
+}
