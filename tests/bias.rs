@@ -450,7 +450,7 @@ fn every_graph_is_unbiased_on_the_glass_sphere() {
         ("graphs/hybrid.ron", 300),
         ("graphs/hybrid_ppm.ron", 400),
         ("graphs/hybrid_all_depths.ron", 500),
-        ("graphs/hybrid_deep_caustics.ron", 550),
+        ("graphs/hybrid_first_vertex.ron", 550),
     ] {
         let renders = timed(graph, || render_seeds(&gpu, &scene, graph, 2, seed));
         target.assert_unbiased(graph, &renders.combined, &all);
@@ -470,16 +470,17 @@ fn plane(primary_specular: &Image) -> Vec<bool> {
 
 /// point_light_caustic: a glass sphere on a plane lit by a point light, whose caustic no path
 /// tracer renders. Would catch: `pt` drifting from Mitsuba's path tracer by 0.2%; any hybrid's
-/// caustic (the first-diffuse-vertex caustic for `hybrid`, all of it for `hybrid_all_depths`)
-/// missing or doubled; `hybrid_all_depths` losing or gaining 0.3% of the plane outside the
-/// caustic, or 8% in the caustic (75 px).
+/// caustic missing or doubled; `hybrid` and `hybrid_all_depths` losing or gaining 0.3% of the
+/// plane outside the caustic (where the caustic's light returns through the sphere, which
+/// `hybrid_first_vertex` leaves to nobody), or 8% in the caustic (75 px).
 ///
 /// Measured (8 seeds x 2 spp each, 8 s): `pt` +0.02% against Mitsuba's path tracer (bound
 /// 0.17%), its 10% loss flagged at 64x, its missing caustic at 110x. `hybrid_all_depths`
 /// against the composite: plane -0.03% (bound 0.59%), caustic -2.1% (7.7%), outside the caustic
-/// +0.14% (0.29%); the dropped caustic flagged at 111x, the doubled one at 6.6x. `hybrid`:
-/// caustic +0.7% (bound 10%), dropped 103x, doubled 5.3x; outside the caustic -0.17%, 1.5x its
-/// bound (below).
+/// +0.14% (0.29%); the dropped caustic flagged at 111x, the doubled one at 6.6x. `hybrid`
+/// (photon grid): outside the caustic -0.01% (bound 0.20%). `hybrid_first_vertex`: caustic
+/// +0.7% (bound 10%), dropped 103x, doubled 5.3x; outside the caustic -0.17%, 1.5x its bound
+/// (below).
 #[test]
 fn photon_graphs_are_unbiased_on_the_point_light_caustic() {
     let gpu = gpu();
@@ -531,22 +532,25 @@ fn photon_graphs_are_unbiased_on_the_point_light_caustic() {
     target.assert_unbiased("hybrid_all_depths", &renders.combined, &every);
     target.assert_faults_flagged("hybrid_all_depths", &renders, &["plane"], "caustic");
 
+    // The hybrid's photon grid photon-maps the caustic's light seen after a second diffuse
+    // vertex (L S+ D S+ D E: the bright caustic lighting the shadow through the sphere).
     let renders = timed("hybrid", || {
         render_seeds(&gpu, &scene, "graphs/hybrid.ron", 2, 800)
     });
-    target.assert_unbiased("hybrid", &renders.combined, &["caustic"]);
+    target.assert_unbiased("hybrid", &renders.combined, &every);
     target.assert_faults_flagged("hybrid", &renders, &["plane"], "caustic");
-    // With merge_depth 1, light of the caustic that reaches the camera after a second diffuse
-    // vertex (L S+ D S+ D E: the bright caustic lighting the shadow through the sphere) is left
-    // to path tracing, which cannot reach a point light through glass: no graph counts it.
-    // hybrid_all_depths photon-maps it and matches the reference there. Measured: -0.00053
-    // (-0.17% of the plane outside the caustic, about a fifth of the light the caustic throws
-    // there), SE 0.00006, bound 0.00035. The reference and the design both say this light exists
-    // (README: "except caustics of point lights that pt cannot render"); this pins it, so a
-    // change that renders it makes this line fail and must update it.
+
+    let renders = timed("hybrid_first_vertex", || {
+        render_seeds(&gpu, &scene, "graphs/hybrid_first_vertex.ron", 2, 800)
+    });
+    target.assert_unbiased("hybrid_first_vertex", &renders.combined, &["caustic"]);
+    // Without the grid that light is left to path tracing, which cannot reach a point light
+    // through glass: no node counts it. Measured: -0.00053 (-0.17% of the plane outside the
+    // caustic, about a fifth of the light the caustic throws there), SE 0.00006, bound 0.00035.
+    // This pins the gap, so that a change that renders it must update this line.
     target.assert_flagged(
-        "hybrid",
-        "merge_depth 1 (no L S+ D S+ D E)",
+        "hybrid_first_vertex",
+        "merge_depth 1 without a photon grid (no L S+ D S+ D E)",
         &renders.combined,
         "plane outside the caustic",
     );

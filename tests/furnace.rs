@@ -34,7 +34,7 @@ const GRAPHS: [&str; 5] = [
     "graphs/hybrid.ron",
     "graphs/hybrid_ppm.ron",
     "graphs/hybrid_all_depths.ron",
-    "graphs/hybrid_deep_caustics.ron",
+    "graphs/hybrid_first_vertex.ron",
     "graphs/ppm_only.ron",
 ];
 

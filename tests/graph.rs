@@ -395,7 +395,7 @@ fn pruning_drops_the_photon_nodes_when_the_scene_has_no_specular_surface() {
     let mut hybrid = load("graphs/hybrid.ron");
     let pruned = hybrid.prune(|_| false).expect("prune");
     let names: Vec<&str> = pruned.iter().map(|p| p.node.as_str()).collect();
-    assert_eq!(names, ["photons", "gather", "estimate"]);
+    assert_eq!(names, ["photons", "photon_grid", "gather", "estimate"]);
     assert!(pruned[0].reason.contains("specular"), "{}", pruned[0]);
     let kept: Vec<&str> = hybrid
         .order
@@ -413,7 +413,7 @@ fn pruning_drops_the_photon_nodes_when_the_scene_has_no_specular_surface() {
 
     let mut with_glass = load("graphs/hybrid.ron");
     assert!(with_glass.prune(|_| true).expect("prune").is_empty());
-    assert_eq!(with_glass.nodes.len(), 5);
+    assert_eq!(with_glass.nodes.len(), 6);
 
     let mut ppm_only = load("graphs/ppm_only.ron");
     assert!(ppm_only.prune(|_| false).expect("prune").is_empty());

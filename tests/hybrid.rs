@@ -26,7 +26,7 @@ fn hybrid_is_path_tracing_on_a_diffuse_scene() {
     let gpu = gpu();
     let mut r = renderer(&gpu, &load_scene(scene), load_graph("graphs/hybrid.ron"), 5);
     let pruned: Vec<&str> = r.pruned().iter().map(|p| p.node.as_str()).collect();
-    assert_eq!(pruned, ["photons", "gather", "estimate"]);
+    assert_eq!(pruned, ["photons", "photon_grid", "gather", "estimate"]);
     let hybrid = render_to(&mut r, 8);
     let difference = relmse(&hybrid, &pt);
     eprintln!("cornell_diffuse: relMSE(hybrid, pt) = {difference:e} at 8 spp, same seed");
@@ -150,9 +150,12 @@ fn hybrid_renders_the_point_light_caustic_that_path_tracing_misses() {
          caustic ({caustic_pixels} px) mean: hybrid {hybrid_caustic:.3}, pt {pt_caustic:.3}, \
          reference {reference_caustic:.3}"
     );
-    // Measured at 64 spp: hybrid 0.00098, pt 0.0067 (its error is the missing caustic).
+    // Measured at 64 spp: hybrid 0.0026, pt 0.0067 (its error is the missing caustic). The
+    // caustic's light returning through the sphere onto the plane, looked up in the photon grid
+    // at the second diffuse vertex, is most of the hybrid's noise here; hybrid_first_vertex.ron
+    // leaves that light out (0.17% of the plane, tests/bias.rs) and measures 0.00098.
     assert!(
-        hybrid_error < 0.0015,
+        hybrid_error < 0.0045,
         "hybrid relMSE on the plane {hybrid_error}"
     );
     assert!(

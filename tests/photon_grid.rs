@@ -2,7 +2,7 @@
 //! and hash, its radius against Knaus & Zwicker's schedule, and range queries through its
 //! lists (walked the way path_trace.wgsl's `caustic_irradiance` walks them) against all pairs.
 //! The camera's use of it is checked by whole renders: the furnace matrix (tests/furnace.rs)
-//! and the glass-sphere bias test (tests/bias.rs) run graphs/hybrid_deep_caustics.ron.
+//! and the glass-sphere bias test (tests/bias.rs) run graphs/hybrid.ron, which uses it.
 
 mod common;
 
