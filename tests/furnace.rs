@@ -30,9 +30,10 @@ mod common;
 use common::*;
 use hppm::app::render::Renderer;
 
-const GRAPHS: [&str; 4] = [
+const GRAPHS: [&str; 5] = [
     "graphs/hybrid.ron",
     "graphs/hybrid_ppm.ron",
+    "graphs/hybrid_pppm.ron",
     "graphs/hybrid_all_depths.ron",
     "graphs/ppm_only.ron",
 ];

@@ -9,7 +9,9 @@ pub mod hit_points;
 pub mod path_trace;
 pub mod photon_trace;
 pub mod ppm;
+pub mod pppm;
 pub mod resolve;
+pub mod rng;
 pub mod scene_resources;
 pub mod sppm;
 
@@ -34,6 +36,7 @@ pub fn registry() -> &'static [PassKind] {
         photon_trace::KIND,
         sppm::KIND,
         ppm::KIND,
+        pppm::KIND,
         resolve::KIND,
     ];
     KINDS

@@ -227,7 +227,9 @@ impl Pass for PathTrace {
         let counters = gpu.create_buffer(
             "path_trace counters",
             16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
         )?;
         let (max_depth, rr_depth, merge_slots) = self.depths(&ctx)?;
         let header = HitPointsHeader {
@@ -286,12 +288,12 @@ impl Pass for PathTrace {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let record = ctx.iteration == 0 || !p.keep_hit_points;
+        let record = ctx.first || !p.keep_hit_points;
         let spp = self.params.samples_per_iteration;
         let gpu_params = GpuParams {
             sample_base: (ctx.iteration as u32).wrapping_mul(spp),
             samples_per_iteration: spp,
-            seed: crate::passes::seed32(ctx.seed),
+            seed: crate::passes::rng::camera_seed(ctx.seed),
             max_depth: p.max_depth,
             rr_depth: p.rr_depth,
             merge_depth: p.merge_slots,
@@ -329,6 +331,13 @@ impl Pass for PathTrace {
             (true, false) => UNMERGED,
         };
         Some(ctx.source(paths, depth_rule(self.params.max_depth)))
+    }
+
+    fn state(&self) -> Vec<(&'static str, &wgpu::Buffer)> {
+        self.prepared
+            .iter()
+            .map(|p| ("counters", &p.counters))
+            .collect()
     }
 
     fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
