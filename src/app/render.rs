@@ -293,6 +293,22 @@ impl<'a> Renderer<'a> {
         self.graph.counters(self.gpu)
     }
 
+    /// Global iterations the whole render of `budget` runs (all shards together), when the
+    /// budget counts samples or photons; `None` for a time budget alone.
+    pub fn total_iterations(&self, budget: Budget) -> Option<u64> {
+        let spp_iterations = budget
+            .spp
+            .map(|spp| spp.div_ceil(self.spp_per_iteration.max(1)));
+        let photon_iterations = budget
+            .photons
+            .filter(|_| self.photons_per_iteration > 0)
+            .map(|n| n.div_ceil(self.photons_per_iteration.max(1)));
+        match (spp_iterations, photon_iterations) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// Iterates until `budget` is met or `cancel` is raised, calling `progress` after each
     /// iteration with the seconds elapsed.
     pub fn run(
@@ -314,19 +330,10 @@ impl<'a> Renderer<'a> {
             ));
         }
         let start = Instant::now();
-        let spp_iterations = budget
-            .spp
-            .map(|spp| spp.div_ceil(self.spp_per_iteration.max(1)));
-        let photon_iterations = budget
-            .photons
-            .filter(|_| self.photons_per_iteration > 0)
-            .map(|n| n.div_ceil(self.photons_per_iteration.max(1)));
         // Budgets count the iterations of the whole render; this one runs its share of them.
-        let target_iterations = match (spp_iterations, photon_iterations) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
-        .map(|total| self.schedule.local_count(total));
+        let target_iterations = self
+            .total_iterations(budget)
+            .map(|total| self.schedule.local_count(total));
         loop {
             let elapsed = start.elapsed().as_secs_f64();
             let spp_done = target_iterations.is_some_and(|t| self.iteration >= t);

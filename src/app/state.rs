@@ -21,6 +21,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::Error;
+use crate::app::render::Renderer;
 use crate::image::Image;
 
 const MAGIC: &[u8; 8] = b"HPPMST01";
@@ -227,6 +228,117 @@ impl StateFile {
             .zip(self.data.iter().cloned())
             .collect()
     }
+}
+
+/// Where a render's scene and graph came from, and the budget it runs to: what a state file
+/// records besides the renderer's own state.
+#[derive(Debug, Clone)]
+pub struct Origin {
+    pub scene: String,
+    pub graph: String,
+    pub graph_hash: u64,
+    pub total_iterations: Option<u64>,
+}
+
+fn header_of(kind: StateKind, r: &Renderer<'_>, origin: &Origin) -> StateHeader {
+    let schedule = r.schedule();
+    let (width, height) = r.size();
+    StateHeader {
+        version: FORMAT_VERSION,
+        kind,
+        hppm: env!("CARGO_PKG_VERSION").into(),
+        scene: origin.scene.clone(),
+        scene_hash: r.scene_hash(),
+        graph: origin.graph.clone(),
+        graph_hash: origin.graph_hash,
+        seed: r.seed(),
+        width,
+        height,
+        shard: schedule.first,
+        shards: schedule.stride,
+        total_iterations: origin.total_iterations,
+        iterations: r.iterations(),
+        samples_per_pixel: r.samples_per_pixel(),
+        photons: r.photons(),
+        sections: Vec::new(),
+    }
+}
+
+/// A shard's accumulators, for `hppm merge`.
+pub fn shard_file(r: &Renderer<'_>, origin: &Origin) -> Result<StateFile, Error> {
+    let sections = r
+        .read_terms()?
+        .into_iter()
+        .map(|(name, sums)| (name, bytemuck::cast_slice(&sums).to_vec()))
+        .collect();
+    Ok(StateFile::new(
+        header_of(StateKind::Shard, r, origin),
+        sections,
+    ))
+}
+
+/// A render's full state, for `hppm render --resume`.
+pub fn checkpoint_file(r: &Renderer<'_>, origin: &Origin) -> Result<StateFile, Error> {
+    Ok(StateFile::new(
+        header_of(StateKind::Checkpoint, r, origin),
+        r.read_state()?,
+    ))
+}
+
+/// Puts the checkpoint at `path` back into `r`, a renderer made for the same scene, graph,
+/// seed, size and shard; refuses one made for another, naming the field.
+pub fn resume(
+    r: &mut Renderer<'_>,
+    origin: &Origin,
+    path: &Path,
+    file: &StateFile,
+) -> Result<(), Error> {
+    let h = &file.header;
+    if h.kind != StateKind::Checkpoint {
+        return Err(bad(
+            path,
+            "is a shard, not a checkpoint (merge it with hppm merge)",
+        ));
+    }
+    let ours = header_of(StateKind::Checkpoint, r, origin);
+    let differs = |field: &str, theirs: String, now: String| {
+        Err(bad(
+            path,
+            format!("field {field} is {theirs} in the checkpoint but {now} for this render"),
+        ))
+    };
+    if h.scene_hash != ours.scene_hash {
+        return differs(
+            "scene_hash (the scene, or its size)",
+            format!(
+                "{:016x} ({}, {}x{})",
+                h.scene_hash, h.scene, h.width, h.height
+            ),
+            format!(
+                "{:016x} ({}, {}x{})",
+                ours.scene_hash, ours.scene, ours.width, ours.height
+            ),
+        );
+    }
+    if h.graph_hash != ours.graph_hash {
+        return differs(
+            "graph_hash (the graph)",
+            format!("{:016x} ({})", h.graph_hash, h.graph),
+            format!("{:016x} ({})", ours.graph_hash, ours.graph),
+        );
+    }
+    if h.seed != ours.seed {
+        return differs("seed", h.seed.to_string(), ours.seed.to_string());
+    }
+    if (h.shard, h.shards) != (ours.shard, ours.shards) {
+        return differs(
+            "shard",
+            format!("{}/{}", h.shard, h.shards),
+            format!("{}/{}", ours.shard, ours.shards),
+        );
+    }
+    r.restore_state(h.iterations, &file.sections())
+        .map_err(|e| bad(path, e))
 }
 
 /// Per-pixel sums and counts (RGB sum, count) of one accumulator, by its `node.slot` name.
