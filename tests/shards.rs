@@ -10,9 +10,10 @@ use hppm::image::Image;
 const SCENE: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const SIZE: &str = "48x32";
 /// Merged and resumed images equal one render up to float addition order: measured on
-/// lavapipe 1.7e-15 merged (the sums differ in their last bits), 0 to 2e-18 resumed; a shard missing or counted twice,
-/// a random stream that depends on the shard instead of the global index, or a state buffer
-/// left out of a checkpoint is 1e-3 or more (each test checks a wrong image fails by far).
+/// lavapipe 1.7e-15 merged (the sums differ in their last bits) and 0 to 2e-18 resumed. A shard
+/// missing or counted twice, a random stream that depends on the shard instead of the global
+/// index, or a state buffer left out of a checkpoint is 1e-3 or more (each test checks that a
+/// wrong image fails by far).
 const EQUAL: f64 = 1e-9;
 
 fn hppm(args: &[&str]) -> Output {
