@@ -281,6 +281,117 @@ fn resumed_renders_equal_uninterrupted_ones() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The cluster's pre-emption path: shard 1 of 2 checkpointed halfway and resumed with the same
+/// command line plus `--resume` (as deploy/ does), merged with an uninterrupted shard 0, equals
+/// the single render; the checkpoint of a shard refuses to resume as another shard, and a shard
+/// file refuses to resume at all. Would catch a resumed shard that forgets its schedule (renders
+/// iterations 0, 1, ... instead of 1, 3, ...) or writes a checkpoint instead of accumulators.
+#[test]
+fn a_resumed_shard_merges_like_an_uninterrupted_one() {
+    let dir = temp_dir("resume-shard");
+    let graph = "graphs/hybrid_pppm.ron";
+    let reference = single(graph, 16, 2, &dir.join("single.exr"));
+    let state = dir.join("checkpoint-1.hppm");
+    let shard = |spp: &str, k: &str, extra: &[&str], out: &Path| {
+        let mut args = vec![
+            "render", SCENE, "--graph", graph, "--size", SIZE, "--seed", "2", "--spp", spp,
+            "--shard", k,
+        ];
+        args.extend_from_slice(extra);
+        let out_text = text(out);
+        args.extend(["--out", &out_text]);
+        hppm(&args)
+    };
+    let state_text = text(&state);
+    let halfway = dir.join("halfway.hppm");
+    ok(shard("8", "1/2", &["--checkpoint", &state_text], &halfway));
+    let files = [dir.join("shard-0.hppm"), dir.join("shard-1.hppm")];
+    ok(shard("16", "0/2", &[], &files[0]));
+    let other = shard("16", "0/2", &["--resume", &state_text], &dir.join("x.hppm"));
+    assert!(!other.status.success());
+    assert!(stderr(&other).contains("field shard"), "{}", stderr(&other));
+    let wrong_kind = shard(
+        "16",
+        "1/2",
+        &["--resume", &text(&halfway)],
+        &dir.join("y.hppm"),
+    );
+    assert!(stderr(&wrong_kind).contains("is a shard, not a checkpoint"));
+    ok(shard(
+        "16",
+        "1/2",
+        &["--checkpoint", &state_text, "--resume", &state_text],
+        &files[1],
+    ));
+    let merged = dir.join("merged.exr");
+    ok(merge(&files, &merged, false));
+    let error = read(&merged).relmse(&reference).expect("size");
+    eprintln!("resumed shard 1/2 merged with shard 0/2 vs single render: relMSE {error:.3e}");
+    assert!(error <= EQUAL, "{error}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A damaged shard (cut short, as by a full disk) or a file that is not one is refused by
+/// `merge` and `--resume` with its name, without a panic.
+#[test]
+fn damaged_state_files_are_refused_by_name() {
+    let dir = temp_dir("damaged");
+    let good = dir.join("shard-0.hppm");
+    ok(hppm(&[
+        "render",
+        SCENE,
+        "--graph",
+        "graphs/pt.ron",
+        "--size",
+        "16x16",
+        "--spp",
+        "2",
+        "--shard",
+        "0/1",
+        "--out",
+        &text(&good),
+    ]));
+    let bytes = std::fs::read(&good).expect("shard");
+    let cut = dir.join("cut.hppm");
+    std::fs::write(&cut, &bytes[..bytes.len() - 7]).expect("write");
+    let image = dir.join("not-a-shard.exr");
+    ok(hppm(&[
+        "render",
+        SCENE,
+        "--graph",
+        "graphs/pt.ron",
+        "--size",
+        "16x16",
+        "--spp",
+        "1",
+        "--out",
+        &text(&image),
+    ]));
+    for (file, expected) in [(&cut, "truncated"), (&image, "no HPPMST01 magic")] {
+        for args in [
+            vec!["merge", &text(file), "--out", &text(&dir.join("m.exr"))],
+            vec![
+                "render",
+                SCENE,
+                "--graph",
+                "graphs/pt.ron",
+                "--resume",
+                &text(file),
+                "--out",
+                &text(&dir.join("r.exr")),
+            ],
+        ] {
+            let args: Vec<&str> = args.iter().map(|a| a.as_ref()).collect();
+            let out = hppm(&args);
+            let err = stderr(&out);
+            assert!(!out.status.success(), "{args:?}");
+            assert!(err.contains(&text(file)) && err.contains(expected), "{err}");
+            assert!(!err.contains("panicked"), "{err}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Ctrl-C writes a checkpoint (besides the image), and resuming it to a budget gives the image
 /// of one render to that budget. Would catch a checkpoint not written on interrupt, or one
 /// written before the last iteration finished.
