@@ -8,7 +8,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::{Args, Parser, Subcommand};
 use hppm::app::bench;
 use hppm::app::render::{Budget, Renderer};
+use hppm::app::state::{Origin, StateFile, checkpoint_file, graph_fingerprint, shard_file};
 use hppm::gpu::{GpuContext, GpuError};
+use hppm::graph::pass::Schedule;
 use hppm::image::{OutputFormat, Provenance};
 use hppm::{Error, graph, passes, scene};
 
@@ -38,6 +40,8 @@ enum Command {
     },
     /// Render several graphs for the same time and plot their error against time.
     Compare(CompareArgs),
+    /// Sum the shards of one render (`hppm render --shard k/n`) into its image.
+    Merge(MergeArgs),
     /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes; with
     /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error);
     /// with --gather, the hit-point structures (CPU SAH BVH, GPU LBVH, hash grid: build + gather).
@@ -68,11 +72,28 @@ struct RenderArgs {
     /// Image size WxH (default: the scene's film).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
-    /// Output image: .exr (linear float) or .png (sRGB).
+    /// Seed of every random stream (default 0; a resumed render takes the checkpoint's).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Output image: .exr (linear float) or .png (sRGB); with --shard, the shard's
+    /// accumulators (a state file for `hppm merge`, any name).
     #[arg(long, default_value = "render.exr")]
     out: PathBuf,
+    /// Render only iterations K, K+N, K+2N, ... of the budget (0 <= K < N), and write raw
+    /// accumulators to --out for `hppm merge`. Needs a budget in --spp or --photons.
+    #[arg(long, value_parser = parse_shard)]
+    shard: Option<(u64, u64)>,
+    /// Write the render's full state to FILE (atomically) every --checkpoint-every seconds,
+    /// at the end and on Ctrl-C.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(long, default_value_t = 300.0)]
+    checkpoint_every: f64,
+    /// Continue the render saved in this checkpoint (same scene, graph and shard) to the
+    /// budget given now; the image is the one the uninterrupted render would have made.
+    #[arg(long)]
+    resume: Option<PathBuf>,
     /// Adapter index (see `hppm info`) or part of its name.
     #[arg(long)]
     adapter: Option<String>,
@@ -80,6 +101,20 @@ struct RenderArgs {
     /// print a table; nodes then run one at a time, so the render is slower.
     #[arg(long)]
     profile: bool,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// Shard files written by `hppm render --shard k/n`.
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// Output image: .exr (linear float) or .png (sRGB).
+    #[arg(long)]
+    out: PathBuf,
+    /// Merge the shards present even when some of the n are missing (an image of fewer
+    /// samples, still unbiased for pt and pppm).
+    #[arg(long)]
+    partial: bool,
 }
 
 #[derive(Args)]
@@ -165,6 +200,25 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
     Ok((parse(w)?, parse(h)?))
 }
 
+/// `k/n` with 0 <= k < n.
+fn parse_shard(text: &str) -> Result<(u64, u64), String> {
+    let (k, n) = text
+        .split_once('/')
+        .ok_or_else(|| format!("expected K/N, e.g. 0/4, got {text:?}"))?;
+    let k: u64 = k
+        .trim()
+        .parse()
+        .map_err(|_| format!("shard index {k:?} is not a whole number"))?;
+    let n: u64 = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("shard count {n:?} is not a whole number"))?;
+    if n == 0 || k >= n {
+        return Err(format!("shard {k}/{n}: need 0 <= K < N"));
+    }
+    Ok((k, n))
+}
+
 /// A file shipped with hppm, found relative to the working directory or, failing that, to the
 /// source tree the binary was built from.
 fn bundled(relative: &str) -> PathBuf {
@@ -202,9 +256,26 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         .scene
         .unwrap_or_else(|| bundled("scenes/cornell_box.ron"));
     let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron"));
-    OutputFormat::of(&args.out)?;
+    if args.shard.is_none() {
+        OutputFormat::of(&args.out)?;
+    }
     // A missing or read-only folder is found now, not after the render.
     hppm::image::check_writable(&args.out)?;
+    if let Some(checkpoint) = &args.checkpoint {
+        hppm::image::check_writable(checkpoint)?;
+        if !(args.checkpoint_every.is_finite() && args.checkpoint_every > 0.0) {
+            return Err(Error::Other(format!(
+                "--checkpoint-every must be a positive number of seconds, got {}",
+                args.checkpoint_every
+            )));
+        }
+    }
+    let resume = match &args.resume {
+        Some(path) => Some((path.clone(), StateFile::read(path)?)),
+        None => None,
+    };
+    let graph_text = std::fs::read_to_string(&graph_path)
+        .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
     let scene = scene::load(&scene_path)?;
     let features = scene.features();
     eprintln!("scene: {features}");
@@ -220,9 +291,16 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     }
     let gpu = GpuContext::new(args.adapter.as_deref())?;
     eprintln!("adapter: {}", gpu.adapter_label());
-    let (width, height) = args
-        .size
-        .unwrap_or((scene.camera.width, scene.camera.height));
+    let saved = resume.as_ref().map(|(_, f)| &f.header);
+    let (width, height) = args.size.unwrap_or(match saved {
+        Some(h) => (h.width, h.height),
+        None => (scene.camera.width, scene.camera.height),
+    });
+    let seed = args.seed.or(saved.map(|h| h.seed)).unwrap_or(0);
+    let (shard, shards) = args
+        .shard
+        .or(saved.map(|h| (h.shard, h.shards)))
+        .unwrap_or((0, 1));
     let implicit_spp = args.time.is_none() && args.photons.is_none();
     let budget = Budget {
         spp: args
@@ -237,9 +315,49 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         photons: args.photons,
     };
     budget.check()?;
-    let mut renderer = Renderer::new(&gpu, &scene, graph, width, height, args.seed)?;
+    if args.shard.is_some() && budget.spp.is_none() && budget.photons.is_none() {
+        return Err(Error::Other(
+            "--shard needs a budget in --spp or --photons: a time budget ends at a different \
+             iteration on every machine, so the shards would not add up to one render"
+                .into(),
+        ));
+    }
+    let schedule = Schedule {
+        first: shard,
+        stride: shards,
+    };
+    let mut renderer = Renderer::with_schedule(&gpu, &scene, graph, width, height, seed, schedule)?;
     for pruned in renderer.pruned() {
         eprintln!("{pruned}");
+    }
+    if args.shard.is_some() {
+        if let Some((node, why)) = renderer.shard_refusal() {
+            return Err(Error::Other(format!(
+                "--shard: {} cannot be rendered in shards: {node}: {why}",
+                graph_path.display()
+            )));
+        }
+        renderer.read_terms().map_err(|e| {
+            Error::Other(format!(
+                "--shard: {}'s output cannot be summed over shards: {e}",
+                graph_path.display()
+            ))
+        })?;
+    }
+    let origin = Origin {
+        scene: scene_path.display().to_string(),
+        graph: graph_path.display().to_string(),
+        graph_hash: graph_fingerprint(&graph_text),
+        total_iterations: renderer.total_iterations(budget),
+    };
+    if let Some((path, file)) = &resume {
+        hppm::app::state::resume(&mut renderer, &origin, path, file)?;
+        eprintln!(
+            "resumed {}: {} iterations done ({} spp)",
+            path.display(),
+            renderer.iterations(),
+            renderer.samples_per_pixel()
+        );
     }
     if args.profile {
         renderer.enable_profiling()?;
@@ -251,7 +369,18 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         graph_path.display()
     );
     let bar = progress_bar(budget);
+    let mut last_checkpoint = 0.0;
+    let mut checkpoint_error = None;
     let summary = renderer.run(budget, &cancel, |r, seconds| {
+        if let Some(path) = &args.checkpoint
+            && seconds - last_checkpoint >= args.checkpoint_every
+            && checkpoint_error.is_none()
+        {
+            last_checkpoint = seconds;
+            if let Err(e) = checkpoint_file(r, &origin).and_then(|f| f.write(path)) {
+                checkpoint_error = Some(e);
+            }
+        }
         let spp = r.samples_per_pixel();
         match budget.spp {
             Some(_) => bar.set_position(spp),
@@ -260,16 +389,30 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         bar.set_message(format!("{:.1} spp/s", spp as f64 / seconds.max(1e-9)));
     })?;
     bar.finish_and_clear();
+    if let Some(e) = checkpoint_error {
+        return Err(e);
+    }
+    if let Some(path) = &args.checkpoint {
+        checkpoint_file(&renderer, &origin)?.write(path)?;
+        eprintln!(
+            "checkpoint {}: {} iterations",
+            path.display(),
+            renderer.iterations()
+        );
+    }
     let counters = renderer.counters()?;
-    let image = renderer.image()?;
     let provenance = Provenance::default()
         .with("hppm_adapter", gpu.adapter_label())
         .with("hppm_scene", scene_path.display())
         .with("hppm_graph", graph_path.display())
-        .with("hppm_spp", summary.samples_per_pixel)
-        .with("hppm_seed", args.seed)
+        .with("hppm_spp", renderer.samples_per_pixel())
+        .with("hppm_seed", seed)
         .with("hppm_seconds", format!("{:.3}", summary.seconds));
-    image.write(&args.out, &provenance)?;
+    if args.shard.is_some() {
+        shard_file(&renderer, &origin)?.write(&args.out)?;
+    } else {
+        renderer.image()?.write(&args.out, &provenance)?;
+    }
     if args.aovs {
         for (slot, aov) in renderer.aovs()? {
             let path = aov_path(&args.out, slot);
@@ -305,8 +448,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         args.out.display(),
         width,
         height,
-        summary.samples_per_pixel,
-        summary.photons,
+        renderer.samples_per_pixel(),
+        renderer.photons(),
         summary.seconds,
         counters.get("rays") as f64 / summary.seconds.max(1e-9) / 1e6,
         counters.get("discarded_samples"),
@@ -323,6 +466,39 @@ fn aov_path(out: &Path, slot: &str) -> PathBuf {
         None => format!("{stem}.{slot}"),
     };
     out.with_file_name(name)
+}
+
+fn merge(args: MergeArgs) -> Result<(), Error> {
+    OutputFormat::of(&args.out)?;
+    hppm::image::check_writable(&args.out)?;
+    let shards = args
+        .shards
+        .iter()
+        .map(|path| Ok((path.clone(), StateFile::read(path)?)))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let merged = hppm::app::state::merge(&shards, args.partial)?;
+    let h = &merged.header;
+    let provenance = Provenance::default()
+        .with("hppm_scene", &h.scene)
+        .with("hppm_graph", &h.graph)
+        .with("hppm_spp", merged.samples_per_pixel)
+        .with("hppm_seed", h.seed)
+        .with(
+            "hppm_shards",
+            format!("{:?} of {}", merged.shards, merged.of),
+        );
+    merged.image.write(&args.out, &provenance)?;
+    println!(
+        "{}: {} of {} shards, {}x{}, {} spp and {} photons",
+        args.out.display(),
+        merged.shards.len(),
+        merged.of,
+        h.width,
+        h.height,
+        merged.samples_per_pixel,
+        merged.photons
+    );
+    Ok(())
 }
 
 fn info() -> Result<(), Error> {
@@ -473,6 +649,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render(args),
         Command::Compare(args) => compare(args),
+        Command::Merge(args) => merge(args),
         Command::Info => info(),
         Command::Graph { file, dot, scene } => show_graph(&file, dot, scene.as_deref()),
         Command::Bench(args) if args.hybrid => bench_hybrid(&args),

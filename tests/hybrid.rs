@@ -150,12 +150,14 @@ fn hybrid_renders_the_point_light_caustic_that_path_tracing_misses() {
          caustic ({caustic_pixels} px) mean: hybrid {hybrid_caustic:.3}, pt {pt_caustic:.3}, \
          reference {reference_caustic:.3}"
     );
-    // Measured at 64 spp: hybrid 0.0026, pt 0.0067 (its error is the missing caustic). The
-    // caustic's light returning through the sphere onto the plane, looked up in the photon grid
-    // at the second diffuse vertex, is most of the hybrid's noise here; hybrid_first_vertex.ron
-    // leaves that light out (0.17% of the plane, tests/bias.rs) and measures 0.00098.
+    // Measured at 64 spp: hybrid 0.0026 (seed 3), pt 0.0067 (its error is the missing caustic).
+    // The caustic's light returning through the sphere onto the plane, looked up in the photon
+    // grid at the second diffuse vertex, is most of the hybrid's noise here;
+    // hybrid_first_vertex.ron leaves that light out (0.17% of the plane, tests/bias.rs) and
+    // measured 0.0009 to 0.0022 over seeds 3 to 6: at 64 spp the error is mostly noise, so the
+    // bound sits above that spread and well below pt's.
     assert!(
-        hybrid_error < 0.0045,
+        hybrid_error < 0.005,
         "hybrid relMSE on the plane {hybrid_error}"
     );
     assert!(
@@ -165,6 +167,53 @@ fn hybrid_renders_the_point_light_caustic_that_path_tracing_misses() {
     assert!(
         (hybrid_caustic / reference_caustic - 1.0).abs() < 0.1,
         "caustic mean: hybrid {hybrid_caustic} vs reference {reference_caustic}"
+    );
+}
+
+/// The pppm hybrid (graphs/hybrid_pppm.ron) converges to Mitsuba's composite on the point-light
+/// caustic: on the plane its error falls from 16 to 64 spp as an unbiased-in-the-limit estimate's
+/// should (noise roughly as 1/spp, the kernel bias shrinking with the radius schedule), ends
+/// within the bound of the sppm hybrid above, and the caustic's mean is within 10% of the
+/// reference's. Would catch: the caustic lost or doubled (pt's 0.0067 on the plane, a mean off
+/// by 100%), a radius schedule that does not shrink or shrinks to nothing (no convergence, or
+/// noise that grows), or estimates not averaged (a mean 16x too bright).
+#[test]
+fn pppm_hybrid_converges_on_the_point_light_caustic() {
+    let composite = reference("point_light_caustic_composite");
+    let path_only = reference("point_light_caustic");
+    let plane = plane_pixels();
+    let caustic: Vec<bool> = (0..plane.len())
+        .map(|i| plane[i] && composite.pixels[i][0] > 2.0 * path_only.pixels[i][0] + 0.1)
+        .collect();
+    let gpu = gpu();
+    let scene = load_scene(POINT_LIGHT);
+    let mut r = renderer(&gpu, &scene, load_graph("graphs/hybrid_pppm.ron"), 3);
+    let early = render_to(&mut r, 16);
+    let late = render_to(&mut r, 64);
+    let on_plane = |image: &Image| {
+        image
+            .relmse_where(&composite, |i| plane[i])
+            .unwrap_or(f64::NAN)
+    };
+    let (early_error, late_error) = (on_plane(&early), on_plane(&late));
+    let (mean, reference_mean) = (
+        masked_mean(&late, &caustic),
+        masked_mean(&composite, &caustic),
+    );
+    eprintln!(
+        "point_light_caustic, hybrid_pppm, plane relMSE: 16 spp {early_error:.5}, 64 spp \
+         {late_error:.5}; caustic mean {mean:.3} vs reference {reference_mean:.3}"
+    );
+    assert!(
+        late_error < 0.6 * early_error,
+        "no convergence: relMSE {early_error} at 16 spp, {late_error} at 64"
+    );
+    // Measured at seed 3: 0.0140 at 16 spp, 0.0042 at 64 (the photon grid's light through the
+    // sphere is most of the noise, as for the sppm hybrid above); pt's missing caustic is 0.0067.
+    assert!(late_error < 0.005, "relMSE on the plane {late_error}");
+    assert!(
+        (mean / reference_mean - 1.0).abs() < 0.1,
+        "caustic mean: pppm {mean} vs reference {reference_mean}"
     );
 }
 

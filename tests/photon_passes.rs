@@ -18,6 +18,7 @@ use hppm::passes::hit_points::{
     DEPOSITS, GpuHitPoint, GpuPhotonHit, NO_PIXEL, PhotonHitsHeader, build_tree,
 };
 use hppm::passes::photon_trace::{self, PhotonMode, PhotonTrace, PhotonTraceParams};
+use hppm::passes::rng::Stream;
 use hppm::passes::sppm::{self, Merge, MergeParams};
 use hppm::scene::Scene;
 use hppm::scene::bvh::{build_sah, closest_hit, scene_boxes};
@@ -139,27 +140,6 @@ fn hit_point_tree_leaves_hold_one_hit_point_each_and_nodes_bound_children() {
 
 const PHOTON_SEED: u64 = 7;
 
-fn pcg_hash(input: u32) -> u32 {
-    let state = input.wrapping_mul(747796405).wrapping_add(2891336453);
-    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
-    (word >> 22) ^ word
-}
-
-/// The shaders' random stream (shaders/common/rng.wgsl).
-struct Rng(u32);
-
-impl Rng {
-    fn new(a: u32, b: u32, c: u32) -> Self {
-        Rng(pcg_hash(a ^ pcg_hash(b ^ pcg_hash(c))))
-    }
-    fn next_f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(747796405).wrapping_add(2891336453);
-        let s = self.0;
-        let word = ((s >> ((s >> 28) + 4)) ^ s).wrapping_mul(277803737);
-        (((word >> 22) ^ word) >> 8) as f32 * (1.0 / 16777216.0)
-    }
-}
-
 fn floor_hit_points() -> Vec<GpuHitPoint> {
     let n = 24;
     let mut points = Vec::new();
@@ -195,11 +175,11 @@ fn cpu_caustic_deposits(
 ) -> Vec<(u32, [f64; 3])> {
     let bvh = build_sah(&scene_boxes(scene), 4);
     let light = scene.point_lights[0];
-    let seed = ((PHOTON_SEED ^ (PHOTON_SEED >> 32)) as u32) ^ 0x9e37_79b9;
+    let seed = hppm::passes::rng::photon_seed(PHOTON_SEED);
     let flux = light.intensity * (4.0 * std::f32::consts::PI) * (1.0 / photons as f32);
     let mut result = vec![(0u32, [0.0f64; 3]); points.len()];
     for index in 0..photons {
-        let mut rng = Rng::new(index, 0, seed);
+        let mut rng = Stream::new(index, 0, seed);
         let _pick = rng.next_f32();
         let _position = (rng.next_f32(), rng.next_f32());
         let u = (rng.next_f32(), rng.next_f32());
@@ -803,6 +783,8 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
             let ctx = ExecCtx {
                 gpu: &gpu,
                 iteration,
+                next_iteration: iteration + 1,
+                first: iteration == 0,
                 seed: 0,
             };
             merge.execute(&ctx, &mut recorder).expect("execute");

@@ -39,14 +39,16 @@ struct HitPointBuffer {
     points: array<HitPoint>,
 }
 
-// Written by the estimator when it is prepared: how the camera pass sets a slot's first radius.
+// Written by the estimator (when prepared; pppm every iteration): how the camera pass sets a
+// slot's first radius.
 struct RadiusRule {
     // Absolute initial radius in scene units; 0 means `radius_pixels` footprints.
     initial_radius: f32,
     radius_pixels: f32,
     // Floor relative to the scene's size, so radii never underflow.
     min_radius: f32,
-    pad: u32,
+    // Factor on the first radius before the floor: 1, or pppm's schedule for this iteration.
+    scale: f32,
 }
 
 // The estimator's radius per hit-point slot; 0 while the slot has none yet.
@@ -129,7 +131,7 @@ fn initial_radius(rule: RadiusRule, footprint: f32) -> f32 {
     if r <= 0.0 {
         r = rule.radius_pixels * footprint;
     }
-    return max(r, rule.min_radius);
+    return max(r * rule.scale, rule.min_radius);
 }
 
 fn point_in_box(p: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> bool {

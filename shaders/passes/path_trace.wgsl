@@ -7,7 +7,7 @@
 // it through one or more specular vertices is dropped, because photon mapping adds exactly that.
 // With `trace_beyond` 0 (photon mapping only) a path stops at its first photon-mapped vertex.
 
-#import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
+#import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
 #import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, unoccluded, surface_at, spawn_origin}
 #import common::camera::camera_direction
@@ -105,7 +105,7 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
 }
 
 // Next-event estimation at a diffuse vertex: one light sample with a shadow ray.
-fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
     let ls = sample_light(surface.position, u_pick, u);
@@ -167,7 +167,7 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
     return flux / (PI * r2);
 }
 
-fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
     var result = vec3<f32>(0.0);
     let max_depth = min(params.max_depth, SAFETY_MAX_DEPTH);
@@ -277,7 +277,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var accepted = 0u;
     var rays = 0u;
     for (var s = 0u; s < params.samples_per_iteration; s++) {
-        var rng = rng_seed(pixel_index, params.sample_base + s, params.seed);
+        var rng = rng_stream(pixel_index, params.sample_base + s, params.seed);
         let sink = HitPointSink(pixel_index, recording && s == 0u);
         let sample = trace_path(id.xy, sink, &rng, &rays);
         // One NaN or Inf sample (or one that would overflow the sum) must not poison the

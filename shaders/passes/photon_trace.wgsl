@@ -12,7 +12,7 @@
 // elsewhere reaches a diffuse surface first and would be discarded, so leaving those directions
 // out changes nothing but the cost. The flux is divided by the cone's density instead.
 
-#import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
+#import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
 #import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_photon, surface_at, offset_ray_origin, spawn_origin}
 #import common::lights::{pick_light, sample_area_light_point}
@@ -151,7 +151,7 @@ fn emit_point_photon(light: Light, u: vec2<f32>) -> Photon {
 }
 #endif
 
-fn emit_photon(rng: ptr<function, u32>) -> Photon {
+fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
     var photon: Photon;
     photon.valid = false;
     if scene_info.num_lights == 0u {
@@ -201,7 +201,7 @@ fn deposit(position: vec3<f32>, wi: vec3<f32>, flux: vec3<f32>, segments: u32) {
 }
 
 // Traces one photon; returns the segments traced.
-fn trace_photon(start: Photon, rng: ptr<function, u32>) -> u32 {
+fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
     var photon = start;
     var after_specular = false;
     let initial = max_component(start.flux);
@@ -271,7 +271,7 @@ fn main(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index
     var flux = vec3<f32>(0.0);
     var segments = 0u;
     if index < params.photons {
-        var rng = rng_seed(index, params.iteration, params.seed);
+        var rng = rng_stream(index, params.iteration, params.seed);
         let photon = emit_photon(&rng);
         if photon.valid {
             flux = photon.flux;

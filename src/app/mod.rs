@@ -7,3 +7,4 @@ pub mod bench_hybrid;
 pub mod compare;
 pub mod plot;
 pub mod render;
+pub mod state;

@@ -9,7 +9,7 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::graph::ValidGraph;
 use crate::graph::exec::PreparedGraph;
-use crate::graph::pass::{Counters, IMAGE, Resource, Shared};
+use crate::graph::pass::{Counters, IMAGE, Resource, Schedule, Shared};
 use crate::image::Image;
 use crate::passes::{SceneResources, paths, scene_meets, shader_library};
 use crate::scene::Scene;
@@ -60,22 +60,46 @@ pub struct Renderer<'a> {
     width: u32,
     height: u32,
     seed: u64,
+    /// Which global iterations this render runs (all of them, or a shard's share).
+    schedule: Schedule,
+    /// Iterations run so far by this render (its local count; `schedule` maps it to global).
     iteration: u64,
     spp_per_iteration: u64,
     photons_per_iteration: u64,
     /// Nodes the scene had no use for, removed before preparing.
     pruned: Vec<crate::graph::Pruned>,
+    /// Fingerprint of the scene as uploaded (geometry, materials, lights, camera at this size).
+    scene_hash: u64,
 }
 
 impl<'a> Renderer<'a> {
     pub fn new(
         gpu: &'a GpuContext,
         scene: &Scene,
-        mut graph: ValidGraph,
+        graph: ValidGraph,
         width: u32,
         height: u32,
         seed: u64,
     ) -> Result<Self, Error> {
+        Self::with_schedule(gpu, scene, graph, width, height, seed, Schedule::default())
+    }
+
+    /// A renderer that runs the global iterations of `schedule` (a shard's, or the rest of a
+    /// resumed render), each drawing the random numbers it would in one full render.
+    pub fn with_schedule(
+        gpu: &'a GpuContext,
+        scene: &Scene,
+        mut graph: ValidGraph,
+        width: u32,
+        height: u32,
+        seed: u64,
+        schedule: Schedule,
+    ) -> Result<Self, Error> {
+        if schedule.stride == 0 {
+            return Err(Error::Other(
+                "a schedule's stride must be at least 1".into(),
+            ));
+        }
         // The loaders refuse these already; a scene made or scaled in code must not render black
         // without a word either.
         scene.check_extent()?;
@@ -84,11 +108,11 @@ impl<'a> Renderer<'a> {
         graph.check_transport(&paths::CLASSES)?;
         let shaders = shader_library(gpu.has_float_atomics(), scene)?;
         let mut shared = Shared::default();
-        shared.insert(SceneResources::upload(
-            gpu,
-            &GpuScene::new(scene, width, height),
-        )?);
-        let graph = PreparedGraph::new(gpu, &shaders, &shared, graph, width, height)?;
+        let gpu_scene = GpuScene::new(scene, width, height);
+        let scene_hash = scene_fingerprint(&gpu_scene);
+        shared.insert(SceneResources::upload(gpu, &gpu_scene)?);
+        let graph =
+            PreparedGraph::new(gpu, &shaders, &shared, graph, width, height, schedule.first)?;
         let out_node = graph.graph().output.0;
         let kind = graph.graph().nodes[out_node].kind;
         let mut aovs: Vec<(&'static str, Resource)> = kind
@@ -114,16 +138,82 @@ impl<'a> Renderer<'a> {
             width,
             height,
             seed,
+            schedule,
             iteration: 0,
             spp_per_iteration,
             photons_per_iteration,
             pruned,
+            scene_hash,
         })
+    }
+
+    /// Fingerprint of the scene as the GPU sees it: two renders with equal fingerprints render
+    /// the same scene at the same size.
+    pub fn scene_hash(&self) -> u64 {
+        self.scene_hash
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The accumulators whose means add up to the image, read back as per-pixel sums and
+    /// counts, by `node.slot` (what a shard writes and `hppm merge` sums).
+    pub fn read_terms(&self) -> Result<Vec<crate::app::state::Term>, Error> {
+        self.graph
+            .output_terms()?
+            .into_iter()
+            .map(|(name, r)| Ok((name, self.gpu.read_pod(&r.buffer, r.len as usize)?)))
+            .collect()
+    }
+
+    /// Every buffer whose contents carry between iterations, read back whole, by name (what a
+    /// checkpoint holds, besides the iteration count).
+    pub fn read_state(&self) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        self.gpu.wait()?;
+        self.graph
+            .state_buffers()
+            .into_iter()
+            .map(|(name, buffer)| Ok((name, self.gpu.read_buffer(buffer, 0, buffer.size())?)))
+            .collect()
+    }
+
+    /// Puts back what `read_state` read after `iterations` iterations of a render of the same
+    /// graph, scene and schedule, so that the next iteration is the one that render would run.
+    pub fn restore_state(
+        &mut self,
+        iterations: u64,
+        sections: &[(String, Vec<u8>)],
+    ) -> Result<(), Error> {
+        let buffers = self.graph.state_buffers();
+        let ours: Vec<String> = buffers.iter().map(|(n, _)| n.clone()).collect();
+        let theirs: Vec<String> = sections.iter().map(|(n, _)| n.clone()).collect();
+        if ours != theirs {
+            return Err(Error::Other(format!(
+                "the checkpoint holds state [{}] but this graph has [{}]",
+                theirs.join(", "),
+                ours.join(", ")
+            )));
+        }
+        for ((name, buffer), (_, bytes)) in buffers.iter().zip(sections) {
+            if bytes.len() as u64 != buffer.size() {
+                return Err(Error::Other(format!(
+                    "checkpoint state {name} has {} bytes, this render's {}",
+                    bytes.len(),
+                    buffer.size()
+                )));
+            }
+            self.gpu.queue.write_buffer(buffer, 0, bytes);
+        }
+        self.gpu.wait()?;
+        self.iteration = iterations;
+        Ok(())
     }
 
     /// Records and submits one iteration of every node, in schedule order.
     pub fn iterate(&mut self) -> Result<(), Error> {
-        self.graph.iterate(self.gpu, self.iteration, self.seed)?;
+        self.graph
+            .iterate(self.gpu, self.schedule, self.iteration, self.seed)?;
         self.iteration += 1;
         Ok(())
     }
@@ -143,8 +233,23 @@ impl<'a> Renderer<'a> {
         self.graph.node_times()
     }
 
+    /// Iterations this render has run.
     pub fn iterations(&self) -> u64 {
         self.iteration
+    }
+
+    pub fn schedule(&self) -> Schedule {
+        self.schedule
+    }
+
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// Why this graph's renders of disjoint iterations cannot be summed into one image, naming
+    /// the node; `None` when they can.
+    pub fn shard_refusal(&self) -> Option<(String, &'static str)> {
+        self.graph.shard_refusal()
     }
 
     pub fn samples_per_pixel(&self) -> u64 {
@@ -188,6 +293,22 @@ impl<'a> Renderer<'a> {
         self.graph.counters(self.gpu)
     }
 
+    /// Global iterations the whole render of `budget` runs (all shards together), when the
+    /// budget counts samples or photons; `None` for a time budget alone.
+    pub fn total_iterations(&self, budget: Budget) -> Option<u64> {
+        let spp_iterations = budget
+            .spp
+            .map(|spp| spp.div_ceil(self.spp_per_iteration.max(1)));
+        let photon_iterations = budget
+            .photons
+            .filter(|_| self.photons_per_iteration > 0)
+            .map(|n| n.div_ceil(self.photons_per_iteration.max(1)));
+        match (spp_iterations, photon_iterations) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
     /// Iterates until `budget` is met or `cancel` is raised, calling `progress` after each
     /// iteration with the seconds elapsed.
     pub fn run(
@@ -209,17 +330,10 @@ impl<'a> Renderer<'a> {
             ));
         }
         let start = Instant::now();
-        let spp_iterations = budget
-            .spp
-            .map(|spp| spp.div_ceil(self.spp_per_iteration.max(1)));
-        let photon_iterations = budget
-            .photons
-            .filter(|_| self.photons_per_iteration > 0)
-            .map(|n| n.div_ceil(self.photons_per_iteration.max(1)));
-        let target_iterations = match (spp_iterations, photon_iterations) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        };
+        // Budgets count the iterations of the whole render; this one runs its share of them.
+        let target_iterations = self
+            .total_iterations(budget)
+            .map(|total| self.schedule.local_count(total));
         loop {
             let elapsed = start.elapsed().as_secs_f64();
             let spp_done = target_iterations.is_some_and(|t| self.iteration >= t);
@@ -241,6 +355,28 @@ impl<'a> Renderer<'a> {
             cancelled: cancel.load(Ordering::Relaxed),
         })
     }
+}
+
+/// FNV-1a over the uploaded scene (uniform and tables), so a shard or checkpoint made from
+/// another scene, or at another size, is recognised whatever its file is called.
+fn scene_fingerprint(scene: &GpuScene) -> u64 {
+    use bytemuck::{bytes_of, cast_slice};
+    let parts: [&[u8]; 8] = [
+        bytes_of(&scene.uniform),
+        cast_slice(&scene.bvh_nodes),
+        cast_slice(&scene.prim_indices),
+        cast_slice(&scene.triangles),
+        cast_slice(&scene.spheres),
+        cast_slice(&scene.materials),
+        cast_slice(&scene.lights),
+        cast_slice(&scene.light_cdf),
+    ];
+    let mut hash = crate::app::state::Fnv::default();
+    for part in parts {
+        hash.write(&(part.len() as u64).to_le_bytes());
+        hash.write(part);
+    }
+    hash.finish()
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -7,7 +7,8 @@ use std::time::Instant;
 
 use super::ValidGraph;
 use super::pass::{
-    Counters, ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, Shared, Size, SlotDir,
+    Counters, ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Resource, Schedule, Shared, Size,
+    SlotDir,
 };
 use crate::Error;
 use crate::gpu::GpuContext;
@@ -110,6 +111,7 @@ impl PreparedGraph {
         mut graph: ValidGraph,
         width: u32,
         height: u32,
+        first_iteration: u64,
     ) -> Result<Self, Error> {
         let order = graph.order.clone();
         let context = |graph: &ValidGraph,
@@ -140,6 +142,7 @@ impl PreparedGraph {
                 kept_inputs,
                 width,
                 height,
+                first_iteration,
             }
         };
         // Outputs first, all of them: an input that reads the previous iteration is wired to
@@ -204,12 +207,21 @@ impl PreparedGraph {
             .and_then(|e| self.resource(e.from_node, e.from_slot))
     }
 
-    /// Records and submits one iteration of every node, in schedule order.
-    pub fn iterate(&mut self, gpu: &GpuContext, iteration: u64, seed: u64) -> Result<(), Error> {
+    /// Records and submits the `local`-th iteration (0-based) of `schedule`, every node in
+    /// schedule order.
+    pub fn iterate(
+        &mut self,
+        gpu: &GpuContext,
+        schedule: Schedule,
+        local: u64,
+        seed: u64,
+    ) -> Result<(), Error> {
         let mut recorder = begin_iteration(gpu, &self.cleared);
         let ctx = ExecCtx {
             gpu,
-            iteration,
+            iteration: schedule.global(local),
+            next_iteration: schedule.global(local + 1),
+            first: local == 0,
             seed,
         };
         for &node in &self.graph.order {
@@ -295,6 +307,74 @@ impl PreparedGraph {
             .sum()
     }
 
+    /// What a checkpoint saves, in schedule order: every persistent output (named
+    /// `node.slot`) and every pass's own state (`node#name`).
+    pub fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
+        let mut out = Vec::new();
+        for &n in &self.graph.order {
+            let node = &self.graph.nodes[n];
+            let persistent = node
+                .kind
+                .slots
+                .iter()
+                .filter(|s| s.dir == SlotDir::Out && s.persistent);
+            for slot in persistent {
+                if let Some(r) = self.resources.get(&(n, slot.name)) {
+                    out.push((format!("{}.{}", node.name, slot.name), &*r.buffer));
+                }
+            }
+            for (name, buffer) in node.pass.state() {
+                out.push((format!("{}#{name}", node.name), buffer));
+            }
+        }
+        out
+    }
+
+    /// The accumulators whose per-pixel means add up to the output image (resolve's `pt` and
+    /// `caustic` inputs, or the output itself), named `node.slot` after their producers. An
+    /// error when one is not an accumulator (a persistent sum and count): such an output
+    /// cannot be summed over renders.
+    pub fn output_terms(&self) -> Result<Vec<(String, Resource)>, Error> {
+        let (out_node, out_slot) = self.graph.output;
+        let producers: Vec<(usize, &'static str)> =
+            match self.graph.nodes[out_node].pass.output_terms(out_slot) {
+                Some(inputs) => inputs
+                    .iter()
+                    .filter_map(|input| {
+                        self.graph
+                            .inputs_of(out_node)
+                            .find(|e| e.to_slot == *input)
+                            .map(|e| (e.from_node, e.from_slot))
+                    })
+                    .collect(),
+                None => vec![(out_node, out_slot)],
+            };
+        producers
+            .into_iter()
+            .map(|(node, slot)| {
+                let valid = &self.graph.nodes[node];
+                let name = format!("{}.{slot}", valid.name);
+                let persistent = valid.kind.slot(slot).is_some_and(|s| s.persistent);
+                let resource = self.resource(node, slot).filter(|_| persistent);
+                resource.map(|r| (name.clone(), r.clone())).ok_or_else(|| {
+                    Error::Other(format!(
+                        "{name} ({}) is not an accumulator of sums and counts",
+                        valid.kind.name
+                    ))
+                })
+            })
+            .collect()
+    }
+
+    /// The first reason a node gives why renders of disjoint iterations cannot be summed.
+    pub fn shard_refusal(&self) -> Option<(String, &'static str)> {
+        self.graph.nodes.iter().find_map(|n| {
+            n.pass
+                .shard_refusal()
+                .map(|why| (format!("node \"{}\" ({})", n.name, n.kind.name), why))
+        })
+    }
+
     /// Counters summed over every node.
     pub fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
         let mut total = Counters::default();
@@ -312,12 +392,15 @@ pub struct Wiring {
     pub consumed: Vec<&'static str>,
     pub kept: Vec<&'static str>,
     pub kept_inputs: Vec<&'static str>,
+    /// The global iteration the pass will first run (`PrepareCtx::first_iteration`).
+    pub first_iteration: u64,
 }
 
 /// A pass prepared alone: its outputs, allocated as a graph would.
 pub struct Standalone {
     pub outputs: HashMap<&'static str, Resource>,
     cleared: Vec<Resource>,
+    first_iteration: u64,
 }
 
 impl Standalone {
@@ -346,13 +429,18 @@ impl Standalone {
             kept_inputs: wiring.kept_inputs.iter().copied().collect(),
             width: size.0,
             height: size.1,
+            first_iteration: wiring.first_iteration,
         };
         let mut cleared = Vec::new();
         let outputs = allocate_outputs(&ctx, kind, kind.name, pass, &mut cleared)?;
         ctx.outputs = outputs.clone();
         pass.prepare(ctx)?;
         gpu.check_errors()?;
-        Ok(Self { outputs, cleared })
+        Ok(Self {
+            outputs,
+            cleared,
+            first_iteration: wiring.first_iteration,
+        })
     }
 
     /// The output `slot` (allocated for every output slot of the kind).
@@ -362,8 +450,8 @@ impl Standalone {
             .ok_or_else(|| Error::Other(format!("no output slot \"{slot}\"")))
     }
 
-    /// Records one iteration of `pass` after zeroing its non-persistent outputs, as a graph
-    /// does, submits it and waits.
+    /// Records global iteration `iteration` of `pass` after zeroing its non-persistent
+    /// outputs, as a graph with consecutive iterations does, submits it and waits.
     pub fn run(
         &self,
         gpu: &GpuContext,
@@ -375,6 +463,8 @@ impl Standalone {
         let ctx = ExecCtx {
             gpu,
             iteration,
+            next_iteration: iteration + 1,
+            first: iteration == self.first_iteration,
             seed,
         };
         pass.execute(&ctx, &mut recorder)?;

@@ -276,6 +276,9 @@ pub struct PrepareCtx<'a> {
     pub kept_inputs: HashSet<&'static str>,
     pub width: u32,
     pub height: u32,
+    /// Global index of the first iteration the render will run (0, or where a shard or a
+    /// resumed render starts): passes with a schedule set their first state from it.
+    pub first_iteration: u64,
 }
 
 impl PrepareCtx<'_> {
@@ -361,9 +364,48 @@ impl<'a> Recorder<'a> {
 /// Per-iteration information handed to `execute`.
 pub struct ExecCtx<'a> {
     pub gpu: &'a GpuContext,
-    /// 0-based iteration index; with the seed it decorrelates random streams between iterations.
+    /// 0-based global iteration index: with the seed it keys every random stream, and schedules
+    /// (pppm's radius) follow it. A shard k of n runs k, k + n, ...; a resumed render goes on
+    /// where it stopped; so each iteration draws what it would in one uninterrupted render.
     pub iteration: u64,
+    /// Global index of the iteration after this one in this render (`iteration` + 1, or + n
+    /// for a shard): state a pass leaves for the next iteration is for that one.
+    pub next_iteration: u64,
+    /// This render's first iteration (a kept resource is written then).
+    pub first: bool,
     pub seed: u64,
+}
+
+/// Which global iterations a render runs: `first`, `first + stride`, `first + 2 stride`, ...
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Schedule {
+    pub first: u64,
+    pub stride: u64,
+}
+
+impl Default for Schedule {
+    fn default() -> Self {
+        Self {
+            first: 0,
+            stride: 1,
+        }
+    }
+}
+
+impl Schedule {
+    /// Global index of this render's `local`-th iteration (0-based).
+    pub fn global(&self, local: u64) -> u64 {
+        self.first + local * self.stride
+    }
+
+    /// Iterations this render runs out of a budget of `total` global iterations (0..total).
+    pub fn local_count(&self, total: u64) -> u64 {
+        if total <= self.first {
+            0
+        } else {
+            (total - self.first).div_ceil(self.stride)
+        }
+    }
 }
 
 /// Counters a pass reports after the render (read back from the GPU once, not per iteration),
@@ -417,6 +459,12 @@ pub trait Pass {
         &[]
     }
 
+    /// Why renders of disjoint iterations through this pass cannot be summed into one image
+    /// (an estimator whose state depends on every earlier iteration); `None`: they can.
+    fn shard_refusal(&self) -> Option<&'static str> {
+        None
+    }
+
     /// Photons this pass emits each iteration (known after `prepare`).
     fn photons_per_iteration(&self) -> u64 {
         0
@@ -426,6 +474,20 @@ pub trait Pass {
     /// carry; `None`: the union of the inputs. Sources of light (camera and photon passes)
     /// answer; pass-throughs need not.
     fn transport(&self, _slot: &str, _ctx: &TransportCtx<'_>) -> Option<Transport> {
+        None
+    }
+
+    /// Buffers of its own (not graph resources) whose contents carry from one iteration to the
+    /// next (sppm's per-slot statistics, counters), by name: a checkpoint saves them with the
+    /// persistent resources and a resumed render restores them. They need COPY_SRC and COPY_DST.
+    fn state(&self) -> Vec<(&'static str, &wgpu::Buffer)> {
+        Vec::new()
+    }
+
+    /// For an output slot that is computed from image inputs (resolve's `combined`), the input
+    /// slots whose per-pixel means add up to it; `None`: the slot is an accumulator itself.
+    /// Shards are merged through these terms.
+    fn output_terms(&self, _slot: &str) -> Option<&'static [&'static str]> {
         None
     }
 

@@ -52,7 +52,8 @@ pub struct RadiusRule {
     pub initial_radius: f32,
     pub radius_pixels: f32,
     pub min_radius: f32,
-    pub _pad: u32,
+    /// Factor on the first radius before the floor: 1, or pppm's schedule for the iteration.
+    pub scale: f32,
 }
 
 impl RadiusRule {
@@ -63,7 +64,7 @@ impl RadiusRule {
             initial_radius,
             radius_pixels,
             min_radius: MIN_RADIUS_FRACTION * scene_radius,
-            _pad: 0,
+            scale: 1.0,
         }
     }
 }
@@ -144,7 +145,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     }),
     struct_layout!(HitPointsHeader => "HitPointsHeader" in BVH_GATHER, { slots_per_pixel }),
     struct_layout!(RadiusRule => "RadiusRule" in SPPM_SHADER, {
-        initial_radius, radius_pixels, min_radius
+        initial_radius, radius_pixels, min_radius, scale
     }),
     struct_layout!(GpuPhotonHit => "PhotonHit" in BVH_GATHER, { position, remaining, wi, flux }),
     struct_layout!(PhotonHitsHeader => "PhotonHitsIn" in BVH_GATHER, { count, dropped } head),

@@ -10,7 +10,9 @@ pub mod path_trace;
 pub mod photon_grid;
 pub mod photon_trace;
 pub mod ppm;
+pub mod pppm;
 pub mod resolve;
+pub mod rng;
 pub mod scene_resources;
 pub mod sppm;
 
@@ -36,6 +38,7 @@ pub fn registry() -> &'static [PassKind] {
         photon_grid::KIND,
         sppm::KIND,
         ppm::KIND,
+        pppm::KIND,
         resolve::KIND,
     ];
     KINDS

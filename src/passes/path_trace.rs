@@ -236,7 +236,9 @@ impl Pass for PathTrace {
         let counters = gpu.create_buffer(
             "path_trace counters",
             16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
         )?;
         let (max_depth, rr_depth, merge_slots) = self.depths(&ctx)?;
         let header = HitPointsHeader {
@@ -330,12 +332,12 @@ impl Pass for PathTrace {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let record = ctx.iteration == 0 || !p.keep_hit_points;
+        let record = ctx.first || !p.keep_hit_points;
         let spp = self.params.samples_per_iteration;
         let gpu_params = GpuParams {
             sample_base: (ctx.iteration as u32).wrapping_mul(spp),
             samples_per_iteration: spp,
-            seed: crate::passes::seed32(ctx.seed),
+            seed: crate::passes::rng::camera_seed(ctx.seed),
             max_depth: p.max_depth,
             rr_depth: p.rr_depth,
             merge_depth: p.merge_slots,
@@ -380,6 +382,13 @@ impl Pass for PathTrace {
             Some(grid) => Some(ctx.source(paths & !DEEP_CAUSTIC, depth).and(grid)),
             None => Some(ctx.source(paths, depth)),
         }
+    }
+
+    fn state(&self) -> Vec<(&'static str, &wgpu::Buffer)> {
+        self.prepared
+            .iter()
+            .map(|p| ("counters", &p.counters))
+            .collect()
     }
 
     fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {

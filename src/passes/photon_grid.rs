@@ -170,14 +170,15 @@ impl PhotonGrid {
         }
     }
 
-    /// r_i / r_1 at `iteration`, stepping from the last one asked when it is the next.
+    /// r_i / r_1 at global `iteration`, stepping on from the last one asked (a shard's
+    /// iterations are `n` apart; a resumed render starts anywhere).
     fn scale_at(&mut self, iteration: u64) -> f64 {
         let alpha = self.params.alpha as f64;
         let (last, log) = self.schedule;
-        let log = if iteration == last {
-            log
-        } else if iteration == last + 1 {
-            log + ((iteration as f64 + alpha) / (iteration as f64 + 1.0)).ln()
+        let log = if iteration >= last {
+            log + ((last + 1)..=iteration)
+                .map(|k| ((k as f64 + alpha) / (k as f64 + 1.0)).ln())
+                .sum::<f64>()
         } else {
             2.0 * radius_scale(alpha, iteration).ln()
         };
@@ -292,7 +293,7 @@ mod tests {
         }
         // Stepping one iteration at a time agrees with the closed product, and jumps too.
         let mut grid = PhotonGrid::new(PhotonGridParams::default());
-        for i in [0u64, 1, 2, 3, 10, 11, 500] {
+        for i in [0u64, 1, 2, 3, 10, 11, 500, 7, 8] {
             let stepped = grid.scale_at(i);
             assert!(
                 (stepped - radius_scale(0.7f32 as f64, i)).abs() < 1e-12,

@@ -27,8 +27,6 @@ const GROUPS_PER_ROW: u32 = 32768;
 /// bounce of indirect light): 4.
 pub const DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC: u32 = 1;
 pub const DEFAULT_PHOTONS_PER_PIXEL_ALL: u32 = 4;
-/// Decorrelates photon random streams from camera streams that share the seed.
-const PHOTON_STREAM: u32 = 0x9e37_79b9;
 /// Photon hits stored per photon in mode All (a photon deposits at every diffuse vertex); hits
 /// beyond are counted as `photon_hits_dropped`. Caustic mode deposits at most once per photon.
 pub const ALL_MODE_HITS_PER_PHOTON: u64 = 8;
@@ -184,12 +182,16 @@ impl Pass for PhotonTrace {
         let counters = gpu.create_buffer(
             "photon_trace counters",
             16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
         )?;
         let emitted = gpu.create_buffer(
             "photon_trace emitted",
             16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
         )?;
         let (layout, bind_group) = bind_buffers(
             &gpu.device,
@@ -228,7 +230,7 @@ impl Pass for PhotonTrace {
         let groups_per_row = groups.clamp(1, GROUPS_PER_ROW);
         let gpu_params = GpuParams {
             photons: p.photons,
-            seed: crate::passes::seed32(ctx.seed) ^ PHOTON_STREAM,
+            seed: crate::passes::rng::photon_seed(ctx.seed),
             iteration: ctx.iteration as u32,
             mode: match self.params.mode {
                 PhotonMode::Caustic => 0,
@@ -275,6 +277,13 @@ impl Pass for PhotonTrace {
 
     fn photons_per_iteration(&self) -> u64 {
         self.prepared.as_ref().map_or(0, |p| p.photons as u64)
+    }
+
+    fn state(&self) -> Vec<(&'static str, &wgpu::Buffer)> {
+        match &self.prepared {
+            Some(p) => vec![("counters", &p.counters), ("emitted", &p.emitted)],
+            None => Vec::new(),
+        }
     }
 
     fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {

@@ -122,6 +122,11 @@ impl Pass for Resolve {
         Ok(())
     }
 
+    fn output_terms(&self, slot: &str) -> Option<&'static [&'static str]> {
+        // combined = mean(pt) + mean(caustic), as resolve.wgsl computes it.
+        (slot == "combined").then_some(&["pt", "caustic"][..])
+    }
+
     fn execute(&mut self, _ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
         let Some(p) = &self.prepared else {
             return Ok(());

@@ -215,7 +215,9 @@ impl Pass for Merge {
         let stats = gpu.create_buffer(
             "merge slot stats",
             hit_points.len.max(1) * SLOT_STATS_BYTES,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
         )?;
         let params = gpu.create_buffer(
             "merge params",
@@ -275,6 +277,21 @@ impl Pass for Merge {
             [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
         );
         Ok(())
+    }
+
+    fn state(&self) -> Vec<(&'static str, &wgpu::Buffer)> {
+        self.prepared
+            .iter()
+            .map(|p| ("slot_stats", &p.stats))
+            .collect()
+    }
+
+    fn shard_refusal(&self) -> Option<&'static str> {
+        Some(
+            "its per-pixel N, R and tau depend on every earlier iteration, so renders of \
+             disjoint iterations are not parts of one render and their images cannot be summed \
+             (graphs/hybrid_pppm.ron's pppm estimator can)",
+        )
     }
 
     fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {

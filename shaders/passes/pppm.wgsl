@@ -1,0 +1,65 @@
+// Probabilistic progressive photon mapping (Knaus & Zwicker 2011): each iteration is an
+// independent density estimate at this iteration's hit points, with the radius the global
+// schedule gives this iteration; the caustic image is the mean of the estimates. One
+// invocation per pixel adds its estimate (summed over its hit-point slots) and a count of 1 to
+// the pixel's running sum, so renders of disjoint iterations add up to one render's sums.
+
+#import common::sampling::{PI, any_not_finite}
+#import common::hit_points::{HitPointBuffer, RadiusBuffer, DepositCell, NO_PIXEL}
+
+struct PppmParams {
+    width: u32,
+    height: u32,
+    slots_per_pixel: u32,
+    // The schedule's radius factor for the next iteration this render runs.
+    next_scale: f32,
+}
+
+@group(1) @binding(0) var<uniform> params: PppmParams;
+@group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
+@group(1) @binding(2) var<storage, read_write> deposits: array<DepositCell>;
+@group(1) @binding(3) var<storage, read_write> radiance: array<vec4<f32>>;
+// Only the rule is used: its scale is the schedule, its radii stay 0, so the camera pass gives
+// every hit point the rule's radius for its footprint.
+@group(1) @binding(4) var<storage, read_write> radii: RadiusBuffer;
+// Pixel estimates dropped as NaN or Inf.
+@group(1) @binding(5) var<storage, read_write> discarded: atomic<u32>;
+
+fn deposited_flux(cell: u32) -> vec3<f32> {
+#ifdef FLOAT_ATOMICS
+    return vec3<f32>(atomicLoad(&deposits[cell].flux[0]), atomicLoad(&deposits[cell].flux[1]), atomicLoad(&deposits[cell].flux[2]));
+#else
+    return vec3<f32>(bitcast<f32>(atomicLoad(&deposits[cell].flux[0])), bitcast<f32>(atomicLoad(&deposits[cell].flux[1])), bitcast<f32>(atomicLoad(&deposits[cell].flux[2])));
+#endif
+}
+
+// This iteration's density estimate at slot `index`: flux per emitted photon over the disc.
+fn slot_estimate(index: u32) -> vec3<f32> {
+    let point = hit_points.points[index];
+    if point.pixel == NO_PIXEL || point.radius <= 0.0 || atomicLoad(&deposits[index].count) == 0u {
+        return vec3<f32>(0.0);
+    }
+    return deposited_flux(index) / (PI * point.radius * point.radius);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.width || id.y >= params.height {
+        return;
+    }
+    let pixel = id.y * params.width + id.x;
+    if pixel == 0u {
+        // Read by the camera pass of the next iteration, which runs after this dispatch.
+        radii.rule.scale = params.next_scale;
+    }
+    var estimate = vec3<f32>(0.0);
+    for (var slot = 0u; slot < params.slots_per_pixel; slot++) {
+        estimate += slot_estimate(pixel * params.slots_per_pixel + slot);
+    }
+    let total = radiance[pixel] + vec4<f32>(estimate, 1.0);
+    if any_not_finite(total.xyz) {
+        atomicAdd(&discarded, 1u);
+    } else {
+        radiance[pixel] = total;
+    }
+}
