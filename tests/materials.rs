@@ -119,10 +119,11 @@ fn materials_cornell_converges_to_mitsuba_at_256_spp() {
     }
 }
 
-/// Per seed, the image means of `pt` and `hybrid` with the same seed (their camera paths are
-/// the same: they differ only by the caustic the hybrid takes from photons), and the hybrid's
-/// caustic AOV mean.
+/// Per seed, the image means of `pt` and of the hybrid `graph` with the same seed (their camera
+/// paths are the same: they differ only by the caustic the hybrid takes from photons), and the
+/// hybrid's caustic AOV mean.
 fn paired_means(
+    graph: &str,
     scene: &hppm::scene::Scene,
     spp: u64,
     seeds: u64,
@@ -132,7 +133,7 @@ fn paired_means(
         .map(|seed| {
             let mut pt = renderer(&gpu, scene, load_graph("graphs/pt.ron"), 100 + seed);
             let pt_mean = render_to(&mut pt, spp).mean();
-            let mut hy = renderer(&gpu, scene, load_graph("graphs/hybrid.ron"), 100 + seed);
+            let mut hy = renderer(&gpu, scene, load_graph(graph), 100 + seed);
             let hy_mean = render_to(&mut hy, spp).mean();
             let aovs = hy.aovs().expect("aovs");
             let caustic = aovs
@@ -144,8 +145,8 @@ fn paired_means(
         .collect()
 }
 
-/// On a box holding every BSDF kind (tests/data/scenes/bsdf_box.xml), `hybrid` renders the
-/// image `pt` renders: with the same seed their camera paths are the same, so the difference
+/// On a box holding every BSDF kind (tests/data/scenes/bsdf_box.xml), `hybrid` and
+/// `hybrid_all_depths` (every Lambertian vertex photon-mapped) render the image `pt` renders: with the same seed their camera paths are the same, so the difference
 /// of their image means is the photon caustic minus the path-traced caustic it replaces, and
 /// over 4 seeds it must be within 4 standard errors plus 0.3% (the photon kernel's blur;
 /// tests/furnace.rs measures it) of zero. The photon-mapped caustic (through the pane under
@@ -156,7 +157,13 @@ fn paired_means(
 #[test]
 fn hybrid_equals_pt_with_every_bsdf() {
     let scene = load_scene("tests/data/scenes/bsdf_box.xml");
-    let runs = paired_means(&scene, 16, 4);
+    for graph in ["graphs/hybrid.ron", "graphs/hybrid_all_depths.ron"] {
+        hybrid_equals_pt(graph, &scene);
+    }
+}
+
+fn hybrid_equals_pt(graph: &str, scene: &hppm::scene::Scene) {
+    let runs = paired_means(graph, scene, 16, 4);
     let n = runs.len() as f64;
     let caustic = runs.iter().map(|r| r.2).sum::<f64>() / n;
     for c in 0..3 {
@@ -166,7 +173,7 @@ fn hybrid_equals_pt_with_every_bsdf() {
         let pt = runs.iter().map(|r| r.0[c]).sum::<f64>() / n;
         let tolerance = 4.0 * se + 0.003 * pt;
         eprintln!(
-            "bsdf_box channel {c}: pt {pt:.5}, hybrid - pt {mean:+.5} +- {se:.5} (tolerance \
+            "bsdf_box, {graph}, channel {c}: pt {pt:.5}, hybrid - pt {mean:+.5} +- {se:.5} (tolerance \
              {tolerance:.5}), caustic {caustic:.5} ({:.1}% of the image)",
             100.0 * caustic / pt
         );
@@ -178,7 +185,7 @@ fn hybrid_equals_pt_with_every_bsdf() {
         }
         assert!(
             mean.abs() <= tolerance,
-            "channel {c}: hybrid - pt = {mean} (tolerance {tolerance})"
+            "{graph}, channel {c}: hybrid - pt = {mean} (tolerance {tolerance})"
         );
     }
 }

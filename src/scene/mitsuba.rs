@@ -945,7 +945,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
             }
             "conductor" | "roughconductor" => {
-                let (eta, k) = self.conductor_index(props, node)?;
+                let (eta, k) = self.conductor_index(props)?;
                 let specular = self.reflectance(props, "specular_reflectance", 1.0)?;
                 if kind == "roughconductor" {
                     Bsdf::RoughConductor {
@@ -1108,7 +1108,7 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// A conductor's complex index: `material` (Mitsuba's measured tables at RGB, default
     /// "none", a perfect mirror: eta 0, k 1) or explicit `eta` and `k`.
-    fn conductor_index(&self, props: &mut Props, node: Node) -> Result<(Vec3, Vec3), SceneError> {
+    fn conductor_index(&self, props: &mut Props) -> Result<(Vec3, Vec3), SceneError> {
         let material = props.take("material");
         let (eta, k) = (props.take("eta"), props.take("k"));
         if let Some(m) = material {
@@ -1134,7 +1134,6 @@ impl<'a, 'input> Reader<'a, 'input> {
                 });
             }
         }
-        let _ = node;
         let eta = eta
             .map(|n| self.color(n))
             .transpose()?
