@@ -478,7 +478,7 @@ fn named_conductors_are_mitsubas() {
 
 /// Malformed BSDF parameters are errors at their line: both alpha and alpha_u, one of
 /// alpha_u/alpha_v, anisotropic roughplastic, a dielectric nested in twosided, an unknown
-/// distribution and an unknown parameter.
+/// distribution and an unknown parameter (whose message lists the parameters the BSDF takes).
 #[test]
 fn bad_bsdf_parameters_are_errors_at_their_line() {
     let cases = [
@@ -508,7 +508,7 @@ fn bad_bsdf_parameters_are_errors_at_their_line() {
         ),
         (
             r#"<bsdf type="plastic"><float name="roughness" value="0.1"/></bsdf>"#,
-            "unknown property \"roughness\"",
+            "unknown property \"roughness\" for <bsdf type=\"plastic\"> (it takes int_ior, ext_ior, diffuse_reflectance",
         ),
         (r#"<bsdf type="blend"/>"#, "roughplastic"),
     ];

@@ -155,6 +155,28 @@ struct Sides {
 const SUPPORTED_BSDFS: &str = "diffuse, dielectric, thindielectric, roughdielectric, conductor, \
     roughconductor, plastic, roughplastic, twosided";
 
+/// The parameters `kind` reads, for messages.
+fn bsdf_parameters(kind: &str) -> &'static str {
+    match kind {
+        "diffuse" => "reflectance",
+        "dielectric" | "thindielectric" => "int_ior, ext_ior",
+        "roughdielectric" => {
+            "int_ior, ext_ior, distribution, alpha or alpha_u and alpha_v, sample_visible"
+        }
+        "conductor" => "material or eta and k, specular_reflectance",
+        "roughconductor" => {
+            "material or eta and k, specular_reflectance, distribution, alpha or alpha_u and \
+             alpha_v, sample_visible"
+        }
+        "plastic" => "int_ior, ext_ior, diffuse_reflectance, specular_reflectance, nonlinear",
+        "roughplastic" => {
+            "int_ior, ext_ior, diffuse_reflectance, specular_reflectance, nonlinear, \
+             distribution, alpha, sample_visible"
+        }
+        _ => "no parameters",
+    }
+}
+
 /// Mitsuba's named indices of refraction (include/mitsuba/render/ior.h).
 const NAMED_IORS: &[(&str, f32)] = &[
     ("vacuum", 1.0),
@@ -998,7 +1020,18 @@ impl<'a, 'input> Reader<'a, 'input> {
                 ));
             }
         };
-        self.finish(std::mem::take(props), node)?;
+        if let Some((name, unknown)) = props.entries.first() {
+            return Err(self.attr_error(
+                *unknown,
+                "name",
+                format!(
+                    "{}: unknown property \"{name}\" for {} (it takes {})",
+                    describe(*unknown),
+                    describe_object(node),
+                    bsdf_parameters(kind)
+                ),
+            ));
+        }
         Ok(bsdf)
     }
 
