@@ -40,6 +40,7 @@ MATERIALS = {
     "roughdielectric_beckmann_aniso": {"type": "roughdielectric", "distribution": "beckmann",
                                        "alpha_u": 0.3, "alpha_v": 0.1, "int_ior": 1.33, "ext_ior": 1.0},
     "thindielectric": {"type": "thindielectric", "int_ior": 1.5, "ext_ior": 1.0},
+    "dielectric": {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0},
 }
 
 
