@@ -69,6 +69,7 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
             bsdf: Bsdf::Diffuse {
                 reflectance: Vec3::splat(albedo),
             },
+            back: None,
             emission: Vec3::splat(emission),
         }],
         triangles: vec![],

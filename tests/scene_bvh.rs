@@ -311,6 +311,7 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
         bsdf: Bsdf::Diffuse {
             reflectance: Vec3::splat(0.5),
         },
+        back: None,
         emission: Vec3::ZERO,
     };
     Scene {

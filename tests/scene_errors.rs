@@ -50,7 +50,12 @@ const CASES: &[(&str, &str, usize, &[&str])] = &[
         &["radius", "-0.5"],
     ),
     ("zero_film.xml", "zero_film.xml", 4, &["width", "0"]),
-    ("twosided.xml", "twosided.xml", 4, &["twosided"]),
+    (
+        "twosided.xml",
+        "twosided.xml",
+        5,
+        &["twosided", "transmission"],
+    ),
     ("bad_matrix.xml", "bad_matrix.xml", 5, &["16 numbers"]),
     ("missing_default.xml", "missing_default.xml", 4, &["$spp"]),
     (
@@ -180,16 +185,16 @@ fn unsupported_mitsuba_features_are_refused_with_a_location() {
     let cases = [
         (r#"<shape type="ply"/>"#, "ply"),
         (
-            r#"<shape type="sphere"><bsdf type="plastic"/></shape>"#,
-            "plastic",
+            r#"<shape type="sphere"><bsdf type="blendbsdf"/></shape>"#,
+            "blendbsdf",
         ),
         (
-            r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Au"/></bsdf></shape>"#,
-            "Au",
+            r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Gold"/></bsdf></shape>"#,
+            "Gold",
         ),
         (
-            r#"<shape type="sphere"><bsdf type="conductor"/></shape>"#,
-            "none",
+            r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Au"/><rgb name="eta" value="1"/></bsdf></shape>"#,
+            "not both",
         ),
         (
             r#"<shape type="sphere"><bsdf type="diffuse"/><bsdf type="diffuse"/></shape>"#,

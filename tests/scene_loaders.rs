@@ -417,6 +417,7 @@ fn obj_meshes_and_bare_obj_scenes() {
             bsdf: Bsdf::Diffuse {
                 reflectance: Vec3::splat(0.8)
             },
+            back: None,
             emission: Vec3::ZERO
         }]
     );

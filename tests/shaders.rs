@@ -139,7 +139,8 @@ fn function_names(module: &naga::Module) -> Vec<String> {
 }
 
 /// Code for what a scene lacks is compiled out: a diffuse-only scene's kernels have no
-/// dielectric function, a scene without spheres no sphere intersection.
+/// dielectric function, a scene without spheres no sphere intersection, a scene without rough
+/// or plastic BSDFs none of their modules.
 #[test]
 fn scene_features_compile_code_in_and_out() {
     let load = |p: &str| {
@@ -185,6 +186,41 @@ fn scene_features_compile_code_in_and_out() {
         assert!(
             has(&glass, path, "intersect_sphere"),
             "{path}: glass scene has spheres"
+        );
+    }
+    // The BSDF kinds: each module only where the scene has its kind.
+    let materials = library_with(
+        true,
+        hppm::passes::scene_defs(&load("tests/refs/scenes/materials_cornell/scene.xml").features()),
+    );
+    for path in [
+        "shaders/passes/path_trace.wgsl",
+        "shaders/passes/photon_trace.wgsl",
+    ] {
+        for function in [
+            "rough_conductor_sample",
+            "rough_plastic_sample",
+            "plastic_sample",
+            "rough_dielectric_sample",
+            "microfacet_sample",
+        ] {
+            assert!(
+                !has(&diffuse, path, function),
+                "{path}: diffuse scene has {function}"
+            );
+            assert!(
+                !has(&glass, path, function),
+                "{path}: glass scene has {function}"
+            );
+            assert!(
+                has(&materials, path, function),
+                "{path}: materials_cornell lacks {function}"
+            );
+        }
+        // materials_cornell has no smooth or thin dielectric.
+        assert!(
+            !has(&materials, path, "sample_thin_dielectric"),
+            "{path}: materials scene"
         );
     }
     let point_light = library_with(

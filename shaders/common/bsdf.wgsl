@@ -1,5 +1,34 @@
 #define_import_path common::bsdf
 
+// What the BSDF modules share, and the smooth dielectrics. Local directions are named as in
+// Mitsuba: `wi` towards the previous vertex (the camera for radiance, the light for photons),
+// `wo` the next; z is the normal of the side the BSDF sees. Values are f |cos wo| (eval) or
+// f |cos wo| / pdf (samples). The CPU reference is src/scene/bsdf.rs.
+
+struct BsdfEval {
+    // f(wi, wo) |cos wo| of the non-delta lobes.
+    value: vec3<f32>,
+    // Density of sampling wo (solid angle), lobe choice included.
+    pdf: f32,
+}
+
+struct BsdfSample {
+    wo: vec3<f32>,
+    weight: vec3<f32>,
+    // Solid-angle density, or the choice probability of a delta lobe.
+    pdf: f32,
+    delta: bool,
+    valid: bool,
+}
+
+fn no_sample() -> BsdfSample {
+    return BsdfSample(vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), 0.0, false, false);
+}
+
+fn mirror_local(wi: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(-wi.x, -wi.y, wi.z);
+}
+
 fn reflect_about(wo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return 2.0 * dot(wo, n) * n - wo;
 }
@@ -46,5 +75,16 @@ fn sample_dielectric(wo: vec3<f32>, normal: vec3<f32>, int_ior: f32, ext_ior: f3
     let dir = normalize(-eta * wo + (eta * cos_i - cos_t) * n);
     let weight = select(1.0, eta * eta, radiance);
     return SpecularSample(dir, weight);
+}
+
+// Mitsuba's thindielectric: a slab whose internal reflections are summed, r' = 2r / (1 + r);
+// what is not reflected passes straight through, unbent.
+fn sample_thin_dielectric(wi: vec3<f32>, int_ior: f32, ext_ior: f32, u: f32) -> BsdfSample {
+    var r = fresnel_dielectric(abs(wi.z), ext_ior / int_ior);
+    r *= 2.0 / (1.0 + r);
+    if u <= r {
+        return BsdfSample(mirror_local(wi), vec3<f32>(1.0), r, true, true);
+    }
+    return BsdfSample(-wi, vec3<f32>(1.0), 1.0 - r, true, true);
 }
 #endif

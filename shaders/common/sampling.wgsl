@@ -69,3 +69,29 @@ fn is_not_finite(x: f32) -> bool {
 fn any_not_finite(v: vec3<f32>) -> bool {
     return is_not_finite(v.x) || is_not_finite(v.y) || is_not_finite(v.z);
 }
+
+// Shirley and Chiu's concentric map of the unit square onto the unit disk (as Mitsuba writes it).
+fn square_to_disk_concentric(u: vec2<f32>) -> vec2<f32> {
+    let x = 2.0 * u.x - 1.0;
+    let y = 2.0 * u.y - 1.0;
+    let quarter = 0.25 * PI;
+    var r = 0.0;
+    var phi = 0.0;
+    if x == 0.0 && y == 0.0 {
+        return vec2<f32>(0.0);
+    } else if x * x > y * y {
+        r = x;
+        phi = quarter * (y / x);
+    } else {
+        r = y;
+        phi = 2.0 * quarter - quarter * (x / y);
+    }
+    return vec2<f32>(r * cos(phi), r * sin(phi));
+}
+
+// Cosine-weighted local direction (z up) through the concentric map, as Mitsuba samples it;
+// pdf = z / pi.
+fn square_to_cosine_hemisphere(u: vec2<f32>) -> vec3<f32> {
+    let p = square_to_disk_concentric(u);
+    return vec3<f32>(p.x, p.y, sqrt(max(1.0 - dot(p, p), 0.0)));
+}

@@ -1,7 +1,9 @@
 #define_import_path common::scene
 
 // Shader defs (src/shaders.rs, from the scene): SPHERES compiles in sphere intersection,
-// DIELECTRIC the dielectric BSDF, POINT_LIGHTS point-light sampling. Code for what a scene
+// DIELECTRIC the smooth and thin dielectric BSDFs, CONDUCTOR the smooth and rough conductors,
+// PLASTIC plastic and rough plastic, ROUGH_DIELECTRIC the rough dielectric, POINT_LIGHTS
+// point-light sampling. Code for what a scene
 // lacks is left out of every kernel.
 
 // The scene every pass shares (bind group 0). Layouts mirror src/scene/gpu_layout.rs.
@@ -60,14 +62,30 @@ struct Sphere {
 }
 
 struct Material {
+    // Diffuse reflectance (diffuse, plastic's base).
     albedo: vec3<f32>,
     kind: u32,
     emission: vec3<f32>,
     int_ior: f32,
+    // Specular reflectance (conductors, plastic's coating).
+    specular: vec3<f32>,
     ext_ior: f32,
+    // A conductor's complex index eta + i k.
+    eta: vec3<f32>,
+    alpha_u: f32,
+    k: vec3<f32>,
+    alpha_v: f32,
+    // 0 Beckmann, 1 GGX.
+    distribution: u32,
+    // The material of the back side (twosided), or NO_BACK.
+    back: u32,
+    nonlinear: u32,
+    specular_weight: f32,
+    internal_reflectance: f32,
+    // Rough plastic: first entry of its transmittance table in bsdf_tables.
+    table: u32,
     pad_a: u32,
     pad_b: u32,
-    pad_c: u32,
 }
 
 struct Light {
@@ -84,6 +102,13 @@ struct Light {
 const MATERIAL_DIFFUSE: u32 = 0u;
 const MATERIAL_DIELECTRIC: u32 = 1u;
 const MATERIAL_MIRROR: u32 = 2u;
+const MATERIAL_CONDUCTOR: u32 = 3u;
+const MATERIAL_ROUGH_CONDUCTOR: u32 = 4u;
+const MATERIAL_PLASTIC: u32 = 5u;
+const MATERIAL_ROUGH_PLASTIC: u32 = 6u;
+const MATERIAL_ROUGH_DIELECTRIC: u32 = 7u;
+const MATERIAL_THIN_DIELECTRIC: u32 = 8u;
+const NO_BACK: u32 = 0xffffffffu;
 const LIGHT_TRIANGLE: u32 = 0u;
 const LIGHT_SPHERE: u32 = 1u;
 const LIGHT_POINT: u32 = 2u;
@@ -101,6 +126,8 @@ const BVH_STACK_SIZE: u32 = 64u;
 @group(0) @binding(5) var<storage, read> materials: array<Material>;
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 @group(0) @binding(7) var<storage, read> light_cdf: array<f32>;
+// Tables BSDFs look up (rough plastic's transmittance per cos theta).
+@group(0) @binding(8) var<storage, read> bsdf_tables: array<f32>;
 
 struct Hit {
     t: f32,

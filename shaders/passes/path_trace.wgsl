@@ -5,11 +5,16 @@
 // With `merge_depth` > 0 the first `merge_depth` diffuse vertices of the first sample are
 // photon-mapped (design.md section 1): each is recorded as a hit point, and emission reached from
 // it through one or more specular vertices is dropped, because photon mapping adds exactly that.
+// Only Lambertian vertices are photon-mapped (a hit point's weight is albedo / pi): glossy and
+// plastic-base vertices are path traced (NEE with MIS), and emission reached from them through
+// specular vertices is kept; photons stop there (photon_trace.wgsl). Delta lobes (mirror,
+// dielectrics, smooth conductor, plastic's coating) are the specular vertices.
 // With `trace_beyond` 0 (photon mapping only) a path stops at its first photon-mapped vertex.
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
-#import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
+#import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::material::{material_eval, material_sample, material_has_continuous_lobe}
 #import common::camera::camera_direction
 #import common::lights::{sample_light, area_light_pdf}
 #import common::bsdf::reflect_about
@@ -167,6 +172,30 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
     return flux / (PI * r2);
 }
 
+// Next-event estimation at a vertex with a non-Lambertian, non-delta lobe: the BSDF evaluated
+// towards one light sample, MIS-weighted against sampling the BSDF. `wi` is local, in `frame`.
+fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, wi: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+    let u_pick = rng_next_f32(rng);
+    let u = rng_next_vec2(rng);
+    let ls = sample_light(surface.position, u_pick, u);
+    if !ls.valid {
+        return vec3<f32>(0.0);
+    }
+    let e = material_eval(material, wi, ls.dir * frame, true);
+    if max_component(e.value) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    *rays += 1u;
+    if !unoccluded(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal) {
+        return vec3<f32>(0.0);
+    }
+    var weight = 1.0;
+    if !ls.is_delta {
+        weight = power_heuristic(ls.pdf, e.pdf);
+    }
+    return e.value * ls.radiance * weight / ls.pdf;
+}
+
 fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
     var result = vec3<f32>(0.0);
@@ -178,10 +207,10 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
         if hit.prim == NO_HIT {
             break;
         }
-        let surface = surface_at(hit, path.origin, path.dir);
-        let material = materials[surface.material];
+        var surface = surface_at(hit, path.origin, path.dir);
+        var material = materials[surface.material];
         let wo = -path.dir;
-        let cos_o = dot(wo, surface.normal);
+        var cos_o = dot(wo, surface.normal);
         path.travelled += hit.t;
 
         if surface.light != NO_LIGHT && cos_o > 0.0 && !(path.after_delta && path.after_merge) {
@@ -190,6 +219,12 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
                 weight = power_heuristic(path.bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
             }
             result += path.throughput * material.emission * weight;
+        }
+        // A twosided material's back is its own BSDF, seen with the normal flipped.
+        if cos_o < 0.0 && material.back != NO_BACK {
+            material = materials[material.back];
+            surface.normal = -surface.normal;
+            cos_o = -cos_o;
         }
         if depth == max_depth {
             break;
@@ -240,7 +275,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             }
             path.dir = reflect_about(wo, surface.normal);
             path.after_delta = true;
-        } else {
+        } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
             let s = sample_dielectric(wo, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
             path.throughput *= s.weight;
@@ -249,6 +284,26 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
 #else
             break;
 #endif
+        } else {
+            // Every other BSDF, in the local frame of the side it is seen from.
+            let frame = basis_from_normal(surface.normal);
+            let wi = wo * frame;
+            if material_has_continuous_lobe(material.kind) {
+                result += path.throughput * direct_light_bsdf(surface, material, frame, wi, rng, rays);
+            }
+            let u1 = rng_next_f32(rng);
+            let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
+            if !s.valid {
+                break;
+            }
+            path.throughput *= s.weight;
+            path.dir = normalize(frame * s.wo);
+            path.after_delta = s.delta;
+            if !s.delta {
+                // A path-traced vertex: what it reaches through specular vertices is ours.
+                path.bsdf_pdf = s.pdf;
+                path.after_merge = false;
+            }
         }
         path.origin = spawn_origin(surface, path.dir);
         if max_component(path.throughput) <= 0.0 {

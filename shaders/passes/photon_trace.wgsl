@@ -5,7 +5,10 @@
 //
 // Mode CAUSTIC deposits only at the first diffuse vertex after at least one specular vertex and
 // stops there (L S+ D: what the hybrid's path tracer leaves out). Mode ALL deposits at every
-// diffuse vertex and continues (photon mapping alone).
+// diffuse vertex and continues (photon mapping alone). Only Lambertian vertices take deposits
+// (the camera's hit points are Lambertian); at a vertex whose sampled lobe is glossy (or
+// plastic's base) a caustic photon stops, because the camera path traces that vertex, and a
+// photon in mode ALL scatters on without depositing. Delta lobes are specular vertices.
 //
 // With `aim` (caustic mode only) photons leave only in directions that meet the sphere around
 // every specular surface (Jensen's projection maps, reduced to one sphere): a photon sent
@@ -13,8 +16,9 @@
 // out changes nothing but the cost. The flux is divided by the cone's density instead.
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
-#import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_photon, surface_at, offset_ray_origin, spawn_origin}
+#import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, intersect_photon, surface_at, offset_ray_origin, spawn_origin}
+#import common::material::material_sample
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
@@ -213,10 +217,15 @@ fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
         if hit.prim == NO_HIT {
             break;
         }
-        let surface = surface_at(hit, photon.origin, photon.dir);
-        let material = materials[surface.material];
+        var surface = surface_at(hit, photon.origin, photon.dir);
+        var material = materials[surface.material];
         let wi = -photon.dir;
-        let cos_i = dot(wi, surface.normal);
+        var cos_i = dot(wi, surface.normal);
+        if cos_i < 0.0 && material.back != NO_BACK {
+            material = materials[material.back];
+            surface.normal = -surface.normal;
+            cos_i = -cos_i;
+        }
         if material.kind == MATERIAL_DIFFUSE {
             // One-sided, as the camera pass: the back of a diffuse surface absorbs.
             if cos_i <= 0.0 {
@@ -239,7 +248,7 @@ fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
             }
             photon.dir = reflect_about(wi, surface.normal);
             after_specular = true;
-        } else {
+        } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
             // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
             let s = sample_dielectric(wi, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
@@ -249,6 +258,19 @@ fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
 #else
             break;
 #endif
+        } else {
+            let frame = basis_from_normal(surface.normal);
+            let u1 = rng_next_f32(rng);
+            let s = material_sample(material, wi * frame, u1, rng_next_vec2(rng), false);
+            if !s.valid {
+                break;
+            }
+            if !s.delta && params.mode == MODE_CAUSTIC {
+                break;
+            }
+            photon.flux *= s.weight;
+            photon.dir = normalize(frame * s.wo);
+            after_specular = s.delta;
         }
         photon.origin = spawn_origin(surface, photon.dir);
         if segments >= params.rr_depth {

@@ -52,7 +52,13 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/scene.wgsl"),
     shader_file!("shaders/common/camera.wgsl"),
     shader_file!("shaders/common/lights.wgsl"),
+    shader_file!("shaders/common/fresnel.wgsl"),
+    shader_file!("shaders/common/microfacet.wgsl"),
     shader_file!("shaders/common/bsdf.wgsl"),
+    shader_file!("shaders/common/conductor.wgsl"),
+    shader_file!("shaders/common/plastic.wgsl"),
+    shader_file!("shaders/common/rough_dielectric.wgsl"),
+    shader_file!("shaders/common/material.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
     shader_file!("shaders/common/spatial_hash.wgsl"),
@@ -60,13 +66,25 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
 ];
 
 /// Shader defs that compile in code for scene features; without them that code is left out.
-pub const SCENE_DEFS: &[&str] = &["DIELECTRIC", "SPHERES", "POINT_LIGHTS"];
+pub const SCENE_DEFS: &[&str] = &[
+    "DIELECTRIC",
+    "SPHERES",
+    "POINT_LIGHTS",
+    "CONDUCTOR",
+    "PLASTIC",
+    "ROUGH_DIELECTRIC",
+];
 
-/// The shader defs a scene needs: `DIELECTRIC` when a shape has a dielectric BSDF, `SPHERES`
-/// when it has spheres, `POINT_LIGHTS` when it has a point light.
+/// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
+/// BSDF, `CONDUCTOR` a conductor with a Fresnel term (smooth or rough), `PLASTIC` a plastic
+/// (smooth or rough), `ROUGH_DIELECTRIC` a rough dielectric, `SPHERES` when it has spheres,
+/// `POINT_LIGHTS` when it has a point light.
 pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
     let present = [
         ("DIELECTRIC", features.dielectric),
+        ("CONDUCTOR", features.conductor),
+        ("PLASTIC", features.plastic),
+        ("ROUGH_DIELECTRIC", features.rough_dielectric),
         ("SPHERES", features.spheres),
         ("POINT_LIGHTS", features.point_lights),
     ];
@@ -125,10 +143,11 @@ pub(crate) fn depth_rule(max_depth: Option<u32>) -> crate::graph::transport::Dep
     max_depth.map_or(Depth::Scene, Depth::Segments)
 }
 
-/// A mirror or dielectric surface: caustic photons need one to become caustic photons.
+/// A surface with a delta lobe (mirror, smooth or thin dielectric, smooth conductor, plastic's
+/// coating): caustic photons need one to become caustic photons.
 pub const SPECULAR_SURFACE: SceneNeed = SceneNeed {
     name: "specular_surface",
-    description: "specular (mirror or dielectric) surface",
+    description: "specular (delta: mirror, smooth dielectric or conductor, plastic) surface",
 };
 
 /// Whether a scene with `features` meets `need` (pruning asks).

@@ -29,7 +29,8 @@ pub const LAYOUTS: &[StructLayout] = &[
         center, radius, material, light, flip_normals
     }),
     struct_layout!(GpuMaterial => "Material" in TRACER, {
-        albedo, kind, emission, int_ior, ext_ior
+        albedo, kind, emission, int_ior, specular, ext_ior, eta, alpha_u, k, alpha_v,
+        distribution, back, nonlinear, specular_weight, internal_reflectance, table
     }),
     struct_layout!(GpuLight => "Light" in TRACER, {
         position, kind, radiance, prim, select_prob, area
@@ -52,7 +53,7 @@ impl SceneResources {
             bytes_of(&scene.uniform),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let tables: [(&str, &[u8]); 7] = [
+        let tables: [(&str, &[u8]); 8] = [
             ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
             ("scene prim indices", cast_slice(&scene.prim_indices)),
             ("scene triangles", cast_slice(&scene.triangles)),
@@ -60,6 +61,7 @@ impl SceneResources {
             ("scene materials", cast_slice(&scene.materials)),
             ("scene lights", cast_slice(&scene.lights)),
             ("scene light cdf", cast_slice(&scene.light_cdf)),
+            ("scene bsdf tables", cast_slice(&scene.bsdf_tables)),
         ];
         let mut buffers = vec![uniform];
         for (label, bytes) in tables {

@@ -5,12 +5,22 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::bsdf::Prepared;
 use super::bvh::{self, BvhNode};
-use super::{Bsdf, Scene};
+use super::{Bsdf, Distribution, Microfacet, Scene};
 
 pub const MATERIAL_DIFFUSE: u32 = 0;
 pub const MATERIAL_DIELECTRIC: u32 = 1;
 pub const MATERIAL_MIRROR: u32 = 2;
+pub const MATERIAL_CONDUCTOR: u32 = 3;
+pub const MATERIAL_ROUGH_CONDUCTOR: u32 = 4;
+pub const MATERIAL_PLASTIC: u32 = 5;
+pub const MATERIAL_ROUGH_PLASTIC: u32 = 6;
+pub const MATERIAL_ROUGH_DIELECTRIC: u32 = 7;
+pub const MATERIAL_THIN_DIELECTRIC: u32 = 8;
+
+/// `back` of a material without a back side of its own.
+pub const NO_BACK: u32 = u32::MAX;
 
 pub const LIGHT_TRIANGLE: u32 = 0;
 pub const LIGHT_SPHERE: u32 = 1;
@@ -46,12 +56,31 @@ pub struct GpuSphere {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuMaterial {
+    /// Diffuse reflectance (diffuse, and plastic's base).
     pub albedo: [f32; 3],
     pub kind: u32,
     pub emission: [f32; 3],
     pub int_ior: f32,
+    /// Specular reflectance (conductors, plastic's coating).
+    pub specular: [f32; 3],
     pub ext_ior: f32,
-    pub _pad: [u32; 3],
+    /// A conductor's complex index of refraction eta + i k.
+    pub eta: [f32; 3],
+    pub alpha_u: f32,
+    pub k: [f32; 3],
+    pub alpha_v: f32,
+    /// 0 Beckmann, 1 GGX.
+    pub distribution: u32,
+    /// The material the back side sees (twosided), or NO_BACK.
+    pub back: u32,
+    pub nonlinear: u32,
+    /// Plastic: probability weight of the coating's lobe.
+    pub specular_weight: f32,
+    /// Plastic: the coating's diffuse reflectance from inside.
+    pub internal_reflectance: f32,
+    /// Rough plastic: first entry of its transmittance table in `bsdf_tables`.
+    pub table: u32,
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -111,26 +140,123 @@ pub struct GpuScene {
     pub lights: Vec<GpuLight>,
     /// Inclusive prefix sums of `select_prob`, searched to pick a light.
     pub light_cdf: Vec<f32>,
+    /// Tables BSDFs look up (rough plastic's transmittance), addressed by `GpuMaterial::table`.
+    pub bsdf_tables: Vec<f32>,
 }
 
 fn mean(v: Vec3) -> f32 {
     (v.x + v.y + v.z) / 3.0
 }
 
-fn gpu_material(bsdf: &Bsdf, emission: Vec3) -> GpuMaterial {
-    let (kind, albedo, int_ior, ext_ior) = match *bsdf {
-        Bsdf::Diffuse { reflectance } => (MATERIAL_DIFFUSE, reflectance, 1.0, 1.0),
-        Bsdf::Dielectric { int_ior, ext_ior } => (MATERIAL_DIELECTRIC, Vec3::ONE, int_ior, ext_ior),
-        Bsdf::Mirror => (MATERIAL_MIRROR, Vec3::ONE, 1.0, 1.0),
-    };
-    GpuMaterial {
-        albedo: albedo.to_array(),
-        kind,
+/// The GPU form of one side's BSDF; its rough plastic table (if any) is appended to `tables`.
+fn gpu_material(bsdf: &Bsdf, emission: Vec3, tables: &mut Vec<f32>) -> GpuMaterial {
+    let prepared = Prepared::new(*bsdf);
+    let mut m = GpuMaterial {
+        albedo: [0.0; 3],
+        kind: MATERIAL_DIFFUSE,
         emission: emission.to_array(),
-        int_ior,
-        ext_ior,
-        _pad: [0; 3],
+        int_ior: 1.0,
+        specular: [1.0; 3],
+        ext_ior: 1.0,
+        eta: [0.0; 3],
+        alpha_u: 0.0,
+        k: [0.0; 3],
+        alpha_v: 0.0,
+        distribution: 0,
+        back: NO_BACK,
+        nonlinear: 0,
+        specular_weight: prepared.specular_weight,
+        internal_reflectance: prepared.internal_reflectance,
+        table: 0,
+        _pad: [0; 2],
+    };
+    let rough = |m: &mut GpuMaterial, mf: &Microfacet| {
+        m.alpha_u = mf.alpha_u.max(1e-4);
+        m.alpha_v = mf.alpha_v.max(1e-4);
+        m.distribution = match mf.distribution {
+            Distribution::Beckmann => 0,
+            Distribution::Ggx => 1,
+        };
+    };
+    match *bsdf {
+        Bsdf::Diffuse { reflectance } => m.albedo = reflectance.to_array(),
+        Bsdf::Dielectric { int_ior, ext_ior } => {
+            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_DIELECTRIC, int_ior, ext_ior);
+        }
+        Bsdf::ThinDielectric { int_ior, ext_ior } => {
+            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_THIN_DIELECTRIC, int_ior, ext_ior);
+        }
+        Bsdf::RoughDielectric {
+            int_ior,
+            ext_ior,
+            microfacet,
+        } => {
+            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_ROUGH_DIELECTRIC, int_ior, ext_ior);
+            rough(&mut m, &microfacet);
+        }
+        Bsdf::Mirror => m.kind = MATERIAL_MIRROR,
+        Bsdf::Conductor { eta, k, specular } => {
+            m.kind = MATERIAL_CONDUCTOR;
+            (m.eta, m.k, m.specular) = (eta.to_array(), k.to_array(), specular.to_array());
+        }
+        Bsdf::RoughConductor {
+            eta,
+            k,
+            specular,
+            microfacet,
+        } => {
+            m.kind = MATERIAL_ROUGH_CONDUCTOR;
+            (m.eta, m.k, m.specular) = (eta.to_array(), k.to_array(), specular.to_array());
+            rough(&mut m, &microfacet);
+        }
+        Bsdf::Plastic {
+            int_ior,
+            ext_ior,
+            diffuse,
+            specular,
+            nonlinear,
+        } => {
+            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_PLASTIC, int_ior, ext_ior);
+            (m.albedo, m.specular) = (diffuse.to_array(), specular.to_array());
+            m.nonlinear = nonlinear as u32;
+        }
+        Bsdf::RoughPlastic {
+            int_ior,
+            ext_ior,
+            diffuse,
+            specular,
+            nonlinear,
+            microfacet,
+        } => {
+            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_ROUGH_PLASTIC, int_ior, ext_ior);
+            (m.albedo, m.specular) = (diffuse.to_array(), specular.to_array());
+            m.nonlinear = nonlinear as u32;
+            rough(&mut m, &microfacet);
+            m.table = tables.len() as u32;
+            tables.extend_from_slice(&prepared.transmittance);
+        }
     }
+    m
+}
+
+/// Every material's front, then the back sides of twosided ones (each front pointing at its
+/// back), and the BSDF tables they use.
+fn gpu_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<f32>) {
+    let mut tables = Vec::new();
+    let mut materials: Vec<GpuMaterial> = scene
+        .materials
+        .iter()
+        .map(|m| gpu_material(&m.bsdf, m.emission, &mut tables))
+        .collect();
+    for i in 0..scene.materials.len() {
+        if let Some(back) = &scene.materials[i].back {
+            let index = materials.len() as u32;
+            // The back emits nothing: area emitters are one-sided.
+            materials.push(gpu_material(back, Vec3::ZERO, &mut tables));
+            materials[i].back = index;
+        }
+    }
+    (materials, tables)
 }
 
 /// Lights with their unnormalised power (what NEE picks in proportion to).
@@ -274,11 +400,7 @@ impl GpuScene {
                 _pad: 0,
             })
             .collect::<Vec<_>>();
-        let materials = scene
-            .materials
-            .iter()
-            .map(|m| gpu_material(&m.bsdf, m.emission))
-            .collect::<Vec<_>>();
+        let (materials, bsdf_tables) = gpu_materials(scene);
 
         let (lo, hi) = scene.bounds();
         let scene_radius = 0.5 * (hi - lo).length();
@@ -309,6 +431,7 @@ impl GpuScene {
             materials: non_empty(materials),
             lights: non_empty(lights),
             light_cdf: non_empty(light_cdf),
+            bsdf_tables: non_empty(bsdf_tables),
         }
     }
 }
@@ -321,7 +444,7 @@ fn specular_bounds(scene: &Scene) -> Option<(Vec3, f32)> {
         scene
             .materials
             .get(material as usize)
-            .is_some_and(|m| m.bsdf.is_delta())
+            .is_some_and(|m| m.bsdfs().any(Bsdf::is_delta))
     };
     let triangles = || scene.triangles.iter().filter(|t| is_specular(t.material));
     let spheres = || scene.spheres.iter().filter(|s| is_specular(s.material));

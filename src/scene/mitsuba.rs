@@ -1,14 +1,15 @@
 //! The subset of Mitsuba 3 XML used by the reference scenes (see `tests/refs/README.md`).
 //! Like Mitsuba, an unknown tag, attribute or property is an error with its line and column, so
 //! a typo never silently renders a different scene; so is anything this renderer would have to
-//! ignore to load the file (a texture, a twosided BSDF, a mirroring camera).
+//! ignore to load the file (a texture, a mirroring camera).
 //!
 //! Supported: `<default>` with `$name` substitution in attribute values; integrator `path`
 //! (`max_depth`, `rr_depth`); sensor `perspective` (`fov`, `fov_axis`, clip planes, `to_world`)
 //! with sampler `independent` and film `hdrfilm` (box filter); shapes `rectangle`, `cube`,
 //! `sphere`, `obj` with `to_world` and `flip_normals`; BSDFs `diffuse`, `dielectric`,
-//! `conductor` with `material="none"` (a mirror), inline or declared at top level with an `id`
-//! and used through `<ref id>`; `area` emitters inside shapes and top-level `point` emitters.
+//! `thindielectric`, `roughdielectric`, `conductor`, `roughconductor`, `plastic`,
+//! `roughplastic` and `twosided` (README's table lists their parameters), inline or declared
+//! at top level with an `id` and used through `<ref id>`; `area` emitters inside shapes and top-level `point` emitters.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -16,7 +17,10 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
-use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh};
+use super::{
+    Bsdf, Camera, Distribution, Integrator, Material, Microfacet, PointLight, Scene, SceneError,
+    Sphere, bsdf, mesh,
+};
 use crate::error::Location;
 
 /// Mitsuba's default BSDF for a shape that names none.
@@ -120,7 +124,7 @@ struct Reader<'a, 'input> {
     path: &'a Path,
     doc: &'a Document<'input>,
     defaults: HashMap<String, String>,
-    named_bsdfs: HashMap<String, Bsdf>,
+    named_bsdfs: HashMap<String, Sides>,
     scene: Scene,
     has_integrator: bool,
     has_sensor: bool,
@@ -128,6 +132,7 @@ struct Reader<'a, 'input> {
 
 /// The properties of one object (`<float name=...>` and friends), consumed by name; whatever is
 /// left over at the end is an unknown property.
+#[derive(Default)]
 struct Props<'a, 'input> {
     entries: Vec<(String, Node<'a, 'input>)>,
 }
@@ -138,6 +143,66 @@ impl<'a, 'input> Props<'a, 'input> {
         Some(self.entries.remove(i).1)
     }
 }
+
+/// A `<bsdf>` as a shape uses it: the front BSDF and, for `twosided`, the back's.
+#[derive(Debug, Clone, Copy)]
+struct Sides {
+    front: Bsdf,
+    back: Option<Bsdf>,
+}
+
+/// The BSDF plugins this loader reads, for messages.
+const SUPPORTED_BSDFS: &str = "diffuse, dielectric, thindielectric, roughdielectric, conductor, \
+    roughconductor, plastic, roughplastic, twosided";
+
+/// The parameters `kind` reads, for messages.
+fn bsdf_parameters(kind: &str) -> &'static str {
+    match kind {
+        "diffuse" => "reflectance",
+        "dielectric" | "thindielectric" => "int_ior, ext_ior",
+        "roughdielectric" => {
+            "int_ior, ext_ior, distribution, alpha or alpha_u and alpha_v, sample_visible"
+        }
+        "conductor" => "material or eta and k, specular_reflectance",
+        "roughconductor" => {
+            "material or eta and k, specular_reflectance, distribution, alpha or alpha_u and \
+             alpha_v, sample_visible"
+        }
+        "plastic" => "int_ior, ext_ior, diffuse_reflectance, specular_reflectance, nonlinear",
+        "roughplastic" => {
+            "int_ior, ext_ior, diffuse_reflectance, specular_reflectance, nonlinear, \
+             distribution, alpha, sample_visible"
+        }
+        _ => "no parameters",
+    }
+}
+
+/// Mitsuba's named indices of refraction (include/mitsuba/render/ior.h).
+const NAMED_IORS: &[(&str, f32)] = &[
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
 
 /// The parts of a shape that do not depend on its type.
 struct ShapeCommon {
@@ -824,82 +889,317 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(())
     }
 
-    fn read_bsdf(&self, node: Node<'a, 'input>) -> Result<Bsdf, SceneError> {
+    /// A `<bsdf>`: one BSDF, or a `twosided` pair.
+    fn read_bsdf(&self, node: Node<'a, 'input>) -> Result<Sides, SceneError> {
         let kind = self.required_attr(node, "type")?;
         if kind == "twosided" {
-            return Err(self.attr_error(
-                node,
-                "type",
-                "bsdf type \"twosided\" is not supported: surfaces are one-sided (use \
-                 flip_normals to choose the side)",
-            ));
+            return self.read_twosided(node);
         }
-        let mut props = self.props(node, &[])?;
-        let bsdf = match kind.as_str() {
-            "diffuse" => {
-                let reflectance = match props.take("reflectance") {
-                    Some(n) => self.non_negative_color(n)?,
-                    None => Vec3::splat(0.5),
-                };
-                Bsdf::Diffuse { reflectance }
+        Ok(Sides {
+            front: self.read_one_sided(node, &kind)?,
+            back: None,
+        })
+    }
+
+    /// Mitsuba's `twosided`: one nested BSDF seen from both sides, or two (front, back); they
+    /// must not transmit.
+    fn read_twosided(&self, node: Node<'a, 'input>) -> Result<Sides, SceneError> {
+        let props = self.props(node, &["bsdf", "ref"])?;
+        self.finish(props, node)?;
+        let mut nested = Vec::new();
+        for child in node.children().filter(Node::is_element) {
+            let sides = match child.tag_name().name() {
+                "bsdf" => self.read_bsdf(child)?,
+                _ => self.bsdf_ref(child)?,
+            };
+            if sides.back.is_some() {
+                return Err(self.error(child, "twosided: a nested BSDF is already twosided"));
             }
+            if sides.front.transmits() {
+                return Err(self.error(
+                    child,
+                    "twosided: only BSDFs without transmission can be nested (as in Mitsuba); \
+                     a dielectric is two-sided already",
+                ));
+            }
+            if nested.len() == 2 {
+                return Err(self.error(child, "twosided: at most two nested BSDFs"));
+            }
+            nested.push(sides.front);
+        }
+        match nested.as_slice() {
+            [one] => Ok(Sides {
+                front: *one,
+                back: Some(*one),
+            }),
+            [front, back] => Ok(Sides {
+                front: *front,
+                back: Some(*back),
+            }),
+            _ => Err(self.error(node, "twosided: a nested <bsdf> is required")),
+        }
+    }
+
+    fn read_one_sided(&self, node: Node<'a, 'input>, kind: &str) -> Result<Bsdf, SceneError> {
+        let mut props = self.props(node, &[])?;
+        let props = &mut props;
+        let bsdf = match kind {
+            "diffuse" => Bsdf::Diffuse {
+                reflectance: self.reflectance(props, "reflectance", 0.5)?,
+            },
             // Mitsuba's defaults: BK7 glass inside, air outside.
             "dielectric" => Bsdf::Dielectric {
-                int_ior: self.ior(&mut props, "int_ior", 1.5046)?,
-                ext_ior: self.ior(&mut props, "ext_ior", 1.000277)?,
+                int_ior: self.ior(props, "int_ior", 1.5046)?,
+                ext_ior: self.ior(props, "ext_ior", 1.000277)?,
             },
-            "conductor" => {
-                self.read_conductor_material(&mut props, node)?;
-                Bsdf::Mirror
+            "thindielectric" => Bsdf::ThinDielectric {
+                int_ior: self.ior(props, "int_ior", 1.5046)?,
+                ext_ior: self.ior(props, "ext_ior", 1.000277)?,
+            },
+            "roughdielectric" => {
+                let int_ior = self.ior(props, "int_ior", 1.5046)?;
+                let ext_ior = self.ior(props, "ext_ior", 1.000277)?;
+                self.distinct_iors(node, int_ior, ext_ior)?;
+                Bsdf::RoughDielectric {
+                    int_ior,
+                    ext_ior,
+                    microfacet: self.microfacet(props, node, true)?,
+                }
+            }
+            "conductor" | "roughconductor" => {
+                let (eta, k) = self.conductor_index(props)?;
+                let specular = self.reflectance(props, "specular_reflectance", 1.0)?;
+                if kind == "roughconductor" {
+                    Bsdf::RoughConductor {
+                        eta,
+                        k,
+                        specular,
+                        microfacet: self.microfacet(props, node, true)?,
+                    }
+                } else if eta == Vec3::ZERO && k == Vec3::ONE && specular == Vec3::ONE {
+                    Bsdf::Mirror
+                } else {
+                    Bsdf::Conductor { eta, k, specular }
+                }
+            }
+            "plastic" | "roughplastic" => {
+                // Mitsuba's defaults: polypropylene inside, air outside.
+                let int_ior = self.ior(props, "int_ior", 1.49)?;
+                let ext_ior = self.ior(props, "ext_ior", 1.000277)?;
+                let diffuse = self.reflectance(props, "diffuse_reflectance", 0.5)?;
+                let specular = self.reflectance(props, "specular_reflectance", 1.0)?;
+                let nonlinear = match props.take("nonlinear") {
+                    Some(n) => self.boolean(n)?,
+                    None => false,
+                };
+                if kind == "plastic" {
+                    Bsdf::Plastic {
+                        int_ior,
+                        ext_ior,
+                        diffuse,
+                        specular,
+                        nonlinear,
+                    }
+                } else {
+                    self.distinct_iors(node, int_ior, ext_ior)?;
+                    Bsdf::RoughPlastic {
+                        int_ior,
+                        ext_ior,
+                        diffuse,
+                        specular,
+                        nonlinear,
+                        microfacet: self.microfacet(props, node, false)?,
+                    }
+                }
             }
             other => {
                 return Err(self.attr_error(
                     node,
                     "type",
-                    format!(
-                        "bsdf type \"{other}\" is not supported (diffuse, dielectric, conductor \
-                         with material \"none\")"
-                    ),
+                    format!("bsdf type \"{other}\" is not supported ({SUPPORTED_BSDFS})"),
                 ));
             }
         };
-        self.finish(props, node)?;
+        if let Some((name, unknown)) = props.entries.first() {
+            return Err(self.attr_error(
+                *unknown,
+                "name",
+                format!(
+                    "{}: unknown property \"{name}\" for {} (it takes {})",
+                    describe(*unknown),
+                    describe_object(node),
+                    bsdf_parameters(kind)
+                ),
+            ));
+        }
         Ok(bsdf)
     }
 
+    /// A colour parameter in [0, inf), `default` when absent.
+    fn reflectance(&self, props: &mut Props, name: &str, default: f32) -> Result<Vec3, SceneError> {
+        match props.take(name) {
+            Some(n) => self.non_negative_color(n),
+            None => Ok(Vec3::splat(default)),
+        }
+    }
+
+    fn distinct_iors(&self, node: Node, int_ior: f32, ext_ior: f32) -> Result<(), SceneError> {
+        if int_ior == ext_ior {
+            return Err(self.error(
+                node,
+                format!(
+                    "{}: int_ior and ext_ior are both {int_ior}; they must differ",
+                    describe_object(node)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `distribution`, `alpha` or `alpha_u` + `alpha_v`, `sample_visible` as Mitsuba's
+    /// MicrofacetDistribution reads them (Beckmann, alpha 0.1 by default).
+    fn microfacet(
+        &self,
+        props: &mut Props,
+        node: Node,
+        anisotropic: bool,
+    ) -> Result<Microfacet, SceneError> {
+        let distribution = match props.take("distribution") {
+            None => Distribution::Beckmann,
+            Some(n) => match self.string(n)?.to_ascii_lowercase().as_str() {
+                "beckmann" => Distribution::Beckmann,
+                "ggx" => Distribution::Ggx,
+                other => {
+                    return Err(self.attr_error(
+                        n,
+                        "value",
+                        format!("distribution \"{other}\": expected \"beckmann\" or \"ggx\""),
+                    ));
+                }
+            },
+        };
+        let alpha = |r: &Self, n: Node| -> Result<f32, SceneError> {
+            let v = r.float(n)?;
+            if v.is_nan() || v < 0.0 {
+                return Err(r.attr_error(
+                    n,
+                    "value",
+                    format!("{}: must not be negative", describe(n)),
+                ));
+            }
+            Ok(v)
+        };
+        let (a, au, av) = (
+            props.take("alpha"),
+            props.take("alpha_u"),
+            props.take("alpha_v"),
+        );
+        let (alpha_u, alpha_v) = match (a, au, av) {
+            (Some(a), None, None) => {
+                let v = alpha(self, a)?;
+                (v, v)
+            }
+            (None, None, None) => (0.1, 0.1),
+            (None, Some(u), Some(v)) if anisotropic => (alpha(self, u)?, alpha(self, v)?),
+            (None, Some(u), Some(v)) => {
+                let (x, y) = (alpha(self, u)?, alpha(self, v)?);
+                if x != y {
+                    return Err(self.error(
+                        node,
+                        format!(
+                            "{}: anisotropic roughness is not supported by Mitsuba's \
+                             roughplastic; give one alpha",
+                            describe_object(node)
+                        ),
+                    ));
+                }
+                (x, y)
+            }
+            (Some(a), _, _) => {
+                return Err(self.error(a, "give either alpha or alpha_u and alpha_v, not both"));
+            }
+            (None, u, v) => {
+                let given = u.or(v).unwrap_or(node);
+                return Err(self.error(given, "alpha_u and alpha_v must both be given"));
+            }
+        };
+        if let Some(n) = props.take("sample_visible")
+            && !self.boolean(n)?
+        {
+            return Err(self.attr_error(
+                n,
+                "value",
+                "sample_visible false is not supported (visible normals are always sampled)",
+            ));
+        }
+        Ok(Microfacet {
+            distribution,
+            alpha_u,
+            alpha_v,
+        })
+    }
+
+    /// A conductor's complex index: `material` (Mitsuba's measured tables at RGB, default
+    /// "none", a perfect mirror: eta 0, k 1) or explicit `eta` and `k`.
+    fn conductor_index(&self, props: &mut Props) -> Result<(Vec3, Vec3), SceneError> {
+        let material = props.take("material");
+        let (eta, k) = (props.take("eta"), props.take("k"));
+        if let Some(m) = material {
+            let name = self.string(m)?;
+            if name != "none" {
+                if let Some(given) = eta.or(k) {
+                    return Err(self.error(
+                        given,
+                        "give either a conductor material or eta and k, not both",
+                    ));
+                }
+                return bsdf::named_conductor(&name).ok_or_else(|| {
+                    let names: Vec<&str> =
+                        bsdf::NAMED_CONDUCTORS.iter().map(|(n, _, _)| *n).collect();
+                    self.attr_error(
+                        m,
+                        "value",
+                        format!(
+                            "conductor material \"{name}\" is not one of Mitsuba's: none, {}",
+                            names.join(", ")
+                        ),
+                    )
+                });
+            }
+        }
+        let eta = eta
+            .map(|n| self.color(n))
+            .transpose()?
+            .unwrap_or(Vec3::ZERO);
+        let k = k.map(|n| self.color(n)).transpose()?.unwrap_or(Vec3::ONE);
+        Ok((eta, k))
+    }
+
+    /// An index of refraction: a positive number or one of Mitsuba's named media.
     fn ior(&self, props: &mut Props, name: &str, default: f32) -> Result<f32, SceneError> {
         let Some(n) = props.take(name) else {
             return Ok(default);
         };
+        if n.has_tag_name("string") {
+            let medium = self.string(n)?;
+            return NAMED_IORS
+                .iter()
+                .find(|(m, _)| *m == medium.to_ascii_lowercase())
+                .map(|(_, v)| *v)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = NAMED_IORS.iter().map(|(m, _)| *m).collect();
+                    self.attr_error(
+                        n,
+                        "value",
+                        format!("{name} \"{medium}\" is not one of {}", names.join(", ")),
+                    )
+                });
+        }
         let v = self.float(n)?;
         if v <= 0.0 {
             return Err(self.attr_error(n, "value", format!("{name} {v}: must be positive")));
         }
         Ok(v)
-    }
-
-    /// Only the perfect mirror (`material="none"`) is supported; Mitsuba's default conductor is
-    /// aluminium, so the material must be given.
-    fn read_conductor_material(&self, props: &mut Props, node: Node) -> Result<(), SceneError> {
-        let Some(n) = props.take("material") else {
-            return Err(self.error(
-                node,
-                "conductor: only material=\"none\" (a perfect mirror) is supported; add \
-                 <string name=\"material\" value=\"none\"/>",
-            ));
-        };
-        let material = self.string(n)?;
-        if material != "none" {
-            return Err(self.attr_error(
-                n,
-                "value",
-                format!(
-                    "conductor material \"{material}\" is not supported (only \"none\", a \
-                     perfect mirror)"
-                ),
-            ));
-        }
-        Ok(())
     }
 
     /// The shape's BSDF (inline or `<ref>`) and area emission, at most one of each.
@@ -922,13 +1222,18 @@ impl<'a, 'input> Reader<'a, 'input> {
                 _ => {}
             }
         }
+        let sides = bsdf.unwrap_or(Sides {
+            front: DEFAULT_BSDF,
+            back: None,
+        });
         Ok(Material {
-            bsdf: bsdf.unwrap_or(DEFAULT_BSDF),
+            bsdf: sides.front,
+            back: sides.back,
             emission: emission.unwrap_or(Vec3::ZERO),
         })
     }
 
-    fn bsdf_ref(&self, node: Node) -> Result<Bsdf, SceneError> {
+    fn bsdf_ref(&self, node: Node) -> Result<Sides, SceneError> {
         let id = self.required_attr(node, "id")?;
         self.named_bsdfs.get(&id).copied().ok_or_else(|| {
             self.attr_error(

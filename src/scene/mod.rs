@@ -3,6 +3,7 @@
 //! every shape owns one material entry (its BSDF plus its area emission, as in Mitsuba, where the
 //! emitter is attached to the shape).
 
+pub mod bsdf;
 pub mod bvh;
 pub mod gpu_layout;
 pub mod mesh;
@@ -28,28 +29,163 @@ pub struct Camera {
     pub height: u32,
 }
 
+/// Microfacet normal distributions (Mitsuba's `distribution`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Distribution {
+    Beckmann,
+    Ggx,
+}
+
+/// A rough surface's microfacet distribution: roughness `alpha_u` along the tangent (local x)
+/// and `alpha_v` along the bitangent; equal for an isotropic surface. Sampled by visible
+/// normals.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Microfacet {
+    pub distribution: Distribution,
+    pub alpha_u: f32,
+    pub alpha_v: f32,
+}
+
+/// One side's BSDF, as Mitsuba 3 defines each plugin (src/scene/bsdf.rs is the reference).
+/// Reflective BSDFs are one-sided (black from the back) unless the material has a `back`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Bsdf {
-    /// Lambertian, one-sided: black when seen from the back of the surface.
+    /// Lambertian.
     Diffuse { reflectance: Vec3 },
     /// Smooth dielectric with Fresnel-weighted reflection and refraction, no absorption.
     Dielectric { int_ior: f32, ext_ior: f32 },
     /// Perfect mirror of reflectance 1 (Mitsuba `conductor` with `material="none"`).
     Mirror,
+    /// Smooth conductor: Fresnel reflectance of the complex index eta + i k, times `specular`.
+    Conductor { eta: Vec3, k: Vec3, specular: Vec3 },
+    RoughConductor {
+        eta: Vec3,
+        k: Vec3,
+        specular: Vec3,
+        microfacet: Microfacet,
+    },
+    /// A diffuse base under a smooth dielectric coating (Mitsuba `plastic`).
+    Plastic {
+        int_ior: f32,
+        ext_ior: f32,
+        diffuse: Vec3,
+        specular: Vec3,
+        nonlinear: bool,
+    },
+    /// The same under a rough coating (isotropic, as Mitsuba's `roughplastic`).
+    RoughPlastic {
+        int_ior: f32,
+        ext_ior: f32,
+        diffuse: Vec3,
+        specular: Vec3,
+        nonlinear: bool,
+        microfacet: Microfacet,
+    },
+    RoughDielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        microfacet: Microfacet,
+    },
+    /// A thin slab of dielectric: reflects or passes straight through.
+    ThinDielectric { int_ior: f32, ext_ior: f32 },
 }
 
 impl Bsdf {
-    /// Delta (specular) BSDFs are the S vertices of the light-transport partition.
+    /// A BSDF with a delta lobe can make an S vertex of the light-transport partition (for
+    /// plastic, when its coating's lobe is sampled).
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Bsdf::Diffuse { .. })
+        matches!(
+            self,
+            Bsdf::Dielectric { .. }
+                | Bsdf::Mirror
+                | Bsdf::Conductor { .. }
+                | Bsdf::Plastic { .. }
+                | Bsdf::ThinDielectric { .. }
+        )
+    }
+
+    /// Transmits light to the other side (such a BSDF has no back face to be given).
+    pub fn transmits(&self) -> bool {
+        matches!(
+            self,
+            Bsdf::Dielectric { .. } | Bsdf::RoughDielectric { .. } | Bsdf::ThinDielectric { .. }
+        )
+    }
+
+    /// Every number it holds is finite and every index of refraction positive.
+    fn is_valid(&self) -> bool {
+        let finite = |v: Vec3| v.is_finite();
+        let ior = |a: f32, b: f32| a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0;
+        let rough = |m: &Microfacet| {
+            m.alpha_u.is_finite() && m.alpha_v.is_finite() && m.alpha_u >= 0.0 && m.alpha_v >= 0.0
+        };
+        match self {
+            Bsdf::Diffuse { reflectance } => finite(*reflectance),
+            Bsdf::Dielectric { int_ior, ext_ior } | Bsdf::ThinDielectric { int_ior, ext_ior } => {
+                ior(*int_ior, *ext_ior)
+            }
+            Bsdf::Mirror => true,
+            Bsdf::Conductor { eta, k, specular } => finite(*eta) && finite(*k) && finite(*specular),
+            Bsdf::RoughConductor {
+                eta,
+                k,
+                specular,
+                microfacet,
+            } => finite(*eta) && finite(*k) && finite(*specular) && rough(microfacet),
+            Bsdf::Plastic {
+                int_ior,
+                ext_ior,
+                diffuse,
+                specular,
+                ..
+            } => ior(*int_ior, *ext_ior) && finite(*diffuse) && finite(*specular),
+            Bsdf::RoughPlastic {
+                int_ior,
+                ext_ior,
+                diffuse,
+                specular,
+                microfacet,
+                ..
+            } => {
+                ior(*int_ior, *ext_ior)
+                    && finite(*diffuse)
+                    && finite(*specular)
+                    && rough(microfacet)
+            }
+            Bsdf::RoughDielectric {
+                int_ior,
+                ext_ior,
+                microfacet,
+            } => ior(*int_ior, *ext_ior) && rough(microfacet),
+        }
     }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Material {
+    /// What the front (normal) side sees.
     pub bsdf: Bsdf,
+    /// What the back side sees, seen with the normal flipped (Mitsuba `twosided`); `None`: the
+    /// back of a reflective BSDF is black, a transmissive one is its own back.
+    pub back: Option<Bsdf>,
     /// Radiance emitted on the front (normal) side; zero for non-emitters.
     pub emission: Vec3,
+}
+
+impl Material {
+    /// A one-sided material.
+    pub fn new(bsdf: Bsdf, emission: Vec3) -> Self {
+        Material {
+            bsdf,
+            back: None,
+            emission,
+        }
+    }
+
+    /// The BSDFs of both sides.
+    pub fn bsdfs(&self) -> impl Iterator<Item = &Bsdf> {
+        std::iter::once(&self.bsdf).chain(self.back.as_ref())
+    }
 }
 
 /// A world-space triangle, counter-clockwise seen from its front (normal) side.
@@ -96,8 +232,16 @@ impl Default for Integrator {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct SceneFeatures {
     pub diffuse: bool,
+    /// Smooth or thin dielectric.
     pub dielectric: bool,
     pub mirror: bool,
+    /// Smooth or rough conductor with a Fresnel term.
+    pub conductor: bool,
+    /// Smooth or rough plastic.
+    pub plastic: bool,
+    pub rough_dielectric: bool,
+    /// Some BSDF has a delta lobe (S vertices exist).
+    pub delta: bool,
     /// Some shape emits (an area light).
     pub area_lights: bool,
     pub point_lights: bool,
@@ -108,7 +252,7 @@ pub struct SceneFeatures {
 impl SceneFeatures {
     /// Delta surfaces are the S vertices of caustic paths: without one there are no caustics.
     pub fn has_specular_surface(&self) -> bool {
-        self.dielectric || self.mirror
+        self.delta
     }
 
     pub fn has_lights(&self) -> bool {
@@ -133,7 +277,10 @@ impl std::fmt::Display for SceneFeatures {
             list(&[
                 ("diffuse", self.diffuse),
                 ("dielectric", self.dielectric),
-                ("mirror", self.mirror)
+                ("mirror", self.mirror),
+                ("conductor", self.conductor),
+                ("plastic", self.plastic),
+                ("rough dielectric", self.rough_dielectric),
             ]),
             list(&[("area", self.area_lights), ("point", self.point_lights)]),
             list(&[("triangles", self.triangles), ("spheres", self.spheres)]),
@@ -283,10 +430,16 @@ impl Scene {
             .map(|t| t.material)
             .chain(self.spheres.iter().map(|s| s.material));
         for m in shape_materials.filter_map(|m| self.materials.get(m as usize)) {
-            match m.bsdf {
-                Bsdf::Diffuse { .. } => f.diffuse = true,
-                Bsdf::Dielectric { .. } => f.dielectric = true,
-                Bsdf::Mirror => f.mirror = true,
+            for bsdf in m.bsdfs() {
+                match bsdf {
+                    Bsdf::Diffuse { .. } => f.diffuse = true,
+                    Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => f.dielectric = true,
+                    Bsdf::Mirror => f.mirror = true,
+                    Bsdf::Conductor { .. } | Bsdf::RoughConductor { .. } => f.conductor = true,
+                    Bsdf::Plastic { .. } | Bsdf::RoughPlastic { .. } => f.plastic = true,
+                    Bsdf::RoughDielectric { .. } => f.rough_dielectric = true,
+                }
+                f.delta |= bsdf.is_delta();
             }
             f.area_lights |= m.emission.max_element() > 0.0;
         }
@@ -332,14 +485,7 @@ impl Scene {
             return fail("the film has zero size".into());
         }
         for (i, m) in self.materials.iter().enumerate() {
-            let ok = finite(m.emission)
-                && match m.bsdf {
-                    Bsdf::Diffuse { reflectance } => finite(reflectance),
-                    Bsdf::Dielectric { int_ior, ext_ior } => {
-                        int_ior.is_finite() && ext_ior.is_finite() && int_ior > 0.0 && ext_ior > 0.0
-                    }
-                    Bsdf::Mirror => true,
-                };
+            let ok = finite(m.emission) && m.bsdfs().all(Bsdf::is_valid);
             if !ok {
                 return fail(format!(
                     "material {i} has a non-finite or non-positive value"

@@ -210,6 +210,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             bsdf: Bsdf::Diffuse {
                 reflectance: Vec3::splat(0.8),
             },
+            back: None,
             emission: Vec3::ZERO,
         }],
         triangles: place_triangles(triangles, Mat4::IDENTITY, 0, false).collect(),

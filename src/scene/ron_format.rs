@@ -435,7 +435,7 @@ impl<'a> Builder<'a> {
         let to_world = to_world(&shape.to_world)
             .map_err(|e| self.at(self.word_in_element("shapes", index, "to_world"), e))?;
         let material = scene.materials.len() as u32;
-        scene.materials.push(Material { bsdf, emission });
+        scene.materials.push(Material::new(bsdf, emission));
         let object_triangles = match &shape.shape {
             ShapeKind::Rectangle => mesh::rectangle(),
             ShapeKind::Cube => mesh::cube(),

@@ -1,0 +1,108 @@
+#define_import_path common::plastic
+
+// Mitsuba 3's plastic and roughplastic (src/bsdfs/plastic.cpp, roughplastic.cpp): a diffuse
+// base under a dielectric coating, with the coating's internal reflections folded into the
+// base (`nonlinear` as Mitsuba) and its lobe chosen by the specular sampling weight.
+
+#import common::sampling::{INV_PI, square_to_cosine_hemisphere}
+#import common::scene::{Material, bsdf_tables}
+#import common::bsdf::{BsdfEval, BsdfSample, no_sample, mirror_local}
+#import common::fresnel::fresnel_full
+#import common::microfacet::{Microfacet, microfacet_d, microfacet_g1, microfacet_sample}
+
+const TRANSMITTANCE_RES: u32 = 64u;
+
+fn plastic_microfacet(m: Material) -> Microfacet {
+    return Microfacet(m.alpha_u, m.alpha_v, m.distribution == 1u);
+}
+
+// The base's albedo seen through the coating's internal reflections.
+fn diffuse_under_coating(m: Material) -> vec3<f32> {
+    if m.nonlinear != 0u {
+        return m.albedo / (vec3<f32>(1.0) - m.albedo * m.internal_reflectance);
+    }
+    return m.albedo / (1.0 - m.internal_reflectance);
+}
+
+// Probability of the diffuse lobe when the coating reflects `f` of the light at wi.
+fn plastic_diffuse_prob(f: f32, specular_weight: f32) -> f32 {
+    let ps = f * specular_weight;
+    let pd = (1.0 - f) * (1.0 - specular_weight);
+    return pd / (ps + pd);
+}
+
+// Linear interpolation in a material's transmittance table at cos `x`.
+fn transmittance_at(m: Material, x: f32) -> f32 {
+    let t = x * f32(TRANSMITTANCE_RES - 1u);
+    let i = min(u32(max(t, 0.0)), TRANSMITTANCE_RES - 2u);
+    let a = bsdf_tables[m.table + i];
+    let b = bsdf_tables[m.table + i + 1u];
+    return mix(a, b, t - f32(i));
+}
+
+fn plastic_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
+    if wi.z <= 0.0 || wo.z <= 0.0 {
+        return BsdfEval(vec3<f32>(0.0), 0.0);
+    }
+    let eta = m.int_ior / m.ext_ior;
+    let fi = fresnel_full(wi.z, eta).f;
+    let fo = fresnel_full(wo.z, eta).f;
+    let value = diffuse_under_coating(m) * (wo.z * INV_PI / (eta * eta) * (1.0 - fi) * (1.0 - fo));
+    return BsdfEval(value, wo.z * INV_PI * plastic_diffuse_prob(fi, m.specular_weight));
+}
+
+fn plastic_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>) -> BsdfSample {
+    if wi.z <= 0.0 {
+        return no_sample();
+    }
+    let fi = fresnel_full(wi.z, m.int_ior / m.ext_ior).f;
+    let prob_diffuse = plastic_diffuse_prob(fi, m.specular_weight);
+    if u1 < 1.0 - prob_diffuse {
+        let prob = 1.0 - prob_diffuse;
+        return BsdfSample(mirror_local(wi), m.specular * (fi / prob), prob, true, true);
+    }
+    let wo = square_to_cosine_hemisphere(u2);
+    let e = plastic_eval(m, wi, wo);
+    if !(e.pdf > 0.0) {
+        return no_sample();
+    }
+    return BsdfSample(wo, e.value / e.pdf, e.pdf, false, true);
+}
+
+fn rough_plastic_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
+    if wi.z <= 0.0 || wo.z <= 0.0 {
+        return BsdfEval(vec3<f32>(0.0), 0.0);
+    }
+    let mf = plastic_microfacet(m);
+    let eta = m.int_ior / m.ext_ior;
+    let h = normalize(wi + wo);
+    let d = microfacet_d(mf, h);
+    let g1_i = microfacet_g1(mf, wi, h);
+    let g = g1_i * microfacet_g1(mf, wo, h);
+    let f = fresnel_full(dot(wi, h), eta).f;
+    let ti = transmittance_at(m, wi.z);
+    let to = transmittance_at(m, wo.z);
+    let value = m.specular * (f * d * g / (4.0 * wi.z)) + diffuse_under_coating(m) * (INV_PI / (eta * eta) * wo.z * ti * to);
+    let prob_diffuse = plastic_diffuse_prob(1.0 - ti, m.specular_weight);
+    let pdf = (1.0 - prob_diffuse) * d * g1_i / (4.0 * wi.z) + prob_diffuse * wo.z * INV_PI;
+    return BsdfEval(value, pdf);
+}
+
+fn rough_plastic_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>) -> BsdfSample {
+    if wi.z <= 0.0 {
+        return no_sample();
+    }
+    let prob_diffuse = plastic_diffuse_prob(1.0 - transmittance_at(m, wi.z), m.specular_weight);
+    var wo: vec3<f32>;
+    if u1 < 1.0 - prob_diffuse {
+        let h = microfacet_sample(plastic_microfacet(m), wi, u2);
+        wo = 2.0 * dot(wi, h) * h - wi;
+    } else {
+        wo = square_to_cosine_hemisphere(u2);
+    }
+    let e = rough_plastic_eval(m, wi, wo);
+    if !(e.pdf > 0.0) {
+        return no_sample();
+    }
+    return BsdfSample(wo, e.value / e.pdf, e.pdf, false, true);
+}

@@ -1,0 +1,191 @@
+//! Mitsuba 3's BSDFs in a scene: `materials_cornell` (tests/refs: twosided walls, rough red
+//! plastic, rough gold, a smooth plastic box, a frosted-glass sphere) through `pt` and `hybrid`
+//! against Mitsuba 3.9.1's reference, and the hybrid against `pt` on a box holding every BSDF
+//! kind, where the delta lobes (plastic's coating, a smooth conductor, a thin dielectric) make
+//! caustics that photons render.
+//!
+//! The bound, from tests/refs/README.md: at 256 spp within 1.5x Mitsuba's own 256-spp error
+//! plus twice the reference's noise floor, on pixels (Mitsuba 0.00139) and on 8x8 block means
+//! (Mitsuba 2.1e-5; noise averages out there, a bias does not), both scaled as 1/spp for fewer
+//! samples. Measured on lavapipe (seed 0): at 256 spp `pt` 0.00151 and 1.73e-5, `hybrid` 0.00134
+//! and 1.57e-5 (bounds 0.00211 and 5.35e-5); at 16 spp, seeds 1 and 2, `pt` 0.0188 / 0.0249 and
+//! 2.9e-4 / 3.7e-4, `hybrid` 0.0173 / 0.0219 and 2.5e-4 / 3.5e-4 (bounds 0.0334 and 5.3e-4). A
+//! 10% energy loss alone adds 2.9e-3 to the block metric (5x the 16-spp bound); 3% adds 2.6e-4.
+
+mod common;
+
+use common::*;
+use hppm::image::Image;
+
+const SCENE: &str = "tests/refs/scenes/materials_cornell/scene.xml";
+const MITSUBA_256: f64 = 0.00139;
+const MITSUBA_256_BLOCKS: f64 = 2.1e-5;
+const REFERENCE_NOISE: f64 = 1.1e-5;
+
+/// (pixel, block) relMSE bounds at `spp`.
+fn bounds(spp: u64) -> (f64, f64) {
+    let scale = 256.0 / spp as f64;
+    (
+        1.5 * MITSUBA_256 * scale + 2.0 * REFERENCE_NOISE,
+        1.5 * MITSUBA_256_BLOCKS * scale + 2.0 * REFERENCE_NOISE,
+    )
+}
+
+/// The image averaged over `side` x `side` blocks.
+fn block_means(image: &Image, side: u32) -> Image {
+    let (w, h) = (image.width / side, image.height / side);
+    let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
+    for y in 0..h * side {
+        for x in 0..w * side {
+            let p = image.pixels[(y * image.width + x) as usize];
+            let b = &mut pixels[((y / side) * w + x / side) as usize];
+            for c in 0..3 {
+                b[c] += p[c] / (side * side) as f32;
+            }
+        }
+    }
+    Image {
+        width: w,
+        height: h,
+        pixels,
+    }
+}
+
+fn scaled(image: &Image, s: f32) -> Image {
+    Image {
+        pixels: image.pixels.iter().map(|p| p.map(|c| c * s)).collect(),
+        ..image.clone()
+    }
+}
+
+/// Renders `graph` at `spp` and checks both metrics against the bounds; returns them.
+fn check(graph: &str, spp: u64, seed: u64) -> (f64, f64) {
+    let gpu = gpu();
+    let scene = load_scene(SCENE);
+    let reference = reference("materials_cornell");
+    let mut r = renderer(&gpu, &scene, load_graph(graph), seed);
+    let image = render_to(&mut r, spp);
+    let (pixel_bound, block_bound) = bounds(spp);
+    let e = relmse(&image, &reference);
+    let blocks = relmse(&block_means(&image, 8), &block_means(&reference, 8));
+    eprintln!(
+        "{graph}, {spp} spp, seed {seed}: relMSE {e:.3e} (bound {pixel_bound:.3e}), 8x8 blocks \
+         {blocks:.3e} (bound {block_bound:.3e}), mean {:?} vs {:?}",
+        image.mean(),
+        reference.mean()
+    );
+    // The bound must see a 10% energy loss on the block metric.
+    let lossy = relmse(
+        &block_means(&scaled(&image, 0.9), 8),
+        &block_means(&reference, 8),
+    );
+    assert!(lossy > block_bound, "a 10% loss ({lossy:.2e}) would pass");
+    assert!(
+        e <= pixel_bound,
+        "{graph}: relMSE {e:.3e} > {pixel_bound:.3e}"
+    );
+    assert!(
+        blocks <= block_bound,
+        "{graph}: block relMSE {blocks:.3e} > {block_bound:.3e}"
+    );
+    (e, blocks)
+}
+
+/// `pt` at 16 spp within the bound scaled to 16 spp. Catches a BSDF rendering unlike
+/// Mitsuba's (a 10% energy loss fails 5x over on the block metric).
+#[test]
+fn materials_cornell_pt_matches_mitsuba_at_16_spp() {
+    check("graphs/pt.ron", 16, 1);
+}
+
+/// `hybrid` at 16 spp, the same bound: the photon-mapped caustic of the plastic box's coating
+/// must add what the camera leaves out.
+#[test]
+fn materials_cornell_hybrid_matches_mitsuba_at_16_spp() {
+    check("graphs/hybrid.ron", 16, 1);
+}
+
+/// The issue's acceptance figure: `pt` and `hybrid` at 256 spp within 1.5x Mitsuba's own
+/// 256-spp error plus twice the reference's noise, pixels and 8x8 blocks, and the pixel error
+/// falling about as 1/spp from 64 spp (at least 3x for 4x the samples). About 2 minutes on
+/// lavapipe.
+#[test]
+#[ignore]
+fn materials_cornell_converges_to_mitsuba_at_256_spp() {
+    for graph in ["graphs/pt.ron", "graphs/hybrid.ron"] {
+        let (e64, _) = check(graph, 64, 0);
+        let (e256, _) = check(graph, 256, 0);
+        assert!(e64 / e256 >= 3.0, "{graph}: relMSE {e64:.3e} -> {e256:.3e}");
+    }
+}
+
+/// Per seed, the image means of `pt` and of the hybrid `graph` with the same seed (their camera
+/// paths are the same: they differ only by the caustic the hybrid takes from photons), and the
+/// hybrid's caustic AOV mean.
+fn paired_means(
+    graph: &str,
+    scene: &hppm::scene::Scene,
+    spp: u64,
+    seeds: u64,
+) -> Vec<([f64; 3], [f64; 3], f64)> {
+    let gpu = gpu();
+    (0..seeds)
+        .map(|seed| {
+            let mut pt = renderer(&gpu, scene, load_graph("graphs/pt.ron"), 100 + seed);
+            let pt_mean = render_to(&mut pt, spp).mean();
+            let mut hy = renderer(&gpu, scene, load_graph(graph), 100 + seed);
+            let hy_mean = render_to(&mut hy, spp).mean();
+            let aovs = hy.aovs().expect("aovs");
+            let caustic = aovs
+                .iter()
+                .find(|(s, _)| *s == "caustic")
+                .map_or(0.0, |(_, c)| c.mean()[0]);
+            (pt_mean, hy_mean, caustic)
+        })
+        .collect()
+}
+
+/// On a box holding every BSDF kind (tests/data/scenes/bsdf_box.xml), `hybrid` and
+/// `hybrid_all_depths` (every Lambertian vertex photon-mapped) render the image `pt` renders: with the same seed their camera paths are the same, so the difference
+/// of their image means is the photon caustic minus the path-traced caustic it replaces, and
+/// over 4 seeds it must be within 4 standard errors plus 0.3% (the photon kernel's blur;
+/// tests/furnace.rs measures it) of zero. The photon-mapped caustic (through the pane under
+/// the light, plastic's coating, the copper sphere) is checked to be large enough that dropping
+/// it or counting it twice would fail. Catches a delta lobe the camera treats as S while
+/// photons do not (or the reverse), a glossy vertex that drops emission photons never deposit,
+/// and twosided faces seen differently by the two passes.
+#[test]
+fn hybrid_equals_pt_with_every_bsdf() {
+    let scene = load_scene("tests/data/scenes/bsdf_box.xml");
+    for graph in ["graphs/hybrid.ron", "graphs/hybrid_all_depths.ron"] {
+        hybrid_equals_pt(graph, &scene);
+    }
+}
+
+fn hybrid_equals_pt(graph: &str, scene: &hppm::scene::Scene) {
+    let runs = paired_means(graph, scene, 16, 4);
+    let n = runs.len() as f64;
+    let caustic = runs.iter().map(|r| r.2).sum::<f64>() / n;
+    for c in 0..3 {
+        let diffs: Vec<f64> = runs.iter().map(|r| r.1[c] - r.0[c]).collect();
+        let mean = diffs.iter().sum::<f64>() / n;
+        let se = (diffs.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        let pt = runs.iter().map(|r| r.0[c]).sum::<f64>() / n;
+        let tolerance = 4.0 * se + 0.003 * pt;
+        eprintln!(
+            "bsdf_box, {graph}, channel {c}: pt {pt:.5}, hybrid - pt {mean:+.5} +- {se:.5} (tolerance \
+             {tolerance:.5}), caustic {caustic:.5} ({:.1}% of the image)",
+            100.0 * caustic / pt
+        );
+        if c == 0 {
+            assert!(
+                caustic > 2.0 * tolerance,
+                "the caustic ({caustic}) is too small for the test to see it dropped or doubled"
+            );
+        }
+        assert!(
+            mean.abs() <= tolerance,
+            "{graph}, channel {c}: hybrid - pt = {mean} (tolerance {tolerance})"
+        );
+    }
+}
