@@ -24,9 +24,11 @@ struct SceneUniform {
     num_lights: u32,
     max_depth: u32,
     rr_depth: u32,
-    pad_a: u32,
-    pad_b: u32,
-    pad_c: u32,
+    // common::pixel_filter's FILTER_* kind, its parameter (tent radius, Gaussian stddev), and
+    // 1 when samples may leave the film (Mitsuba's sample_border).
+    filter_kind: u32,
+    filter_param: f32,
+    sample_border: u32,
     // A sphere around every specular surface (radius 0 when there is none).
     specular_center: vec3<f32>,
     specular_radius: f32,

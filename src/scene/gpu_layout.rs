@@ -91,7 +91,11 @@ pub struct GpuSceneUniform {
     pub num_lights: u32,
     pub max_depth: u32,
     pub rr_depth: u32,
-    pub _pad: [u32; 3],
+    /// The pixel filter: `filter::FILTER_*`, its parameter (tent radius, Gaussian stddev) and
+    /// whether samples may leave the film (1) or each pixel's filter is cut at its edge (0).
+    pub filter_kind: u32,
+    pub filter_param: f32,
+    pub sample_border: u32,
     /// A sphere around every specular (delta) surface; radius 0 when there is none. Caustic
     /// photons are aimed at it: a photon that misses it can never cross a specular vertex.
     pub specular_center: [f32; 3],
@@ -218,6 +222,7 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
     let up = right.cross(forward);
     let tan_half_x = (cam.fov_x_deg.to_radians() * 0.5).tan();
     let tan_half_y = tan_half_x * height as f32 / width.max(1) as f32;
+    let (filter_kind, filter_param) = cam.filter.gpu_code();
     GpuSceneUniform {
         camera_origin: cam.origin.to_array(),
         tan_half_x,
@@ -227,6 +232,9 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
         width,
         camera_forward: forward.to_array(),
         height,
+        filter_kind,
+        filter_param,
+        sample_border: cam.sample_border as u32,
         ..Zeroable::zeroed()
     }
 }

@@ -5,7 +5,8 @@
 //!
 //! Supported: `<default>` with `$name` substitution in attribute values; integrator `path`
 //! (`max_depth`, `rr_depth`); sensor `perspective` (`fov`, `fov_axis`, clip planes, `to_world`)
-//! with sampler `independent` and film `hdrfilm` (box filter); shapes `rectangle`, `cube`,
+//! with sampler `independent` and film `hdrfilm` (`width`, `height`, `sample_border`; rfilter
+//! `box`, `tent`, `gaussian`, the default); shapes `rectangle`, `cube`,
 //! `sphere`, `obj` with `to_world` and `flip_normals`; BSDFs `diffuse`, `dielectric`,
 //! `conductor` with `material="none"` (a mirror), inline or declared at top level with an `id`
 //! and used through `<ref id>`; `area` emitters inside shapes and top-level `point` emitters.
@@ -16,6 +17,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
+use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
 use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh};
 use crate::error::Location;
 
@@ -23,6 +25,9 @@ use crate::error::Location;
 const DEFAULT_BSDF: Bsdf = Bsdf::Diffuse {
     reflectance: Vec3::splat(0.5),
 };
+
+/// The widest pixel filter accepted (radius or stddev, in pixels).
+const MAX_FILTER_WIDTH: f32 = 16.0;
 
 /// Mitsuba's default `rr_depth`.
 const DEFAULT_RR_DEPTH: u32 = 5;
@@ -70,6 +75,8 @@ fn empty_scene(path: &Path) -> Scene {
             fov_x_deg: 39.3077,
             width: 768,
             height: 576,
+            filter: PixelFilter::MITSUBA_DEFAULT,
+            sample_border: false,
         },
         integrator: Integrator {
             max_depth: None,
@@ -765,7 +772,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         if let Some(filter) = self.single_child(node, "rfilter")? {
-            self.read_rfilter(filter)?;
+            self.scene.camera.filter = self.read_rfilter(filter)?;
         }
         let mut props = self.props(node, &["rfilter"])?;
         if let Some(n) = props.take("width") {
@@ -779,6 +786,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             &["pixel_format", "component_format", "file_format"],
             |r, n| r.string(n).map(drop),
         )?;
+        if let Some(n) = props.take("sample_border") {
+            self.scene.camera.sample_border = self.boolean(n)?;
+        }
         self.finish(props, node)
     }
 
@@ -797,17 +807,47 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(v as u32)
     }
 
-    fn read_rfilter(&self, node: Node<'a, 'input>) -> Result<(), SceneError> {
-        let filter = self.required_attr(node, "type")?;
-        if filter != "box" {
+    /// `box`, `tent` (`radius`) or `gaussian` (`stddev`), with Mitsuba 3's defaults.
+    fn read_rfilter(&self, node: Node<'a, 'input>) -> Result<PixelFilter, SceneError> {
+        let kind = self.required_attr(node, "type")?;
+        let mut props = self.props(node, &[])?;
+        let filter = match kind.as_str() {
+            "box" => PixelFilter::Box,
+            "tent" => PixelFilter::Tent {
+                radius: self.filter_width(&mut props, "radius", DEFAULT_TENT_RADIUS)?,
+            },
+            "gaussian" => PixelFilter::Gaussian {
+                stddev: self.filter_width(&mut props, "stddev", DEFAULT_GAUSSIAN_STDDEV)?,
+            },
+            other => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    format!("rfilter \"{other}\" is not supported (box, tent, gaussian)"),
+                ));
+            }
+        };
+        self.finish(props, node)?;
+        Ok(filter)
+    }
+
+    /// A filter's radius or standard deviation: positive, and at most 16 pixels (a sanity
+    /// bound: wider filters blur the image away and only typos ask for them).
+    fn filter_width(&self, props: &mut Props, name: &str, default: f32) -> Result<f32, SceneError> {
+        let Some(n) = props.take(name) else {
+            return Ok(default);
+        };
+        let v = self.float(n)?;
+        if !(v > 0.0 && v <= MAX_FILTER_WIDTH) {
             return Err(self.attr_error(
-                node,
-                "type",
-                format!("rfilter \"{filter}\" is not supported (only \"box\")"),
+                n,
+                "value",
+                format!(
+                    "rfilter {name} {v}: expected more than 0 and at most {MAX_FILTER_WIDTH} pixels"
+                ),
             ));
         }
-        let props = self.props(node, &[])?;
-        self.finish(props, node)
+        Ok(v)
     }
 
     fn read_named_bsdf(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {

@@ -4,6 +4,7 @@
 //! emitter is attached to the shape).
 
 pub mod bvh;
+pub mod filter;
 pub mod gpu_layout;
 pub mod mesh;
 pub mod mitsuba;
@@ -26,6 +27,11 @@ pub struct Camera {
     pub fov_x_deg: f32,
     pub width: u32,
     pub height: u32,
+    /// The pixel reconstruction filter (Mitsuba's `rfilter`).
+    pub filter: filter::PixelFilter,
+    /// Camera samples may land beyond the film's edge (Mitsuba's `sample_border`); otherwise
+    /// the filter of a pixel near the edge is cut off at it, as in Mitsuba.
+    pub sample_border: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

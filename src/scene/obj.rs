@@ -6,6 +6,7 @@ use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
+use super::filter::PixelFilter;
 use super::{
     Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Triangle, place_triangles,
 };
@@ -203,6 +204,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             fov_x_deg: OBJ_FOV_X_DEG,
             width: 512,
             height: 512,
+            filter: PixelFilter::Box,
+            sample_border: false,
         },
         integrator: Integrator::default(),
         spp_hint: None,
