@@ -11,7 +11,8 @@
 //! `conductor` with `material="none"` (a mirror), inline or declared at top level with an `id`
 //! and used through `<ref id>`; `area` emitters inside shapes and top-level `point` emitters.
 
-use std::collections::HashMap;
+use std::cell::RefCell;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Vec3, Vec4};
@@ -33,12 +34,28 @@ const MAX_FILTER_WIDTH: f32 = 16.0;
 const DEFAULT_RR_DEPTH: u32 = 5;
 
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    load_with(path, &[])
+}
+
+/// Loads with `-D name=value` parameters (`defines`), which take the place of the scene's
+/// `<default name=...>` of the same name and may give `$name`s the scene declares no default
+/// for. As in Mitsuba 3, a parameter no attribute uses is an error.
+pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
     let text = super::read_text(path)?;
-    parse(path, &text)
+    parse_with(path, &text, defines)
 }
 
 /// Parses Mitsuba XML `text`; `path` names the file in errors and anchors relative OBJ paths.
 pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
+    parse_with(path, text, &[])
+}
+
+/// [`parse`] with `-D` parameters (see [`load_with`]).
+pub fn parse_with(
+    path: &Path,
+    text: &str,
+    defines: &[(String, String)],
+) -> Result<Scene, SceneError> {
     let doc = Document::parse(text).map_err(|e| {
         let pos = e.pos();
         SceneError::at(
@@ -49,7 +66,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     let mut reader = Reader {
         path,
         doc: &doc,
-        defaults: HashMap::new(),
+        defaults: defines.iter().cloned().collect(),
+        defined: defines.iter().map(|(k, _)| k.clone()).collect(),
+        used: RefCell::new(HashSet::new()),
+        declared: Vec::new(),
         named_bsdfs: HashMap::new(),
         scene: empty_scene(path),
         has_integrator: false,
@@ -57,6 +77,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     };
     reader.check_attributes()?;
     reader.read_scene(doc.root_element())?;
+    reader.check_defines_used(defines)?;
     if !reader.has_sensor {
         return Err(reader.error(doc.root_element(), "the scene has no <sensor>"));
     }
@@ -127,6 +148,12 @@ struct Reader<'a, 'input> {
     path: &'a Path,
     doc: &'a Document<'input>,
     defaults: HashMap<String, String>,
+    /// The names given on the command line (`-D`), which `<default>` does not replace, and
+    /// which of all names an attribute has used.
+    defined: HashSet<String>,
+    used: RefCell<HashSet<String>>,
+    /// The names of the scene's `<default>`s, for messages.
+    declared: Vec<String>,
     named_bsdfs: HashMap<String, Bsdf>,
     scene: Scene,
     has_integrator: bool,
@@ -228,10 +255,40 @@ impl<'a, 'input> Reader<'a, 'input> {
                 )
             })?;
             out.push_str(value);
+            self.used.borrow_mut().insert(key.to_string());
             rest = &tail[end..];
         }
         out.push_str(rest);
         Ok(Some(out))
+    }
+
+    /// Mitsuba 3 refuses a `-D` parameter that no attribute substitutes (a typo would
+    /// otherwise render the scene unchanged).
+    fn check_defines_used(&self, defines: &[(String, String)]) -> Result<(), SceneError> {
+        let used = self.used.borrow();
+        let Some((key, value)) = defines.iter().find(|(k, _)| !used.contains(k)) else {
+            return Ok(());
+        };
+        let mut known: Vec<&str> = self
+            .declared
+            .iter()
+            .chain(used.iter())
+            .map(String::as_str)
+            .collect();
+        known.sort_unstable();
+        known.dedup();
+        let known = if known.is_empty() {
+            "none".to_string()
+        } else {
+            known.join(", ")
+        };
+        Err(SceneError::File {
+            file: self.path.to_path_buf(),
+            message: format!(
+                "-D {key}={value}: the scene uses no ${key}, so the parameter would change \
+                 nothing (Mitsuba refuses unused parameters too); the scene's parameters: {known}"
+            ),
+        })
     }
 
     fn required_attr(&self, node: Node, name: &str) -> Result<String, SceneError> {
@@ -252,7 +309,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "default" => {
                     let name = self.required_attr(child, "name")?;
                     let value = self.required_attr(child, "value")?;
-                    self.defaults.insert(name, value);
+                    if !self.defined.contains(&name) {
+                        self.defaults.insert(name.clone(), value);
+                    }
+                    self.declared.push(name);
                 }
                 "integrator" => self.read_integrator(child)?,
                 "sensor" => self.read_sensor(child)?,

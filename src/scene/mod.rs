@@ -475,13 +475,23 @@ impl SceneError {
 /// Loads a scene by extension: `.xml` (Mitsuba 3), `.ron` (ours) or `.obj` (a bare mesh, given a
 /// default camera and light so it can be looked at).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    load_with(path, &[])
+}
+
+/// [`load`] with Mitsuba `-D name=value` parameters (see [`mitsuba::load_with`]); only Mitsuba
+/// XML scenes take them.
+pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
     match ext.as_str() {
-        "xml" => mitsuba::load(path),
+        "xml" => mitsuba::load_with(path, defines),
+        _ if !defines.is_empty() => Err(SceneError::File {
+            file: path.to_path_buf(),
+            message: "-D parameters apply to Mitsuba XML scenes only (their <default>s)".into(),
+        }),
         "ron" => ron_format::load(path),
         "obj" => obj::load_scene(path),
         _ => Err(SceneError::File {
