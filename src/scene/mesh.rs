@@ -1,7 +1,17 @@
 //! Built-in shapes as object-space triangles, counter-clockwise seen from the front (normal)
 //! side: Mitsuba's `rectangle` ([-1,1]^2 at z=0, normal +z) and `cube` ([-1,1]^3, outward).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+
+/// A mesh file's triangles in its own coordinates, with what else it has per corner.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshData {
+    pub triangles: Vec<[Vec3; 3]>,
+    /// Vertex normals at each triangle's corners, when the file gives one for every vertex.
+    pub normals: Option<Vec<[Vec3; 3]>>,
+    /// Texture coordinates at each triangle's corners, when the file gives them.
+    pub uvs: Option<Vec<[Vec2; 3]>>,
+}
 
 /// Two triangles spanning the parallelogram centre +- u +- v, facing u x v.
 fn quad(center: Vec3, u: Vec3, v: Vec3) -> [[Vec3; 3]; 2] {

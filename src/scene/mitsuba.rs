@@ -6,8 +6,9 @@
 //! Supported: `<default>` with `$name` substitution in attribute values; integrator `path`
 //! (`max_depth`, `rr_depth`); sensor `perspective` (`fov`, `fov_axis`, clip planes, `to_world`)
 //! with sampler `independent` and film `hdrfilm` (`width`, `height`, `sample_border`; rfilter
-//! `box`, `tent`, `gaussian`, the default); shapes `rectangle`, `cube`,
-//! `sphere`, `obj` with `to_world` and `flip_normals`; BSDFs `diffuse`, `dielectric`,
+//! `box`, `tent`, `gaussian`, the default); shapes `rectangle`, `cube`, `sphere`, `obj`, `ply`
+//! with `to_world` and `flip_normals` (`serialized` is named as not supported); BSDFs `diffuse`,
+//! `dielectric`,
 //! `conductor` with `material="none"` (a mirror), inline or declared at top level with an `id`
 //! and used through `<ref id>`; `area` emitters inside shapes and top-level `point` emitters.
 
@@ -1041,11 +1042,24 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn read_shape(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if !matches!(kind.as_str(), "rectangle" | "cube" | "sphere" | "obj") {
+        if kind == "serialized" {
             return Err(self.attr_error(
                 node,
                 "type",
-                format!("shape type \"{kind}\" is not supported (rectangle, cube, sphere, obj)"),
+                "shape type \"serialized\" (Mitsuba's compressed mesh format) is not supported \
+                 yet: convert the mesh to PLY or OBJ (rectangle, cube, sphere, obj, ply)",
+            ));
+        }
+        if !matches!(
+            kind.as_str(),
+            "rectangle" | "cube" | "sphere" | "obj" | "ply"
+        ) {
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!(
+                    "shape type \"{kind}\" is not supported (rectangle, cube, sphere, obj, ply)"
+                ),
             ));
         }
         let material = self.read_shape_material(node)?;
@@ -1069,7 +1083,8 @@ impl<'a, 'input> Reader<'a, 'input> {
             "rectangle" => self.push_mesh(mesh::rectangle(), &common),
             "cube" => self.push_mesh(mesh::cube(), &common),
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
-            _ => self.read_obj(&mut props, &common, node)?,
+            "ply" => self.read_mesh_file(&mut props, &common, node, MeshFormat::Ply)?,
+            _ => self.read_mesh_file(&mut props, &common, node, MeshFormat::Obj)?,
         }
         let reach = self.scene.reach_since(triangles, spheres);
         if let Some(message) = super::beyond_extent("this shape", reach) {
@@ -1120,16 +1135,22 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(())
     }
 
-    fn read_obj(
+    /// An `obj` or `ply` shape: its file, relative to the scene's folder.
+    fn read_mesh_file(
         &mut self,
         props: &mut Props,
         common: &ShapeCommon,
         node: Node,
+        format: MeshFormat,
     ) -> Result<(), SceneError> {
+        let name = format.name();
         let Some(file_node) = props.take("filename") else {
             return Err(self.error(
                 node,
-                "<shape type=\"obj\"> needs <string name=\"filename\" value=\"...\"/>",
+                format!(
+                    "<shape type=\"{}\"> needs <string name=\"filename\" value=\"...\"/>",
+                    name.to_ascii_lowercase()
+                ),
             ));
         };
         let file = self.string(file_node)?;
@@ -1148,19 +1169,23 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
         // Texture coordinates are not used, so their orientation does not matter.
         self.ignore(props, &["flip_tex_coords"], |r, n| r.boolean(n).map(drop))?;
-        let obj_path = self.relative(&file);
-        let triangles = super::obj::load_triangles(&obj_path).map_err(|e| match e {
+        let mesh_path = self.relative(&file);
+        let loaded = match format {
+            MeshFormat::Obj => super::obj::load_triangles(&mesh_path),
+            MeshFormat::Ply => super::ply::load(&mesh_path).map(|mesh| mesh.triangles),
+        };
+        let triangles = loaded.map_err(|e| match e {
             SceneError::Io { file, source } => self.error(
                 node,
-                format!("cannot read OBJ file {}: {source}", file.display()),
+                format!("cannot read {name} file {}: {source}", file.display()),
             ),
             SceneError::At { location, message } => SceneError::At {
                 location,
-                message: format!("{message} (OBJ used at {})", self.location(node)),
+                message: format!("{message} ({name} used at {})", self.location(node)),
             },
             SceneError::File { file, message } => SceneError::File {
                 file,
-                message: format!("{message} (OBJ used at {})", self.location(node)),
+                message: format!("{message} ({name} used at {})", self.location(node)),
             },
         })?;
         self.push_mesh(triangles, common);
@@ -1239,6 +1264,22 @@ impl<'a, 'input> Reader<'a, 'input> {
             intensity,
         });
         Ok(())
+    }
+}
+
+/// The mesh files a shape may name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MeshFormat {
+    Obj,
+    Ply,
+}
+
+impl MeshFormat {
+    fn name(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "OBJ",
+            MeshFormat::Ply => "PLY",
+        }
     }
 }
 

@@ -9,6 +9,7 @@ pub mod gpu_layout;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj;
+pub mod ply;
 pub mod ron_format;
 
 use std::path::{Path, PathBuf};
@@ -472,8 +473,8 @@ impl SceneError {
     }
 }
 
-/// Loads a scene by extension: `.xml` (Mitsuba 3), `.ron` (ours) or `.obj` (a bare mesh, given a
-/// default camera and light so it can be looked at).
+/// Loads a scene by extension: `.xml` (Mitsuba 3), `.ron` (ours) or `.obj` / `.ply` (a bare mesh,
+/// given a default camera and light so it can be looked at).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     load_with(path, &[])
 }
@@ -494,9 +495,10 @@ pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, Sce
         }),
         "ron" => ron_format::load(path),
         "obj" => obj::load_scene(path),
+        "ply" => obj::framed_scene(path, ply::load(path)?.triangles),
         _ => Err(SceneError::File {
             file: path.to_path_buf(),
-            message: "unknown scene format (expected .xml, .ron or .obj)".into(),
+            message: "unknown scene format (expected .xml, .ron, .obj or .ply)".into(),
         }),
     }
 }

@@ -183,7 +183,11 @@ const OBJ_FOV_X_DEG: f32 = 40.0;
 ///   (distance to the centre squared) makes the irradiance at the centre about 1;
 /// - the default integrator (max depth 12, no Russian roulette).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    let triangles = load_triangles(path)?;
+    framed_scene(path, load_triangles(path)?)
+}
+
+/// The scene of [`load_scene`] around `triangles` (a bare mesh file's, `path` naming it).
+pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, SceneError> {
     let (lo, hi) = triangles.iter().flatten().fold(
         (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
