@@ -339,6 +339,7 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
                         c + rng.point(size),
                     ],
                     material: 0,
+                    normals: None,
                 }
             })
             .collect(),

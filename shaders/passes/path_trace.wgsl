@@ -9,7 +9,7 @@
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
 #import common::sampling::{INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::scene::{scene_info, materials, Surface, NO_HIT, NO_LIGHT, MATERIAL_DIFFUSE, MATERIAL_MIRROR, intersect_scene, unoccluded, surface_at, spawn_origin, shading_agrees}
 #import common::camera::camera_direction
 #import common::lights::{sample_light, area_light_pdf}
 #import common::bsdf::reflect_about
@@ -98,8 +98,8 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, u32>, ra
     if !ls.valid {
         return vec3<f32>(0.0);
     }
-    let cos_i = dot(surface.normal, ls.dir);
-    if cos_i <= 0.0 {
+    let cos_i = dot(surface.shading_normal, ls.dir);
+    if cos_i <= 0.0 || !shading_agrees(surface, ls.dir) {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
@@ -150,7 +150,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, ray
 
         if material.kind == MATERIAL_DIFFUSE {
             // One-sided, as Mitsuba's diffuse: black from behind.
-            if cos_o <= 0.0 {
+            if cos_o <= 0.0 || !shading_agrees(surface, wo) {
                 break;
             }
             path.diffuse_vertices += 1u;
@@ -165,9 +165,9 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, ray
                 }
             }
             result += path.throughput * direct_light(surface, material.albedo, rng, rays);
-            let dir = sample_cosine_hemisphere(surface.normal, rng_next_vec2(rng));
-            let cos_i = dot(dir, surface.normal);
-            if cos_i <= 0.0 {
+            let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
+            let cos_i = dot(dir, surface.shading_normal);
+            if cos_i <= 0.0 || !shading_agrees(surface, dir) {
                 break;
             }
             path.throughput *= material.albedo;
@@ -175,14 +175,23 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, u32>, ray
             path.after_delta = false;
             path.dir = dir;
         } else if material.kind == MATERIAL_MIRROR {
-            if cos_o <= 0.0 {
+            if cos_o <= 0.0 || !shading_agrees(surface, wo) {
                 break;
             }
-            path.dir = reflect_about(wo, surface.normal);
+            path.dir = reflect_about(wo, surface.shading_normal);
             path.after_delta = true;
+            if !shading_agrees(surface, path.dir) {
+                break;
+            }
         } else {
 #ifdef DIELECTRIC
-            let s = sample_dielectric(wo, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
+            if !shading_agrees(surface, wo) {
+                break;
+            }
+            let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
+            if !shading_agrees(surface, s.dir) {
+                break;
+            }
             path.throughput *= s.weight;
             path.dir = s.dir;
             path.after_delta = true;

@@ -14,7 +14,7 @@
 
 #import common::rng::{rng_seed, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_ray_origin, spawn_origin}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, LIGHT_POINT, intersect_scene, surface_at, offset_ray_origin, spawn_origin, shading_agrees, photon_shading_correction}
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
@@ -219,31 +219,48 @@ fn trace_photon(start: Photon, rng: ptr<function, u32>) -> u32 {
         let cos_i = dot(wi, surface.normal);
         if material.kind == MATERIAL_DIFFUSE {
             // One-sided, as the camera pass: the back of a diffuse surface absorbs.
-            if cos_i <= 0.0 {
+            if cos_i <= 0.0 || !shading_agrees(surface, wi) {
                 break;
             }
+            // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
+            // over the geometric one it arrived with turns it into what the camera pass would
+            // gather there (1 on flat-shaded surfaces).
+            let deposited = photon.flux * (dot(wi, surface.shading_normal) / cos_i);
             if params.mode == MODE_CAUSTIC {
                 if after_specular {
-                    deposit(surface.position, wi, photon.flux, segments);
+                    deposit(surface.position, wi, deposited, segments);
                 }
                 break;
             }
-            deposit(surface.position, wi, photon.flux, segments);
-            photon.dir = sample_cosine_hemisphere(surface.normal, rng_next_vec2(rng));
-            // Cosine sampling: f cos / pdf = albedo.
-            photon.flux *= material.albedo;
-            after_specular = false;
-        } else if material.kind == MATERIAL_MIRROR {
-            if cos_i <= 0.0 {
+            deposit(surface.position, wi, deposited, segments);
+            photon.dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
+            if !shading_agrees(surface, photon.dir) {
                 break;
             }
-            photon.dir = reflect_about(wi, surface.normal);
+            // Cosine sampling: f cos / pdf = albedo.
+            photon.flux *= material.albedo * photon_shading_correction(surface, wi, photon.dir);
+            after_specular = false;
+        } else if material.kind == MATERIAL_MIRROR {
+            if cos_i <= 0.0 || !shading_agrees(surface, wi) {
+                break;
+            }
+            photon.dir = reflect_about(wi, surface.shading_normal);
+            if !shading_agrees(surface, photon.dir) {
+                break;
+            }
+            photon.flux *= photon_shading_correction(surface, wi, photon.dir);
             after_specular = true;
         } else {
 #ifdef DIELECTRIC
             // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
-            let s = sample_dielectric(wi, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
-            photon.flux *= s.weight;
+            if !shading_agrees(surface, wi) {
+                break;
+            }
+            let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
+            if !shading_agrees(surface, s.dir) {
+                break;
+            }
+            photon.flux *= s.weight * photon_shading_correction(surface, wi, s.dir);
             photon.dir = s.dir;
             after_specular = true;
 #else

@@ -7,7 +7,7 @@ use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::layout::StructLayout;
 use crate::scene::bvh::BvhNode;
 use crate::scene::gpu_layout::{
-    GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle,
+    GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
 };
 use crate::struct_layout;
 
@@ -25,7 +25,10 @@ pub const LAYOUTS: &[StructLayout] = &[
         specular_radius
     }),
     struct_layout!(BvhNode => "BvhNode" in TRACER, { min, left_or_first, max, count }),
-    struct_layout!(GpuTriangle => "Triangle" in TRACER, { vertex, material, edge_a, light, edge_b }),
+    struct_layout!(GpuTriangle => "Triangle" in TRACER, {
+        vertex, material, edge_a, light, edge_b, normals
+    }),
+    struct_layout!(GpuTriangleNormals => "TriangleNormals" in TRACER, { a, b, c }),
     struct_layout!(GpuSphere => "Sphere" in TRACER, {
         center, radius, material, light, flip_normals
     }),
@@ -53,7 +56,7 @@ impl SceneResources {
             bytes_of(&scene.uniform),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let tables: [(&str, &[u8]); 7] = [
+        let tables: [(&str, &[u8]); 8] = [
             ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
             ("scene prim indices", cast_slice(&scene.prim_indices)),
             ("scene triangles", cast_slice(&scene.triangles)),
@@ -61,6 +64,10 @@ impl SceneResources {
             ("scene materials", cast_slice(&scene.materials)),
             ("scene lights", cast_slice(&scene.lights)),
             ("scene light cdf", cast_slice(&scene.light_cdf)),
+            (
+                "scene triangle normals",
+                cast_slice(&scene.triangle_normals),
+            ),
         ];
         let mut buffers = vec![uniform];
         for (label, bytes) in tables {

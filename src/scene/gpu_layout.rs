@@ -16,6 +16,8 @@ pub const LIGHT_TRIANGLE: u32 = 0;
 pub const LIGHT_SPHERE: u32 = 1;
 pub const LIGHT_POINT: u32 = 2;
 
+/// `normals` of a triangle without vertex normals.
+pub const NO_NORMALS: u32 = u32::MAX;
 /// `light` of a primitive that emits nothing.
 pub const NO_LIGHT: u32 = u32::MAX;
 /// `max_depth` / `rr_depth` meaning "unbounded" / "never".
@@ -29,7 +31,21 @@ pub struct GpuTriangle {
     pub edge_a: [f32; 3],
     pub light: u32,
     pub edge_b: [f32; 3],
-    pub _pad: u32,
+    /// Index of the triangle's vertex normals in `GpuScene::triangle_normals`, or `NO_NORMALS`
+    /// (shaded with its face normal).
+    pub normals: u32,
+}
+
+/// A triangle's unit vertex normals, at `vertex`, `vertex + edge_a`, `vertex + edge_b`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuTriangleNormals {
+    pub a: [f32; 3],
+    pub _pad_a: u32,
+    pub b: [f32; 3],
+    pub _pad_b: u32,
+    pub c: [f32; 3],
+    pub _pad_c: u32,
 }
 
 #[repr(C)]
@@ -110,6 +126,7 @@ pub struct GpuScene {
     pub bvh_nodes: Vec<BvhNode>,
     pub prim_indices: Vec<u32>,
     pub triangles: Vec<GpuTriangle>,
+    pub triangle_normals: Vec<GpuTriangleNormals>,
     pub spheres: Vec<GpuSphere>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
@@ -256,6 +273,7 @@ impl GpuScene {
                 *slot = i as u32;
             }
         }
+        let mut triangle_normals = Vec::new();
         let triangles = scene
             .triangles
             .iter()
@@ -266,7 +284,15 @@ impl GpuScene {
                 edge_a: (t.v[1] - t.v[0]).to_array(),
                 light,
                 edge_b: (t.v[2] - t.v[0]).to_array(),
-                _pad: 0,
+                normals: t.normals.map_or(NO_NORMALS, |[a, b, c]| {
+                    triangle_normals.push(GpuTriangleNormals {
+                        a: a.to_array(),
+                        b: b.to_array(),
+                        c: c.to_array(),
+                        ..Zeroable::zeroed()
+                    });
+                    triangle_normals.len() as u32 - 1
+                }),
             })
             .collect::<Vec<_>>();
         let spheres = scene
@@ -313,6 +339,7 @@ impl GpuScene {
             bvh_nodes: bvh.nodes,
             prim_indices: non_empty(bvh.indices),
             triangles: non_empty(triangles),
+            triangle_normals: non_empty(triangle_normals),
             spheres: non_empty(spheres),
             materials: non_empty(materials),
             lights: non_empty(lights),

@@ -13,6 +13,33 @@ pub struct MeshData {
     pub uvs: Option<Vec<[Vec2; 3]>>,
 }
 
+/// Vertex normals as Mitsuba 3 computes them for a mesh file that has none (Thürmer and
+/// Wüthrich, "Computing Vertex Normals from Polygonal Facets", JGT 1998): each face adds its unit
+/// normal to its corners' vertices, weighted by the corner's angle. `faces` index `positions`;
+/// the result is per triangle corner, zero at a vertex no proper face touches (such a triangle
+/// then shades flat).
+pub fn angle_weighted_normals(positions: &[Vec3], faces: &[[usize; 3]]) -> Vec<[Vec3; 3]> {
+    let mut sums = vec![glam::DVec3::ZERO; positions.len()];
+    for face in faces {
+        let p = face.map(|i| positions[i].as_dvec3());
+        let Some(n) = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize() else {
+            continue;
+        };
+        for k in 0..3 {
+            let (to_next, to_prev) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+            let angle = to_next.angle_between(to_prev);
+            if angle.is_finite() {
+                sums[face[k]] += n * angle;
+            }
+        }
+    }
+    let unit: Vec<Vec3> = sums
+        .iter()
+        .map(|s| s.try_normalize().unwrap_or_default().as_vec3())
+        .collect();
+    faces.iter().map(|face| face.map(|i| unit[i])).collect()
+}
+
 /// Two triangles spanning the parallelogram centre +- u +- v, facing u x v.
 fn quad(center: Vec3, u: Vec3, v: Vec3) -> [[Vec3; 3]; 2] {
     let (a, b, c, d) = (

@@ -1154,27 +1154,21 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         };
         let file = self.string(file_node)?;
-        // Mitsuba interpolates vertex normals unless face_normals is true; we only have flat
-        // normals, which match only for meshes meant to be faceted.
+        // As in Mitsuba, vertex normals (the file's, or computed when it has none) shade the
+        // mesh smoothly unless face_normals is true.
         let face_normals = props
             .take("face_normals")
             .map(|n| self.boolean(n))
-            .transpose()?;
-        if face_normals != Some(true) {
-            eprintln!(
-                "warning: {}: smooth vertex normals are not supported; using flat face normals \
-                 (set face_normals to true to match)",
-                self.location(node)
-            );
-        }
+            .transpose()?
+            .unwrap_or(false);
         // Texture coordinates are not used, so their orientation does not matter.
         self.ignore(props, &["flip_tex_coords"], |r, n| r.boolean(n).map(drop))?;
         let mesh_path = self.relative(&file);
         let loaded = match format {
-            MeshFormat::Obj => super::obj::load_triangles(&mesh_path),
-            MeshFormat::Ply => super::ply::load(&mesh_path).map(|mesh| mesh.triangles),
+            MeshFormat::Obj => super::obj::load_mesh_data(&mesh_path),
+            MeshFormat::Ply => super::ply::load(&mesh_path),
         };
-        let triangles = loaded.map_err(|e| match e {
+        let mut mesh = loaded.map_err(|e| match e {
             SceneError::Io { file, source } => self.error(
                 node,
                 format!("cannot read {name} file {}: {source}", file.display()),
@@ -1188,7 +1182,11 @@ impl<'a, 'input> Reader<'a, 'input> {
                 message: format!("{message} ({name} used at {})", self.location(node)),
             },
         })?;
-        self.push_mesh(triangles, common);
+        if face_normals {
+            mesh.normals = None;
+        }
+        self.scene
+            .push_mesh_data(mesh, common.to_world, common.material, common.flip_normals);
         Ok(())
     }
 

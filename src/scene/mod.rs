@@ -64,6 +64,9 @@ pub struct Material {
 pub struct Triangle {
     pub v: [Vec3; 3],
     pub material: u32,
+    /// Unit vertex normals at the corners, interpolated for shading (Mitsuba's default for a
+    /// mesh that has them); `None` shades with the face normal.
+    pub normals: Option<[Vec3; 3]>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -263,6 +266,19 @@ impl Scene {
         out
     }
 
+    /// Adds an object-space mesh, with its vertex normals if it has them, placed by `to_world`
+    /// (see [`place_mesh`]).
+    pub fn push_mesh_data(
+        &mut self,
+        mesh: mesh::MeshData,
+        to_world: glam::Mat4,
+        material: u32,
+        flip_normals: bool,
+    ) {
+        self.triangles
+            .extend(place_mesh(mesh, to_world, material, flip_normals));
+    }
+
     /// Adds object-space triangles placed by `to_world` (see [`place_triangles`]).
     pub fn push_mesh(
         &mut self,
@@ -390,12 +406,46 @@ pub fn place_triangles(
     material: u32,
     flip_normals: bool,
 ) -> impl Iterator<Item = Triangle> {
+    let mesh = mesh::MeshData {
+        triangles,
+        ..mesh::MeshData::default()
+    };
+    place_mesh(mesh, to_world, material, flip_normals)
+}
+
+/// [`place_triangles`] for a mesh that may have vertex normals: they are carried by the inverse
+/// transpose of `to_world` (so they stay perpendicular to the surface under any affine map) and
+/// turned with the front side by `flip_normals`. A triangle with a normal that is zero or not a
+/// number after the transform shades flat.
+pub fn place_mesh(
+    mesh: mesh::MeshData,
+    to_world: glam::Mat4,
+    material: u32,
+    flip_normals: bool,
+) -> impl Iterator<Item = Triangle> {
     let swap = (to_world.determinant() < 0.0) != flip_normals;
-    triangles.into_iter().map(move |corners| {
-        let [a, b, c] = corners.map(|p| to_world.transform_point3(p));
-        let v = if swap { [a, c, b] } else { [a, b, c] };
-        Triangle { v, material }
-    })
+    let normal_map = glam::Mat3::from_mat4(to_world).inverse().transpose();
+    let sign = if flip_normals { -1.0 } else { 1.0 };
+    let normals = mesh.normals;
+    mesh.triangles
+        .into_iter()
+        .enumerate()
+        .map(move |(i, corners)| {
+            let [a, b, c] = corners.map(|p| to_world.transform_point3(p));
+            let v = if swap { [a, c, b] } else { [a, b, c] };
+            let normals = normals.as_ref().and_then(|n| {
+                let placed = n.get(i)?.map(|n| (sign * (normal_map * n)).try_normalize());
+                let [Some(na), Some(nb), Some(nc)] = placed else {
+                    return None;
+                };
+                Some(if swap { [na, nc, nb] } else { [na, nb, nc] })
+            });
+            Triangle {
+                v,
+                material,
+                normals,
+            }
+        })
 }
 
 /// The uniform scale of an affine transform made only of uniform scaling, rotation, mirroring

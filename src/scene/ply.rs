@@ -2,8 +2,9 @@
 //! as Mitsuba 3's `ply` shape reads them: a `vertex` element with `x`, `y`, `z`, optional
 //! vertex normals `nx`, `ny`, `nz` and texture coordinates (`u`/`v`, `s`/`t` or
 //! `texture_u`/`texture_v`), and a `face` element whose `vertex_indices` (or `vertex_index`)
-//! lists are triangles (larger polygons are fan-triangulated). Other elements and properties
-//! (colours, per-face attributes) are not used.
+//! lists are triangles (larger polygons are fan-triangulated). Without vertex normals in the
+//! file they are computed as Mitsuba computes them. Other elements and properties (colours,
+//! per-face attributes) are not used.
 
 use std::path::Path;
 
@@ -12,7 +13,7 @@ use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 
 use super::SceneError;
-use super::mesh::MeshData;
+use super::mesh::{MeshData, angle_weighted_normals};
 use crate::error::Location;
 
 /// The mesh of PLY file `path`, in the file's coordinates.
@@ -71,11 +72,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<MeshData, SceneError> {
         .find_map(|names| vertex_vectors(vertices, *names).transpose())
         .transpose()
         .map_err(&fail)?;
-    let mut mesh = MeshData {
-        normals: normals.as_ref().map(|_| Vec::new()),
-        uvs: uvs.as_ref().map(|_| Vec::new()),
-        ..MeshData::default()
-    };
+    let mut corners_of_triangles: Vec<[usize; 3]> = Vec::new();
     for (f, face) in faces.iter().enumerate() {
         let indices = face
             .get("vertex_indices")
@@ -99,16 +96,29 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<MeshData, SceneError> {
             )));
         }
         for k in 1..indices.len() - 1 {
-            let corners = [indices[0], indices[k], indices[k + 1]].map(|i| i as usize);
-            mesh.triangles.push(corners.map(|i| positions[i]));
-            if let (Some(out), Some(n)) = (mesh.normals.as_mut(), normals.as_ref()) {
-                out.push(corners.map(|i| n[i]));
-            }
-            if let (Some(out), Some(uv)) = (mesh.uvs.as_mut(), uvs.as_ref()) {
-                out.push(corners.map(|i| Vec2::new(uv[i].x, uv[i].y)));
-            }
+            corners_of_triangles.push([indices[0], indices[k], indices[k + 1]].map(|i| i as usize));
         }
     }
+    let per_corner = |values: &[Vec3]| -> Vec<[Vec3; 3]> {
+        corners_of_triangles
+            .iter()
+            .map(|c| c.map(|i| values[i]))
+            .collect()
+    };
+    let mesh = MeshData {
+        triangles: per_corner(&positions),
+        // Mitsuba computes vertex normals for a mesh file that has none.
+        normals: Some(match &normals {
+            Some(n) => per_corner(n),
+            None => angle_weighted_normals(&positions, &corners_of_triangles),
+        }),
+        uvs: uvs.as_ref().map(|uv| {
+            per_corner(uv)
+                .into_iter()
+                .map(|c| c.map(|t| Vec2::new(t.x, t.y)))
+                .collect()
+        }),
+    };
     Ok(mesh)
 }
 
