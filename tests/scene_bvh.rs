@@ -340,6 +340,7 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
                     ],
                     material: 0,
                     normals: None,
+                    uvs: None,
                 }
             })
             .collect(),

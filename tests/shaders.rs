@@ -8,6 +8,7 @@ use hppm::passes::{COMMON_MODULES, registry};
 use hppm::scene::bvh::BvhNode;
 use hppm::scene::gpu_layout::{
     GpuLight, GpuMaterial, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
+    GpuTriangleUvs,
 };
 use wgpu::naga;
 
@@ -107,6 +108,7 @@ fn gpu_structs_match_wgsl_layout() {
         ("BvhNode", std::mem::size_of::<BvhNode>()),
         ("Triangle", std::mem::size_of::<GpuTriangle>()),
         ("TriangleNormals", std::mem::size_of::<GpuTriangleNormals>()),
+        ("TriangleUvs", std::mem::size_of::<GpuTriangleUvs>()),
         ("Sphere", std::mem::size_of::<GpuSphere>()),
         ("Material", std::mem::size_of::<GpuMaterial>()),
         ("Light", std::mem::size_of::<GpuLight>()),

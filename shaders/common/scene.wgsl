@@ -53,6 +53,13 @@ struct Triangle {
     normals: u32,
 }
 
+// A triangle's texture coordinates at vertex, vertex + edge_a, vertex + edge_b.
+struct TriangleUvs {
+    a: vec2<f32>,
+    b: vec2<f32>,
+    c: vec2<f32>,
+}
+
 // A triangle's unit vertex normals at vertex, vertex + edge_a, vertex + edge_b.
 struct TriangleNormals {
     a: vec3<f32>,
@@ -116,6 +123,8 @@ const BVH_STACK_SIZE: u32 = 64u;
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 @group(0) @binding(7) var<storage, read> light_cdf: array<f32>;
 @group(0) @binding(8) var<storage, read> triangle_normals: array<TriangleNormals>;
+// One per triangle (Mitsuba's default, the barycentrics, where the mesh has none).
+@group(0) @binding(9) var<storage, read> triangle_uvs: array<TriangleUvs>;
 
 struct Hit {
     t: f32,
@@ -136,6 +145,9 @@ struct Surface {
     // front side), else `normal`. Which side a direction is on is still decided by `normal`
     // (see shading_agrees).
     shading_normal: vec3<f32>,
+    // Texture coordinates: interpolated from a triangle's corners; a sphere's Mitsuba
+    // parameterisation (phi / 2 pi, theta / pi about +z).
+    uv: vec2<f32>,
 }
 
 // Möller-Trumbore on triangle `index`. Returns the distance, or T_INFINITE when missed or
@@ -437,7 +449,7 @@ fn surface_at(hit: Hit, origin: vec3<f32>, dir: vec3<f32>) -> Surface {
     if hit.prim >= scene_info.num_triangles {
         let sphere = spheres[hit.prim - scene_info.num_triangles];
         let point = sphere_point(sphere, origin + hit.t * dir - sphere.center);
-        return Surface(point.position, point.normal, sphere.material, sphere.light, point.error, point.normal);
+        return Surface(point.position, point.normal, sphere.material, sphere.light, point.error, point.normal, sphere_uv(point.position - sphere.center));
     }
 #endif
     // From the barycentrics, not origin + t dir: the distance carries the error of the whole
@@ -455,8 +467,24 @@ fn surface_at(hit: Hit, origin: vec3<f32>, dir: vec3<f32>) -> Surface {
             shading = interpolated * inverseSqrt(length_squared);
         }
     }
-    return Surface(point.position, point.normal, tri.material, tri.light, point.error, shading);
+    let uvs = triangle_uvs[hit.prim];
+    let uv = (1.0 - b.x - b.y) * uvs.a + b.x * uvs.b + b.y * uvs.c;
+    return Surface(point.position, point.normal, tri.material, tri.light, point.error, shading, uv);
 }
+
+#ifdef SPHERES
+// Mitsuba's sphere parameterisation of the point `local` from the centre: (phi / 2 pi,
+// theta / pi) with theta from +z and phi from +x towards +y. The sphere's rotation is not
+// stored, so this is about the world axes: right for spheres whose to_world does not rotate.
+fn sphere_uv(local: vec3<f32>) -> vec2<f32> {
+    let d = normalize(local);
+    var phi = atan2(d.y, d.x);
+    if phi < 0.0 {
+        phi += 6.2831853;
+    }
+    return vec2<f32>(phi * 0.15915494, acos(clamp(d.z, -1.0, 1.0)) * 0.31830989);
+}
+#endif
 
 // Whether the shading normal puts `dir` on the same side of the surface as the geometric normal
 // does. Where they disagree (near the silhouette of a smooth-shaded coarse mesh) a BSDF sample

@@ -8,6 +8,7 @@ use crate::gpu::layout::StructLayout;
 use crate::scene::bvh::BvhNode;
 use crate::scene::gpu_layout::{
     GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
+    GpuTriangleUvs,
 };
 use crate::struct_layout;
 
@@ -29,6 +30,7 @@ pub const LAYOUTS: &[StructLayout] = &[
         vertex, material, edge_a, light, edge_b, normals
     }),
     struct_layout!(GpuTriangleNormals => "TriangleNormals" in TRACER, { a, b, c }),
+    struct_layout!(GpuTriangleUvs => "TriangleUvs" in TRACER, { a, b, c }),
     struct_layout!(GpuSphere => "Sphere" in TRACER, {
         center, radius, material, light, flip_normals
     }),
@@ -56,7 +58,7 @@ impl SceneResources {
             bytes_of(&scene.uniform),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let tables: [(&str, &[u8]); 8] = [
+        let tables: [(&str, &[u8]); 9] = [
             ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
             ("scene prim indices", cast_slice(&scene.prim_indices)),
             ("scene triangles", cast_slice(&scene.triangles)),
@@ -68,6 +70,7 @@ impl SceneResources {
                 "scene triangle normals",
                 cast_slice(&scene.triangle_normals),
             ),
+            ("scene triangle uvs", cast_slice(&scene.triangle_uvs)),
         ];
         let mut buffers = vec![uniform];
         for (label, bytes) in tables {

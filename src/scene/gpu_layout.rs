@@ -36,6 +36,16 @@ pub struct GpuTriangle {
     pub normals: u32,
 }
 
+/// A triangle's texture coordinates at `vertex`, `vertex + edge_a`, `vertex + edge_b` (one per
+/// triangle, in triangle order; the barycentrics' corners for a triangle without any).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuTriangleUvs {
+    pub a: [f32; 2],
+    pub b: [f32; 2],
+    pub c: [f32; 2],
+}
+
 /// A triangle's unit vertex normals, at `vertex`, `vertex + edge_a`, `vertex + edge_b`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
@@ -127,6 +137,7 @@ pub struct GpuScene {
     pub prim_indices: Vec<u32>,
     pub triangles: Vec<GpuTriangle>,
     pub triangle_normals: Vec<GpuTriangleNormals>,
+    pub triangle_uvs: Vec<GpuTriangleUvs>,
     pub spheres: Vec<GpuSphere>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
@@ -295,6 +306,20 @@ impl GpuScene {
                 }),
             })
             .collect::<Vec<_>>();
+        let triangle_uvs = scene
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t
+                    .uvs
+                    .unwrap_or([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]);
+                GpuTriangleUvs {
+                    a: a.to_array(),
+                    b: b.to_array(),
+                    c: c.to_array(),
+                }
+            })
+            .collect::<Vec<_>>();
         let spheres = scene
             .spheres
             .iter()
@@ -340,6 +365,7 @@ impl GpuScene {
             prim_indices: non_empty(bvh.indices),
             triangles: non_empty(triangles),
             triangle_normals: non_empty(triangle_normals),
+            triangle_uvs: non_empty(triangle_uvs),
             spheres: non_empty(spheres),
             materials: non_empty(materials),
             lights: non_empty(lights),

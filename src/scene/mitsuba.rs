@@ -1080,8 +1080,8 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.scene.materials.push(material);
         let (triangles, spheres) = (self.scene.triangles.len(), self.scene.spheres.len());
         match kind.as_str() {
-            "rectangle" => self.push_mesh(mesh::rectangle(), &common),
-            "cube" => self.push_mesh(mesh::cube(), &common),
+            "rectangle" => self.push_mesh_data(mesh::rectangle_mesh(), &common),
+            "cube" => self.push_mesh_data(mesh::cube_mesh(), &common),
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
             "ply" => self.read_mesh_file(&mut props, &common, node, MeshFormat::Ply)?,
             _ => self.read_mesh_file(&mut props, &common, node, MeshFormat::Obj)?,
@@ -1161,8 +1161,12 @@ impl<'a, 'input> Reader<'a, 'input> {
             .map(|n| self.boolean(n))
             .transpose()?
             .unwrap_or(false);
-        // Texture coordinates are not used, so their orientation does not matter.
-        self.ignore(props, &["flip_tex_coords"], |r, n| r.boolean(n).map(drop))?;
+        // Mitsuba flips v (v -> 1 - v) by default for OBJ files, not for PLY.
+        let flip_tex_coords = props
+            .take("flip_tex_coords")
+            .map(|n| self.boolean(n))
+            .transpose()?
+            .unwrap_or(format == MeshFormat::Obj);
         let mesh_path = self.relative(&file);
         let loaded = match format {
             MeshFormat::Obj => super::obj::load_mesh_data(&mesh_path),
@@ -1185,18 +1189,19 @@ impl<'a, 'input> Reader<'a, 'input> {
         if face_normals {
             mesh.normals = None;
         }
+        if flip_tex_coords && let Some(uvs) = mesh.uvs.as_mut() {
+            for corner in uvs.iter_mut().flatten() {
+                corner.y = 1.0 - corner.y;
+            }
+        }
         self.scene
             .push_mesh_data(mesh, common.to_world, common.material, common.flip_normals);
         Ok(())
     }
 
-    fn push_mesh(&mut self, triangles: Vec<[Vec3; 3]>, common: &ShapeCommon) {
-        self.scene.push_mesh(
-            triangles,
-            common.to_world,
-            common.material,
-            common.flip_normals,
-        );
+    fn push_mesh_data(&mut self, mesh: mesh::MeshData, common: &ShapeCommon) {
+        self.scene
+            .push_mesh_data(mesh, common.to_world, common.material, common.flip_normals);
     }
 
     fn relative(&self, file: &str) -> PathBuf {

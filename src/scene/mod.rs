@@ -67,6 +67,9 @@ pub struct Triangle {
     /// Unit vertex normals at the corners, interpolated for shading (Mitsuba's default for a
     /// mesh that has them); `None` shades with the face normal.
     pub normals: Option<[Vec3; 3]>,
+    /// Texture coordinates at the corners; `None` gives Mitsuba's default, the barycentrics
+    /// ((0,0), (1,0), (0,1) at the corners).
+    pub uvs: Option<[glam::Vec2; 3]>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -413,10 +416,11 @@ pub fn place_triangles(
     place_mesh(mesh, to_world, material, flip_normals)
 }
 
-/// [`place_triangles`] for a mesh that may have vertex normals: they are carried by the inverse
-/// transpose of `to_world` (so they stay perpendicular to the surface under any affine map) and
-/// turned with the front side by `flip_normals`. A triangle with a normal that is zero or not a
-/// number after the transform shades flat.
+/// [`place_triangles`] for a mesh that may have vertex normals and texture coordinates: normals
+/// are carried by the inverse transpose of `to_world` (so they stay perpendicular to the surface
+/// under any affine map) and turned with the front side by `flip_normals`; a triangle with a
+/// normal that is zero or not a number after the transform shades flat. Texture coordinates
+/// follow their corners.
 pub fn place_mesh(
     mesh: mesh::MeshData,
     to_world: glam::Mat4,
@@ -427,6 +431,7 @@ pub fn place_mesh(
     let normal_map = glam::Mat3::from_mat4(to_world).inverse().transpose();
     let sign = if flip_normals { -1.0 } else { 1.0 };
     let normals = mesh.normals;
+    let uvs = mesh.uvs;
     mesh.triangles
         .into_iter()
         .enumerate()
@@ -440,10 +445,15 @@ pub fn place_mesh(
                 };
                 Some(if swap { [na, nc, nb] } else { [na, nb, nc] })
             });
+            let uvs = uvs
+                .as_ref()
+                .and_then(|uv| uv.get(i))
+                .map(|&[a, b, c]| if swap { [a, c, b] } else { [a, b, c] });
             Triangle {
                 v,
                 material,
                 normals,
+                uvs,
             }
         })
 }

@@ -64,6 +64,7 @@ pub fn parse_mesh(path: &Path, text: &str) -> Result<MeshData, SceneError> {
         normals: Some(Vec::new()),
         ..MeshData::default()
     };
+    let mut uv_parts = Vec::new();
     for model in &models {
         let m = &model.mesh;
         let out_of_range = || SceneError::File {
@@ -121,6 +122,38 @@ pub fn parse_mesh(path: &Path, text: &str) -> Result<MeshData, SceneError> {
             angle_weighted_normals(&vertex_positions, &vertex_corners)
         };
         mesh.normals.get_or_insert_with(Vec::new).extend(normals);
+        // Texture coordinates where every corner of every face names one (as OBJ stores them;
+        // Mitsuba's flip_tex_coords is the loader's business).
+        let with_uv = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
+        let uvs = with_uv
+            .then(|| {
+                m.texcoord_indices
+                    .chunks_exact(3)
+                    .map(|f| {
+                        let uv = [f[0], f[1], f[2]].map(|i| {
+                            let i = i as usize * 2;
+                            m.texcoords.get(i..i + 2).map(glam::Vec2::from_slice)
+                        });
+                        match uv {
+                            [Some(a), Some(b), Some(c)] => Ok([a, b, c]),
+                            _ => Err(out_of_range()),
+                        }
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .transpose()?;
+        uv_parts.push((corners.len(), uvs));
+    }
+    // A model without texture coordinates in a file that has them takes Mitsuba's default for
+    // a mesh without any: the barycentrics.
+    if uv_parts.iter().any(|(_, uvs)| uvs.is_some()) {
+        let barycentric = [glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y];
+        mesh.uvs = Some(
+            uv_parts
+                .into_iter()
+                .flat_map(|(n, uvs)| uvs.unwrap_or_else(|| vec![barycentric; n]))
+                .collect(),
+        );
     }
     if mesh.triangles.is_empty() {
         return Err(SceneError::File {
