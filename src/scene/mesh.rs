@@ -132,7 +132,10 @@ mod tests {
         let uvs = cube.uvs.expect("cube uvs");
         for (t, uv) in cube.triangles.iter().zip(&uvs) {
             let area = 0.5 * (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]);
-            assert!((area.abs() - 0.5).abs() < 1e-6, "triangle {t:?}: uv area {area}");
+            assert!(
+                (area.abs() - 0.5).abs() < 1e-6,
+                "triangle {t:?}: uv area {area}"
+            );
             for c in uv {
                 assert!(c.x == 0.0 || c.x == 1.0, "{c}");
                 assert!(c.y == 0.0 || c.y == 1.0, "{c}");
