@@ -1,6 +1,8 @@
 """Run in this folder: writes smooth_sphere.ply (a 16-ring UV sphere with its radial vertex normals) and renders
 smooth_sphere.xml with Mitsuba 3 into smooth_sphere.exr
-(`python smooth_sphere.py scalar_rgb 1024` with Mitsuba 3.9.1 from PyPI)."""
+(`python smooth_sphere.py scalar_rgb 1024` with Mitsuba 3.9.1 from PyPI). computed_normals.ply
+is smooth_sphere.ply without its normal properties; computed_normals.exr is Mitsuba's render of
+smooth_sphere.xml with `-D mesh=computed_normals.ply`."""
 import math, struct, sys
 rings = 16
 segments = 2 * rings
