@@ -37,6 +37,9 @@ enum Command {
         /// Prune the graph for this scene first (drop what the scene has no use for).
         #[arg(long)]
         scene: Option<PathBuf>,
+        /// Set a parameter of the --scene (see `render -D`).
+        #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+        defines: Vec<(String, String)>,
     },
     /// Render several graphs for the same time and plot their error against time.
     Compare(CompareArgs),
@@ -52,6 +55,10 @@ enum Command {
 struct RenderArgs {
     /// Scene file (.xml Mitsuba 3, .ron, .obj); default: the bundled Cornell box.
     scene: Option<PathBuf>,
+    /// Set a scene parameter, as `mitsuba -D name=value`: replaces the Mitsuba scene's
+    /// `<default name="name">` and fills every `$name` (repeat for each).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+    defines: Vec<(String, String)>,
     /// Render graph (RON); default: graphs/hybrid.ron.
     #[arg(long)]
     graph: Option<PathBuf>,
@@ -121,6 +128,10 @@ struct MergeArgs {
 struct CompareArgs {
     /// Scene file (.xml Mitsuba 3, .ron, .obj).
     scene: PathBuf,
+    /// Set a scene parameter, as `mitsuba -D name=value`: replaces the Mitsuba scene's
+    /// `<default name="name">` and fills every `$name` (repeat for each).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+    defines: Vec<(String, String)>,
     /// Reference image (EXR) the same size as the renders.
     #[arg(long)]
     reference: PathBuf,
@@ -179,6 +190,20 @@ struct BenchArgs {
     /// Iterations of the 512x512 report workload to run (with --hybrid).
     #[arg(long, default_value_t = 4)]
     workload_iterations: u64,
+}
+
+/// `NAME=VALUE` of `-D`: a name as Mitsuba's `$name` references spell it (letters, digits,
+/// `_`), any value.
+fn parse_define(text: &str) -> Result<(String, String), String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, e.g. -D spp=16, got {text:?}"))?;
+    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!(
+            "parameter name {name:?} must be letters, digits and _ (as in $name)"
+        ));
+    }
+    Ok((name.to_string(), value.to_string()))
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
@@ -276,7 +301,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let graph_text = std::fs::read_to_string(&graph_path)
         .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
-    let scene = scene::load(&scene_path)?;
+    let scene = scene::load_with(&scene_path, &args.defines)?;
     let features = scene.features();
     eprintln!("scene: {features}");
     if !features.has_lights() {
@@ -401,13 +426,21 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         );
     }
     let counters = renderer.counters()?;
-    let provenance = Provenance::default()
+    let mut provenance = Provenance::default()
         .with("hppm_adapter", gpu.adapter_label())
         .with("hppm_scene", scene_path.display())
         .with("hppm_graph", graph_path.display())
         .with("hppm_spp", renderer.samples_per_pixel())
         .with("hppm_seed", seed)
         .with("hppm_seconds", format!("{:.3}", summary.seconds));
+    if !args.defines.is_empty() {
+        let defines: Vec<String> = args
+            .defines
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        provenance = provenance.with("hppm_defines", defines.join(" "));
+    }
     if args.shard.is_some() {
         shard_file(&renderer, &origin)?.write(&args.out)?;
     } else {
@@ -532,13 +565,18 @@ fn info() -> Result<(), Error> {
     Ok(())
 }
 
-fn show_graph(file: &Path, dot: bool, scene_path: Option<&Path>) -> Result<(), Error> {
+fn show_graph(
+    file: &Path,
+    dot: bool,
+    scene_path: Option<&Path>,
+    defines: &[(String, String)],
+) -> Result<(), Error> {
     let mut graph = graph::load_graph(file, passes::registry())?;
     for warning in &graph.warnings {
         eprintln!("warning: {warning}");
     }
     if let Some(scene_path) = scene_path {
-        let scene = scene::load(scene_path)?;
+        let scene = scene::load_with(scene_path, defines)?;
         let features = scene.features();
         println!("scene: {features}");
         for pruned in graph.prune(|need| passes::scene_meets(&features, need))? {
@@ -559,6 +597,7 @@ fn compare(args: CompareArgs) -> Result<(), Error> {
     eprintln!("adapter: {}", gpu.adapter_label());
     let options = hppm::app::compare::CompareOptions {
         scene: args.scene,
+        defines: args.defines,
         reference: args.reference,
         graphs: args.graphs,
         seconds: args.time,
@@ -651,7 +690,12 @@ fn main() -> ExitCode {
         Command::Compare(args) => compare(args),
         Command::Merge(args) => merge(args),
         Command::Info => info(),
-        Command::Graph { file, dot, scene } => show_graph(&file, dot, scene.as_deref()),
+        Command::Graph {
+            file,
+            dot,
+            scene,
+            defines,
+        } => show_graph(&file, dot, scene.as_deref(), &defines),
         Command::Bench(args) if args.hybrid => bench_hybrid(&args),
         Command::Bench(args) if args.gather => bench_gather(&args),
         Command::Bench(args) => bench::run(

@@ -312,3 +312,149 @@ fn a_headless_render_is_quiet_and_png_text_may_be_any_unicode() {
     assert!(has_itxt, "the Cyrillic scene path goes into an iTXt chunk");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A small Mitsuba scene whose film and sample count are `<default>` parameters, in its own
+/// temporary folder.
+fn parameterised_scene(tag: &str) -> (std::path::PathBuf, String) {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("scene.xml");
+    std::fs::write(
+        &path,
+        r#"<scene version="3.0.0">
+    <default name="spp" value="2"/>
+    <default name="resx" value="20"/>
+    <default name="resy" value="12"/>
+    <sensor type="perspective">
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="$resx"/>
+            <integer name="height" value="$resy"/>
+        </film>
+    </sensor>
+    <shape type="rectangle">
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>
+</scene>"#,
+    )
+    .expect("scene written");
+    let text = path.to_string_lossy().into_owned();
+    (dir, text)
+}
+
+/// `-D name=value` replaces the scene's `<default>` as `mitsuba -D` does: the film size and the
+/// sample count follow it (a loader that ignored -D renders 20x12 at 2 spp), and it is recorded
+/// in the output file.
+#[test]
+fn defines_override_scene_defaults() {
+    let (dir, scene) = parameterised_scene("defines");
+    let out_path = dir.join("out.exr").to_string_lossy().into_owned();
+    let plain = hppm(&[
+        "render",
+        &scene,
+        "--graph",
+        "graphs/pt.ron",
+        "--out",
+        &out_path,
+    ]);
+    assert!(plain.status.success(), "{}", stderr(&plain));
+    let stdout = String::from_utf8_lossy(&plain.stdout);
+    assert!(stdout.contains("20x12, 2 spp"), "{stdout}");
+    let set = hppm(&[
+        "render",
+        &scene,
+        "--graph",
+        "graphs/pt.ron",
+        "-D",
+        "spp=3",
+        "--define",
+        "resx=24",
+        "--out",
+        &out_path,
+    ]);
+    assert!(set.status.success(), "{}", stderr(&set));
+    let stdout = String::from_utf8_lossy(&set.stdout);
+    assert!(stdout.contains("24x12, 3 spp"), "{stdout}");
+    let bytes = std::fs::read(&out_path).expect("output written");
+    let needle = b"spp=3 resx=24";
+    assert!(
+        bytes.windows(needle.len()).any(|w| w == needle),
+        "the defines are not recorded in the EXR"
+    );
+    // `graph --scene` loads the scene with them too.
+    let graph = hppm(&[
+        "graph",
+        "graphs/hybrid.ron",
+        "--scene",
+        &scene,
+        "-D",
+        "resy=8",
+    ]);
+    assert!(graph.status.success(), "{}", stderr(&graph));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A `-D` no attribute uses is refused, as Mitsuba 3 refuses unused parameters (a typo must not
+/// render the scene unchanged), naming it and the scene's parameters; a malformed one, or one
+/// for a scene format without parameters, is refused before any work. Nothing panics.
+#[test]
+fn unused_or_malformed_defines_are_errors() {
+    let (dir, scene) = parameterised_scene("bad-defines");
+    let out_path = dir.join("out.exr").to_string_lossy().into_owned();
+    let typo = hppm(&["render", &scene, "-D", "sp=16", "--out", &out_path]);
+    assert!(!typo.status.success());
+    let err = stderr(&typo);
+    for words in ["scene.xml", "-D sp=16", "$sp", "resx, resy, spp"] {
+        assert!(err.contains(words), "expected {words:?} in: {err}");
+    }
+    let malformed = hppm(&["render", &scene, "-D", "spp", "--out", &out_path]);
+    assert!(!malformed.status.success());
+    assert!(
+        stderr(&malformed).contains("NAME=VALUE"),
+        "{}",
+        stderr(&malformed)
+    );
+    let ron = hppm(&[
+        "render",
+        "scenes/cornell_box.ron",
+        "-D",
+        "spp=2",
+        "--out",
+        &out_path,
+    ]);
+    assert!(!ron.status.success());
+    assert!(
+        stderr(&ron).contains("Mitsuba XML scenes only"),
+        "{}",
+        stderr(&ron)
+    );
+    let compare = hppm(&[
+        "compare",
+        &scene,
+        "--reference",
+        "none.exr",
+        "--graph",
+        "graphs/pt.ron",
+        "--time",
+        "1",
+        "--out",
+        &out_path,
+        "-D",
+        "nothing=1",
+    ]);
+    assert!(!compare.status.success());
+    assert!(
+        stderr(&compare).contains("$nothing"),
+        "{}",
+        stderr(&compare)
+    );
+    for out in [&typo, &malformed, &ron, &compare] {
+        assert!(!stderr(out).contains("panicked"), "{}", stderr(out));
+    }
+    assert!(
+        !std::path::Path::new(&out_path).exists(),
+        "an image was written"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

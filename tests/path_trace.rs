@@ -59,6 +59,8 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
             fov_x_deg: 70.0,
             width: 48,
             height: 32,
+            filter: hppm::scene::filter::PixelFilter::Box,
+            sample_border: false,
         },
         integrator: Integrator {
             max_depth: None,

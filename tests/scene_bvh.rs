@@ -323,6 +323,8 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
             fov_x_deg: 40.0,
             width: 8,
             height: 8,
+            filter: hppm::scene::filter::PixelFilter::Box,
+            sample_border: false,
         },
         integrator: Integrator::default(),
         spp_hint: None,
@@ -338,6 +340,8 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
                         c + rng.point(size),
                     ],
                     material: 0,
+                    normals: None,
+                    uvs: None,
                 }
             })
             .collect(),

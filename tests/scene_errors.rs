@@ -56,6 +56,24 @@ const CASES: &[(&str, &str, usize, &[&str])] = &[
         5,
         &["twosided", "transmission"],
     ),
+    (
+        "unknown_rfilter.xml",
+        "unknown_rfilter.xml",
+        4,
+        &["mitchell", "box, tent, gaussian"],
+    ),
+    (
+        "bad_rfilter_stddev.xml",
+        "bad_rfilter_stddev.xml",
+        5,
+        &["stddev", "-0.5"],
+    ),
+    (
+        "rfilter_unknown_property.xml",
+        "rfilter_unknown_property.xml",
+        5,
+        &["radius", "gaussian"],
+    ),
     ("bad_matrix.xml", "bad_matrix.xml", 5, &["16 numbers"]),
     ("missing_default.xml", "missing_default.xml", 4, &["$spp"]),
     (

@@ -6,7 +6,10 @@ use std::collections::HashMap;
 use hppm::gpu::shaders::{ShaderFile, ShaderLibrary};
 use hppm::passes::{COMMON_MODULES, registry};
 use hppm::scene::bvh::BvhNode;
-use hppm::scene::gpu_layout::{GpuLight, GpuMaterial, GpuSceneUniform, GpuSphere, GpuTriangle};
+use hppm::scene::gpu_layout::{
+    GpuLight, GpuMaterial, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
+    GpuTriangleUvs,
+};
 use wgpu::naga;
 
 fn library_with(
@@ -104,6 +107,8 @@ fn gpu_structs_match_wgsl_layout() {
         ("SceneUniform", std::mem::size_of::<GpuSceneUniform>()),
         ("BvhNode", std::mem::size_of::<BvhNode>()),
         ("Triangle", std::mem::size_of::<GpuTriangle>()),
+        ("TriangleNormals", std::mem::size_of::<GpuTriangleNormals>()),
+        ("TriangleUvs", std::mem::size_of::<GpuTriangleUvs>()),
         ("Sphere", std::mem::size_of::<GpuSphere>()),
         ("Material", std::mem::size_of::<GpuMaterial>()),
         ("Light", std::mem::size_of::<GpuLight>()),

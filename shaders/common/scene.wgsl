@@ -26,9 +26,11 @@ struct SceneUniform {
     num_lights: u32,
     max_depth: u32,
     rr_depth: u32,
-    pad_a: u32,
-    pad_b: u32,
-    pad_c: u32,
+    // common::pixel_filter's FILTER_* kind, its parameter (tent radius, Gaussian stddev), and
+    // 1 when samples may leave the film (Mitsuba's sample_border).
+    filter_kind: u32,
+    filter_param: f32,
+    sample_border: u32,
     // A sphere around every specular surface (radius 0 when there is none).
     specular_center: vec3<f32>,
     specular_radius: f32,
@@ -49,7 +51,25 @@ struct Triangle {
     edge_a: vec3<f32>,
     light: u32,
     edge_b: vec3<f32>,
+    // Index into triangle_normals, or NO_NORMALS (shaded with the face normal).
+    normals: u32,
+}
+
+// A triangle's texture coordinates at vertex, vertex + edge_a, vertex + edge_b.
+struct TriangleUvs {
+    a: vec2<f32>,
+    b: vec2<f32>,
+    c: vec2<f32>,
+}
+
+// A triangle's unit vertex normals at vertex, vertex + edge_a, vertex + edge_b.
+struct TriangleNormals {
+    a: vec3<f32>,
     pad_a: u32,
+    b: vec3<f32>,
+    pad_b: u32,
+    c: vec3<f32>,
+    pad_c: u32,
 }
 
 struct Sphere {
@@ -114,6 +134,7 @@ const LIGHT_SPHERE: u32 = 1u;
 const LIGHT_POINT: u32 = 2u;
 const NO_LIGHT: u32 = 0xffffffffu;
 const NO_HIT: u32 = 0xffffffffu;
+const NO_NORMALS: u32 = 0xffffffffu;
 const UNBOUNDED: u32 = 0xffffffffu;
 const T_INFINITE: f32 = 3.0e38;
 const BVH_STACK_SIZE: u32 = 64u;
@@ -128,6 +149,9 @@ const BVH_STACK_SIZE: u32 = 64u;
 @group(0) @binding(7) var<storage, read> light_cdf: array<f32>;
 // Tables BSDFs look up (rough plastic's transmittance per cos theta).
 @group(0) @binding(8) var<storage, read> bsdf_tables: array<f32>;
+@group(0) @binding(9) var<storage, read> triangle_normals: array<TriangleNormals>;
+// One per triangle (Mitsuba's default, the barycentrics, where the mesh has none).
+@group(0) @binding(10) var<storage, read> triangle_uvs: array<TriangleUvs>;
 
 struct Hit {
     t: f32,
@@ -144,6 +168,13 @@ struct Surface {
     // Per-component bound on how far `position` may lie from the exact surface (see
     // offset_ray_origin).
     error: vec3<f32>,
+    // The normal BSDFs shade with: the interpolated vertex normal of a smooth mesh (on the
+    // front side), else `normal`. Which side a direction is on is still decided by `normal`
+    // (see shading_agrees).
+    shading_normal: vec3<f32>,
+    // Texture coordinates: interpolated from a triangle's corners; a sphere's Mitsuba
+    // parameterisation (phi / 2 pi, theta / pi about +z).
+    uv: vec2<f32>,
 }
 
 // Möller-Trumbore on triangle `index`. Returns the distance, or T_INFINITE when missed or
@@ -481,14 +512,60 @@ fn surface_at(hit: Hit, origin: vec3<f32>, dir: vec3<f32>) -> Surface {
     if hit.prim >= scene_info.num_triangles {
         let sphere = spheres[hit.prim - scene_info.num_triangles];
         let point = sphere_point(sphere, origin + hit.t * dir - sphere.center);
-        return Surface(point.position, point.normal, sphere.material, sphere.light, point.error);
+        return Surface(point.position, point.normal, sphere.material, sphere.light, point.error, point.normal, sphere_uv(point.position - sphere.center));
     }
 #endif
     // From the barycentrics, not origin + t dir: the distance carries the error of the whole
     // ray (large when the origin is far from the triangle), the barycentrics only the plane's.
     let tri = triangles[hit.prim];
-    let point = triangle_point(tri.vertex, tri.edge_a, tri.edge_b, triangle_barycentrics(tri, origin, dir));
-    return Surface(point.position, point.normal, tri.material, tri.light, point.error);
+    let b = triangle_barycentrics(tri, origin, dir);
+    let point = triangle_point(tri.vertex, tri.edge_a, tri.edge_b, b);
+    var shading = point.normal;
+    if tri.normals != NO_NORMALS {
+        let n = triangle_normals[tri.normals];
+        let interpolated = (1.0 - b.x - b.y) * n.a + b.x * n.b + b.y * n.c;
+        let length_squared = dot(interpolated, interpolated);
+        // Opposite vertex normals can cancel: such a point shades flat.
+        if length_squared > 1e-12 {
+            shading = interpolated * inverseSqrt(length_squared);
+        }
+    }
+    let uvs = triangle_uvs[hit.prim];
+    let uv = (1.0 - b.x - b.y) * uvs.a + b.x * uvs.b + b.y * uvs.c;
+    return Surface(point.position, point.normal, tri.material, tri.light, point.error, shading, uv);
+}
+
+#ifdef SPHERES
+// Mitsuba's sphere parameterisation of the point `local` from the centre: (phi / 2 pi,
+// theta / pi) with theta from +z and phi from +x towards +y. The sphere's rotation is not
+// stored, so this is about the world axes: right for spheres whose to_world does not rotate.
+fn sphere_uv(local: vec3<f32>) -> vec2<f32> {
+    let d = normalize(local);
+    var phi = atan2(d.y, d.x);
+    if phi < 0.0 {
+        phi += 6.2831853;
+    }
+    return vec2<f32>(phi * 0.15915494, acos(clamp(d.z, -1.0, 1.0)) * 0.31830989);
+}
+#endif
+
+// Whether the shading normal puts `dir` on the same side of the surface as the geometric normal
+// does. Where they disagree (near the silhouette of a smooth-shaded coarse mesh) a BSDF sample
+// or light direction would cross the real surface: such directions carry nothing, so light
+// never leaks through a mesh and a path never continues inside it.
+fn shading_agrees(surface: Surface, dir: vec3<f32>) -> bool {
+    return dot(surface.shading_normal, dir) * dot(surface.normal, dir) > 0.0;
+}
+
+// Veach's correction (thesis, section 5.3) of a photon's weight for the asymmetry shading
+// normals add to a BSDF: |wi.ns| |wo.ng| / (|wi.ng| |wo.ns|) for a photon arriving from `wi`
+// and leaving towards `wo` (both pointing away from the surface); 1 where the normals agree.
+fn photon_shading_correction(surface: Surface, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    let denominator = abs(dot(wi, surface.normal) * dot(wo, surface.shading_normal));
+    if !(denominator > 0.0) {
+        return 0.0;
+    }
+    return abs(dot(wi, surface.shading_normal) * dot(wo, surface.normal)) / denominator;
 }
 
 // Start point for a ray leaving `surface` towards `dir`.

@@ -13,7 +13,7 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
-#import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin, shading_agrees}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
 #import common::camera::camera_direction
 #import common::lights::{sample_light, area_light_pdf}
@@ -117,8 +117,8 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, vec4<u32
     if !ls.valid {
         return vec3<f32>(0.0);
     }
-    let cos_i = dot(surface.normal, ls.dir);
-    if cos_i <= 0.0 {
+    let cos_i = dot(surface.shading_normal, ls.dir);
+    if cos_i <= 0.0 || !shading_agrees(surface, ls.dir) {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
@@ -181,6 +181,9 @@ fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, w
     if !ls.valid {
         return vec3<f32>(0.0);
     }
+    if !shading_agrees(surface, ls.dir) {
+        return vec3<f32>(0.0);
+    }
     let e = material_eval(material, wi, ls.dir * frame, true);
     if max_component(e.value) <= 0.0 {
         return vec3<f32>(0.0);
@@ -224,6 +227,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
         if cos_o < 0.0 && material.back != NO_BACK {
             material = materials[material.back];
             surface.normal = -surface.normal;
+            surface.shading_normal = -surface.shading_normal;
             cos_o = -cos_o;
         }
         if depth == max_depth {
@@ -239,7 +243,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
 
         if material.kind == MATERIAL_DIFFUSE {
             // One-sided, as Mitsuba's diffuse: black from behind.
-            if cos_o <= 0.0 {
+            if cos_o <= 0.0 || !shading_agrees(surface, wo) {
                 break;
             }
             path.diffuse_vertices += 1u;
@@ -260,9 +264,9 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
                 }
             }
             result += path.throughput * direct_light(surface, material.albedo, rng, rays);
-            let dir = sample_cosine_hemisphere(surface.normal, rng_next_vec2(rng));
-            let cos_i = dot(dir, surface.normal);
-            if cos_i <= 0.0 {
+            let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
+            let cos_i = dot(dir, surface.shading_normal);
+            if cos_i <= 0.0 || !shading_agrees(surface, dir) {
                 break;
             }
             path.throughput *= material.albedo;
@@ -270,14 +274,23 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             path.after_delta = false;
             path.dir = dir;
         } else if material.kind == MATERIAL_MIRROR {
-            if cos_o <= 0.0 {
+            if cos_o <= 0.0 || !shading_agrees(surface, wo) {
                 break;
             }
-            path.dir = reflect_about(wo, surface.normal);
+            path.dir = reflect_about(wo, surface.shading_normal);
             path.after_delta = true;
+            if !shading_agrees(surface, path.dir) {
+                break;
+            }
         } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
-            let s = sample_dielectric(wo, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
+            if !shading_agrees(surface, wo) {
+                break;
+            }
+            let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
+            if !shading_agrees(surface, s.dir) {
+                break;
+            }
             path.throughput *= s.weight;
             path.dir = s.dir;
             path.after_delta = true;
@@ -285,8 +298,12 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             break;
 #endif
         } else {
-            // Every other BSDF, in the local frame of the side it is seen from.
-            let frame = basis_from_normal(surface.normal);
+            // Every other BSDF, in the shading frame of the side it is seen from; which side a
+            // direction is on is the geometric normal's to say (shading_agrees).
+            if !shading_agrees(surface, wo) {
+                break;
+            }
+            let frame = basis_from_normal(surface.shading_normal);
             let wi = wo * frame;
             if material_has_continuous_lobe(material.kind) {
                 result += path.throughput * direct_light_bsdf(surface, material, frame, wi, rng, rays);
@@ -296,8 +313,11 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             if !s.valid {
                 break;
             }
-            path.throughput *= s.weight;
             path.dir = normalize(frame * s.wo);
+            if !shading_agrees(surface, path.dir) {
+                break;
+            }
+            path.throughput *= s.weight;
             path.after_delta = s.delta;
             if !s.delta {
                 // A path-traced vertex: what it reaches through specular vertices is ours.

@@ -17,7 +17,7 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, intersect_photon, surface_at, offset_ray_origin, spawn_origin}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, intersect_photon, surface_at, offset_ray_origin, spawn_origin, shading_agrees, photon_shading_correction}
 #import common::material::material_sample
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::reflect_about
@@ -224,42 +224,63 @@ fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
         if cos_i < 0.0 && material.back != NO_BACK {
             material = materials[material.back];
             surface.normal = -surface.normal;
+            surface.shading_normal = -surface.shading_normal;
             cos_i = -cos_i;
         }
         if material.kind == MATERIAL_DIFFUSE {
             // One-sided, as the camera pass: the back of a diffuse surface absorbs.
-            if cos_i <= 0.0 {
+            if cos_i <= 0.0 || !shading_agrees(surface, wi) {
                 break;
             }
+            // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
+            // over the geometric one it arrived with turns it into what the camera pass would
+            // gather there (1 on flat-shaded surfaces).
+            let deposited = photon.flux * (dot(wi, surface.shading_normal) / cos_i);
             if params.mode == MODE_CAUSTIC {
                 if after_specular {
-                    deposit(surface.position, wi, photon.flux, segments);
+                    deposit(surface.position, wi, deposited, segments);
                 }
                 break;
             }
-            deposit(surface.position, wi, photon.flux, segments);
-            photon.dir = sample_cosine_hemisphere(surface.normal, rng_next_vec2(rng));
-            // Cosine sampling: f cos / pdf = albedo.
-            photon.flux *= material.albedo;
-            after_specular = false;
-        } else if material.kind == MATERIAL_MIRROR {
-            if cos_i <= 0.0 {
+            deposit(surface.position, wi, deposited, segments);
+            photon.dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
+            if !shading_agrees(surface, photon.dir) {
                 break;
             }
-            photon.dir = reflect_about(wi, surface.normal);
+            // Cosine sampling: f cos / pdf = albedo.
+            photon.flux *= material.albedo * photon_shading_correction(surface, wi, photon.dir);
+            after_specular = false;
+        } else if material.kind == MATERIAL_MIRROR {
+            if cos_i <= 0.0 || !shading_agrees(surface, wi) {
+                break;
+            }
+            photon.dir = reflect_about(wi, surface.shading_normal);
+            if !shading_agrees(surface, photon.dir) {
+                break;
+            }
+            photon.flux *= photon_shading_correction(surface, wi, photon.dir);
             after_specular = true;
         } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
             // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
-            let s = sample_dielectric(wi, surface.normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
-            photon.flux *= s.weight;
+            if !shading_agrees(surface, wi) {
+                break;
+            }
+            let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
+            if !shading_agrees(surface, s.dir) {
+                break;
+            }
+            photon.flux *= s.weight * photon_shading_correction(surface, wi, s.dir);
             photon.dir = s.dir;
             after_specular = true;
 #else
             break;
 #endif
         } else {
-            let frame = basis_from_normal(surface.normal);
+            if !shading_agrees(surface, wi) {
+                break;
+            }
+            let frame = basis_from_normal(surface.shading_normal);
             let u1 = rng_next_f32(rng);
             let s = material_sample(material, wi * frame, u1, rng_next_vec2(rng), false);
             if !s.valid {
@@ -268,8 +289,11 @@ fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
             if !s.delta && params.mode == MODE_CAUSTIC {
                 break;
             }
-            photon.flux *= s.weight;
             photon.dir = normalize(frame * s.wo);
+            if !shading_agrees(surface, photon.dir) {
+                break;
+            }
+            photon.flux *= s.weight * photon_shading_correction(surface, wi, photon.dir);
             after_specular = s.delta;
         }
         photon.origin = spawn_origin(surface, photon.dir);

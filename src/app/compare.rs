@@ -16,6 +16,8 @@ use crate::{graph, passes, scene};
 /// What to compare (the command line's arguments).
 pub struct CompareOptions {
     pub scene: PathBuf,
+    /// Mitsuba `-D name=value` scene parameters.
+    pub defines: Vec<(String, String)>,
     pub reference: PathBuf,
     pub graphs: Vec<PathBuf>,
     pub seconds: f64,
@@ -198,7 +200,7 @@ pub fn compare(
     if options.graphs.is_empty() {
         return Err(Error::Other("give at least one --graph".into()));
     }
-    let scene = scene::load(&options.scene)?;
+    let scene = scene::load_with(&options.scene, &options.defines)?;
     let reference = Image::read_exr(&options.reference)?;
     let (width, height) = options
         .size

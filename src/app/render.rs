@@ -361,15 +361,18 @@ impl<'a> Renderer<'a> {
 /// another scene, or at another size, is recognised whatever its file is called.
 fn scene_fingerprint(scene: &GpuScene) -> u64 {
     use bytemuck::{bytes_of, cast_slice};
-    let parts: [&[u8]; 8] = [
+    let parts: [&[u8]; 11] = [
         bytes_of(&scene.uniform),
         cast_slice(&scene.bvh_nodes),
         cast_slice(&scene.prim_indices),
         cast_slice(&scene.triangles),
+        cast_slice(&scene.triangle_normals),
+        cast_slice(&scene.triangle_uvs),
         cast_slice(&scene.spheres),
         cast_slice(&scene.materials),
         cast_slice(&scene.lights),
         cast_slice(&scene.light_cdf),
+        cast_slice(&scene.bsdf_tables),
     ];
     let mut hash = crate::app::state::Fnv::default();
     for part in parts {

@@ -50,6 +50,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/rng.wgsl"),
     shader_file!("shaders/common/sampling.wgsl"),
     shader_file!("shaders/common/scene.wgsl"),
+    shader_file!("shaders/common/pixel_filter.wgsl"),
     shader_file!("shaders/common/camera.wgsl"),
     shader_file!("shaders/common/lights.wgsl"),
     shader_file!("shaders/common/fresnel.wgsl"),

@@ -7,7 +7,8 @@ use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::layout::StructLayout;
 use crate::scene::bvh::BvhNode;
 use crate::scene::gpu_layout::{
-    GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle,
+    GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
+    GpuTriangleUvs,
 };
 use crate::struct_layout;
 
@@ -21,10 +22,15 @@ pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuSceneUniform => "SceneUniform" in TRACER, {
         camera_origin, tan_half_x, camera_right, tan_half_y, camera_up, width, camera_forward,
         height, bounds_min, bounds_max, scene_radius, num_triangles, num_spheres,
-        num_lights, max_depth, rr_depth, specular_center, specular_radius
+        num_lights, max_depth, rr_depth, filter_kind, filter_param, sample_border, specular_center,
+        specular_radius
     }),
     struct_layout!(BvhNode => "BvhNode" in TRACER, { min, left_or_first, max, count }),
-    struct_layout!(GpuTriangle => "Triangle" in TRACER, { vertex, material, edge_a, light, edge_b }),
+    struct_layout!(GpuTriangle => "Triangle" in TRACER, {
+        vertex, material, edge_a, light, edge_b, normals
+    }),
+    struct_layout!(GpuTriangleNormals => "TriangleNormals" in TRACER, { a, b, c }),
+    struct_layout!(GpuTriangleUvs => "TriangleUvs" in TRACER, { a, b, c }),
     struct_layout!(GpuSphere => "Sphere" in TRACER, {
         center, radius, material, light, flip_normals
     }),
@@ -53,7 +59,7 @@ impl SceneResources {
             bytes_of(&scene.uniform),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let tables: [(&str, &[u8]); 8] = [
+        let tables: [(&str, &[u8]); 10] = [
             ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
             ("scene prim indices", cast_slice(&scene.prim_indices)),
             ("scene triangles", cast_slice(&scene.triangles)),
@@ -62,6 +68,11 @@ impl SceneResources {
             ("scene lights", cast_slice(&scene.lights)),
             ("scene light cdf", cast_slice(&scene.light_cdf)),
             ("scene bsdf tables", cast_slice(&scene.bsdf_tables)),
+            (
+                "scene triangle normals",
+                cast_slice(&scene.triangle_normals),
+            ),
+            ("scene triangle uvs", cast_slice(&scene.triangle_uvs)),
         ];
         let mut buffers = vec![uniform];
         for (label, bytes) in tables {

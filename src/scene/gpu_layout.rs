@@ -26,6 +26,8 @@ pub const LIGHT_TRIANGLE: u32 = 0;
 pub const LIGHT_SPHERE: u32 = 1;
 pub const LIGHT_POINT: u32 = 2;
 
+/// `normals` of a triangle without vertex normals.
+pub const NO_NORMALS: u32 = u32::MAX;
 /// `light` of a primitive that emits nothing.
 pub const NO_LIGHT: u32 = u32::MAX;
 /// `max_depth` / `rr_depth` meaning "unbounded" / "never".
@@ -39,7 +41,31 @@ pub struct GpuTriangle {
     pub edge_a: [f32; 3],
     pub light: u32,
     pub edge_b: [f32; 3],
-    pub _pad: u32,
+    /// Index of the triangle's vertex normals in `GpuScene::triangle_normals`, or `NO_NORMALS`
+    /// (shaded with its face normal).
+    pub normals: u32,
+}
+
+/// A triangle's texture coordinates at `vertex`, `vertex + edge_a`, `vertex + edge_b` (one per
+/// triangle, in triangle order; the barycentrics' corners for a triangle without any).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuTriangleUvs {
+    pub a: [f32; 2],
+    pub b: [f32; 2],
+    pub c: [f32; 2],
+}
+
+/// A triangle's unit vertex normals, at `vertex`, `vertex + edge_a`, `vertex + edge_b`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct GpuTriangleNormals {
+    pub a: [f32; 3],
+    pub _pad_a: u32,
+    pub b: [f32; 3],
+    pub _pad_b: u32,
+    pub c: [f32; 3],
+    pub _pad_c: u32,
 }
 
 #[repr(C)]
@@ -120,7 +146,11 @@ pub struct GpuSceneUniform {
     pub num_lights: u32,
     pub max_depth: u32,
     pub rr_depth: u32,
-    pub _pad: [u32; 3],
+    /// The pixel filter: `filter::FILTER_*`, its parameter (tent radius, Gaussian stddev) and
+    /// whether samples may leave the film (1) or each pixel's filter is cut at its edge (0).
+    pub filter_kind: u32,
+    pub filter_param: f32,
+    pub sample_border: u32,
     /// A sphere around every specular (delta) surface; radius 0 when there is none. Caustic
     /// photons are aimed at it: a photon that misses it can never cross a specular vertex.
     pub specular_center: [f32; 3],
@@ -135,6 +165,8 @@ pub struct GpuScene {
     pub bvh_nodes: Vec<BvhNode>,
     pub prim_indices: Vec<u32>,
     pub triangles: Vec<GpuTriangle>,
+    pub triangle_normals: Vec<GpuTriangleNormals>,
+    pub triangle_uvs: Vec<GpuTriangleUvs>,
     pub spheres: Vec<GpuSphere>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
@@ -344,6 +376,7 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
     let up = right.cross(forward);
     let tan_half_x = (cam.fov_x_deg.to_radians() * 0.5).tan();
     let tan_half_y = tan_half_x * height as f32 / width.max(1) as f32;
+    let (filter_kind, filter_param) = cam.filter.gpu_code();
     GpuSceneUniform {
         camera_origin: cam.origin.to_array(),
         tan_half_x,
@@ -353,6 +386,9 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
         width,
         camera_forward: forward.to_array(),
         height,
+        filter_kind,
+        filter_param,
+        sample_border: cam.sample_border as u32,
         ..Zeroable::zeroed()
     }
 }
@@ -374,6 +410,7 @@ impl GpuScene {
                 *slot = i as u32;
             }
         }
+        let mut triangle_normals = Vec::new();
         let triangles = scene
             .triangles
             .iter()
@@ -384,7 +421,29 @@ impl GpuScene {
                 edge_a: (t.v[1] - t.v[0]).to_array(),
                 light,
                 edge_b: (t.v[2] - t.v[0]).to_array(),
-                _pad: 0,
+                normals: t.normals.map_or(NO_NORMALS, |[a, b, c]| {
+                    triangle_normals.push(GpuTriangleNormals {
+                        a: a.to_array(),
+                        b: b.to_array(),
+                        c: c.to_array(),
+                        ..Zeroable::zeroed()
+                    });
+                    triangle_normals.len() as u32 - 1
+                }),
+            })
+            .collect::<Vec<_>>();
+        let triangle_uvs = scene
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t
+                    .uvs
+                    .unwrap_or([glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]);
+                GpuTriangleUvs {
+                    a: a.to_array(),
+                    b: b.to_array(),
+                    c: c.to_array(),
+                }
             })
             .collect::<Vec<_>>();
         let spheres = scene
@@ -427,6 +486,8 @@ impl GpuScene {
             bvh_nodes: bvh.nodes,
             prim_indices: non_empty(bvh.indices),
             triangles: non_empty(triangles),
+            triangle_normals: non_empty(triangle_normals),
+            triangle_uvs: non_empty(triangle_uvs),
             spheres: non_empty(spheres),
             materials: non_empty(materials),
             lights: non_empty(lights),

@@ -1,34 +1,99 @@
 //! Built-in shapes as object-space triangles, counter-clockwise seen from the front (normal)
-//! side: Mitsuba's `rectangle` ([-1,1]^2 at z=0, normal +z) and `cube` ([-1,1]^3, outward).
+//! side, with Mitsuba's texture coordinates: `rectangle` ([-1,1]^2 at z=0, normal +z) and `cube`
+//! ([-1,1]^3, outward); and what mesh files give per triangle corner.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
-/// Two triangles spanning the parallelogram centre +- u +- v, facing u x v.
-fn quad(center: Vec3, u: Vec3, v: Vec3) -> [[Vec3; 3]; 2] {
-    let (a, b, c, d) = (
-        center - u - v,
-        center + u - v,
-        center + u + v,
-        center - u + v,
-    );
-    [[a, b, c], [a, c, d]]
+/// A mesh file's triangles in its own coordinates, with what else it has per corner.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshData {
+    pub triangles: Vec<[Vec3; 3]>,
+    /// Vertex normals at each triangle's corners, when the file gives one for every vertex.
+    pub normals: Option<Vec<[Vec3; 3]>>,
+    /// Texture coordinates at each triangle's corners, when the file gives them.
+    pub uvs: Option<Vec<[Vec2; 3]>>,
+}
+
+/// Vertex normals as Mitsuba 3 computes them for a mesh file that has none (Thürmer and
+/// Wüthrich, "Computing Vertex Normals from Polygonal Facets", JGT 1998): each face adds its unit
+/// normal to its corners' vertices, weighted by the corner's angle. `faces` index `positions`;
+/// the result is per triangle corner, zero at a vertex no proper face touches (such a triangle
+/// then shades flat).
+pub fn angle_weighted_normals(positions: &[Vec3], faces: &[[usize; 3]]) -> Vec<[Vec3; 3]> {
+    let mut sums = vec![glam::DVec3::ZERO; positions.len()];
+    for face in faces {
+        let p = face.map(|i| positions[i].as_dvec3());
+        let Some(n) = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize() else {
+            continue;
+        };
+        for k in 0..3 {
+            let (to_next, to_prev) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+            let angle = to_next.angle_between(to_prev);
+            if angle.is_finite() {
+                sums[face[k]] += n * angle;
+            }
+        }
+    }
+    let unit: Vec<Vec3> = sums
+        .iter()
+        .map(|s| s.try_normalize().unwrap_or_default().as_vec3())
+        .collect();
+    faces.iter().map(|face| face.map(|i| unit[i])).collect()
+}
+
+/// Mitsuba's `rectangle`: [-1,1]^2 at z=0 facing +z, uv = (x, y) / 2 + 1/2.
+pub fn rectangle_mesh() -> MeshData {
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    let p = corners.map(|(x, y)| Vec3::new(x, y, 0.0));
+    let uv = corners.map(|(x, y)| Vec2::new(0.5 * x + 0.5, 0.5 * y + 0.5));
+    MeshData {
+        triangles: vec![[p[0], p[1], p[2]], [p[0], p[2], p[3]]],
+        normals: None,
+        uvs: Some(vec![[uv[0], uv[1], uv[2]], [uv[0], uv[2], uv[3]]]),
+    }
+}
+
+/// Mitsuba 3's `cube` ([-1,1]^3, outward), triangle for triangle: each face maps onto [0,1]^2
+/// in uv space the way Mitsuba's does (its faces' corner tables, src/shapes/cube.cpp).
+pub fn cube_mesh() -> MeshData {
+    // Corner c is at (+-1, +-1, +-1), bit k of c giving the sign of axis k; each face lists its
+    // four corners, which take the uvs below in order.
+    const FACES: [[usize; 4]; 6] = [
+        [1, 5, 4, 0],
+        [3, 2, 6, 7],
+        [1, 3, 7, 5],
+        [5, 7, 6, 4],
+        [4, 6, 2, 0],
+        [3, 1, 0, 2],
+    ];
+    const FACE_UV: [(f32, f32); 4] = [(0.0, 1.0), (1.0, 1.0), (1.0, 0.0), (0.0, 0.0)];
+    let corner = |c: usize| {
+        let sign = |bit: usize| if c & bit != 0 { 1.0 } else { -1.0 };
+        Vec3::new(sign(1), sign(2), sign(4))
+    };
+    let uv = FACE_UV.map(|(u, v)| Vec2::new(u, v));
+    let mut mesh = MeshData {
+        uvs: Some(Vec::new()),
+        ..MeshData::default()
+    };
+    for face in FACES {
+        let p = face.map(corner);
+        for [i, j, k] in [[0, 1, 2], [3, 0, 2]] {
+            mesh.triangles.push([p[i], p[j], p[k]]);
+            if let Some(uvs) = mesh.uvs.as_mut() {
+                uvs.push([uv[i], uv[j], uv[k]]);
+            }
+        }
+    }
+    mesh
 }
 
 pub fn rectangle() -> Vec<[Vec3; 3]> {
-    quad(Vec3::ZERO, Vec3::X, Vec3::Y).to_vec()
+    rectangle_mesh().triangles
 }
 
 pub fn cube() -> Vec<[Vec3; 3]> {
-    // Each face's (u, v) is ordered so that u x v points out of the cube.
-    let faces = [
-        (Vec3::X, Vec3::Y, Vec3::Z),
-        (Vec3::NEG_X, Vec3::Z, Vec3::Y),
-        (Vec3::Y, Vec3::Z, Vec3::X),
-        (Vec3::NEG_Y, Vec3::X, Vec3::Z),
-        (Vec3::Z, Vec3::X, Vec3::Y),
-        (Vec3::NEG_Z, Vec3::Y, Vec3::X),
-    ];
-    faces.iter().flat_map(|&(n, u, v)| quad(n, u, v)).collect()
+    cube_mesh().triangles
 }
 
 #[cfg(test)]
@@ -57,5 +122,30 @@ mod tests {
             area += 0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length();
         }
         assert!((area - 24.0).abs() < 1e-5);
+    }
+
+    /// Each cube face maps onto the unit uv square (two triangles of uv area 1/2 whose corners
+    /// are its four corners), the way Mitsuba's cube does; the rectangle's uvs are (x, y)/2 + 1/2.
+    #[test]
+    fn built_in_uvs_cover_the_unit_square() {
+        let cube = cube_mesh();
+        let uvs = cube.uvs.expect("cube uvs");
+        for (t, uv) in cube.triangles.iter().zip(&uvs) {
+            let area = 0.5 * (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]);
+            assert!(
+                (area.abs() - 0.5).abs() < 1e-6,
+                "triangle {t:?}: uv area {area}"
+            );
+            for c in uv {
+                assert!(c.x == 0.0 || c.x == 1.0, "{c}");
+                assert!(c.y == 0.0 || c.y == 1.0, "{c}");
+            }
+        }
+        let rect = rectangle_mesh();
+        for (t, uv) in rect.triangles.iter().zip(rect.uvs.expect("rectangle uvs")) {
+            for (p, c) in t.iter().zip(uv) {
+                assert_eq!(c, Vec2::new(0.5 * p.x + 0.5, 0.5 * p.y + 0.5));
+            }
+        }
     }
 }

@@ -5,18 +5,22 @@
 //!
 //! Supported: `<default>` with `$name` substitution in attribute values; integrator `path`
 //! (`max_depth`, `rr_depth`); sensor `perspective` (`fov`, `fov_axis`, clip planes, `to_world`)
-//! with sampler `independent` and film `hdrfilm` (box filter); shapes `rectangle`, `cube`,
-//! `sphere`, `obj` with `to_world` and `flip_normals`; BSDFs `diffuse`, `dielectric`,
-//! `thindielectric`, `roughdielectric`, `conductor`, `roughconductor`, `plastic`,
+//! with sampler `independent` and film `hdrfilm` (`width`, `height`, `sample_border`; rfilter
+//! `box`, `tent`, `gaussian`, the default); shapes `rectangle`, `cube`, `sphere`, `obj`, `ply`
+//! with `to_world` and `flip_normals` (`serialized` is named as not supported); BSDFs `diffuse`,
+//! `dielectric`, `thindielectric`, `roughdielectric`, `conductor`, `roughconductor`, `plastic`,
 //! `roughplastic` and `twosided` (README's table lists their parameters), inline or declared
-//! at top level with an `id` and used through `<ref id>`; `area` emitters inside shapes and top-level `point` emitters.
+//! at top level with an `id` and used through `<ref id>`; `area` emitters inside shapes and
+//! top-level `point` emitters.
 
-use std::collections::HashMap;
+use std::cell::RefCell;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
+use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
 use super::{
     Bsdf, Camera, Distribution, Integrator, Material, Microfacet, PointLight, Scene, SceneError,
     Sphere, bsdf, mesh,
@@ -28,16 +32,35 @@ const DEFAULT_BSDF: Bsdf = Bsdf::Diffuse {
     reflectance: Vec3::splat(0.5),
 };
 
+/// The widest pixel filter accepted (radius or stddev, in pixels).
+const MAX_FILTER_WIDTH: f32 = 16.0;
+
 /// Mitsuba's default `rr_depth`.
 const DEFAULT_RR_DEPTH: u32 = 5;
 
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    load_with(path, &[])
+}
+
+/// Loads with `-D name=value` parameters (`defines`), which take the place of the scene's
+/// `<default name=...>` of the same name and may give `$name`s the scene declares no default
+/// for. As in Mitsuba 3, a parameter no attribute uses is an error.
+pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
     let text = super::read_text(path)?;
-    parse(path, &text)
+    parse_with(path, &text, defines)
 }
 
 /// Parses Mitsuba XML `text`; `path` names the file in errors and anchors relative OBJ paths.
 pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
+    parse_with(path, text, &[])
+}
+
+/// [`parse`] with `-D` parameters (see [`load_with`]).
+pub fn parse_with(
+    path: &Path,
+    text: &str,
+    defines: &[(String, String)],
+) -> Result<Scene, SceneError> {
     let doc = Document::parse(text).map_err(|e| {
         let pos = e.pos();
         SceneError::at(
@@ -48,7 +71,10 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     let mut reader = Reader {
         path,
         doc: &doc,
-        defaults: HashMap::new(),
+        defaults: defines.iter().cloned().collect(),
+        defined: defines.iter().map(|(k, _)| k.clone()).collect(),
+        used: RefCell::new(HashSet::new()),
+        declared: Vec::new(),
         named_bsdfs: HashMap::new(),
         scene: empty_scene(path),
         has_integrator: false,
@@ -56,6 +82,7 @@ pub fn parse(path: &Path, text: &str) -> Result<Scene, SceneError> {
     };
     reader.check_attributes()?;
     reader.read_scene(doc.root_element())?;
+    reader.check_defines_used(defines)?;
     if !reader.has_sensor {
         return Err(reader.error(doc.root_element(), "the scene has no <sensor>"));
     }
@@ -74,6 +101,8 @@ fn empty_scene(path: &Path) -> Scene {
             fov_x_deg: 39.3077,
             width: 768,
             height: 576,
+            filter: PixelFilter::MITSUBA_DEFAULT,
+            sample_border: false,
         },
         integrator: Integrator {
             max_depth: None,
@@ -124,6 +153,12 @@ struct Reader<'a, 'input> {
     path: &'a Path,
     doc: &'a Document<'input>,
     defaults: HashMap<String, String>,
+    /// The names given on the command line (`-D`), which `<default>` does not replace, and
+    /// which of all names an attribute has used.
+    defined: HashSet<String>,
+    used: RefCell<HashSet<String>>,
+    /// The names of the scene's `<default>`s, for messages.
+    declared: Vec<String>,
     named_bsdfs: HashMap<String, Sides>,
     scene: Scene,
     has_integrator: bool,
@@ -286,10 +321,40 @@ impl<'a, 'input> Reader<'a, 'input> {
                 )
             })?;
             out.push_str(value);
+            self.used.borrow_mut().insert(key.to_string());
             rest = &tail[end..];
         }
         out.push_str(rest);
         Ok(Some(out))
+    }
+
+    /// Mitsuba 3 refuses a `-D` parameter that no attribute substitutes (a typo would
+    /// otherwise render the scene unchanged).
+    fn check_defines_used(&self, defines: &[(String, String)]) -> Result<(), SceneError> {
+        let used = self.used.borrow();
+        let Some((key, value)) = defines.iter().find(|(k, _)| !used.contains(k)) else {
+            return Ok(());
+        };
+        let mut known: Vec<&str> = self
+            .declared
+            .iter()
+            .chain(used.iter())
+            .map(String::as_str)
+            .collect();
+        known.sort_unstable();
+        known.dedup();
+        let known = if known.is_empty() {
+            "none".to_string()
+        } else {
+            known.join(", ")
+        };
+        Err(SceneError::File {
+            file: self.path.to_path_buf(),
+            message: format!(
+                "-D {key}={value}: the scene uses no ${key}, so the parameter would change \
+                 nothing (Mitsuba refuses unused parameters too); the scene's parameters: {known}"
+            ),
+        })
     }
 
     fn required_attr(&self, node: Node, name: &str) -> Result<String, SceneError> {
@@ -310,7 +375,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "default" => {
                     let name = self.required_attr(child, "name")?;
                     let value = self.required_attr(child, "value")?;
-                    self.defaults.insert(name, value);
+                    if !self.defined.contains(&name) {
+                        self.defaults.insert(name.clone(), value);
+                    }
+                    self.declared.push(name);
                 }
                 "integrator" => self.read_integrator(child)?,
                 "sensor" => self.read_sensor(child)?,
@@ -830,7 +898,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         if let Some(filter) = self.single_child(node, "rfilter")? {
-            self.read_rfilter(filter)?;
+            self.scene.camera.filter = self.read_rfilter(filter)?;
         }
         let mut props = self.props(node, &["rfilter"])?;
         if let Some(n) = props.take("width") {
@@ -844,6 +912,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             &["pixel_format", "component_format", "file_format"],
             |r, n| r.string(n).map(drop),
         )?;
+        if let Some(n) = props.take("sample_border") {
+            self.scene.camera.sample_border = self.boolean(n)?;
+        }
         self.finish(props, node)
     }
 
@@ -862,17 +933,47 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(v as u32)
     }
 
-    fn read_rfilter(&self, node: Node<'a, 'input>) -> Result<(), SceneError> {
-        let filter = self.required_attr(node, "type")?;
-        if filter != "box" {
+    /// `box`, `tent` (`radius`) or `gaussian` (`stddev`), with Mitsuba 3's defaults.
+    fn read_rfilter(&self, node: Node<'a, 'input>) -> Result<PixelFilter, SceneError> {
+        let kind = self.required_attr(node, "type")?;
+        let mut props = self.props(node, &[])?;
+        let filter = match kind.as_str() {
+            "box" => PixelFilter::Box,
+            "tent" => PixelFilter::Tent {
+                radius: self.filter_width(&mut props, "radius", DEFAULT_TENT_RADIUS)?,
+            },
+            "gaussian" => PixelFilter::Gaussian {
+                stddev: self.filter_width(&mut props, "stddev", DEFAULT_GAUSSIAN_STDDEV)?,
+            },
+            other => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    format!("rfilter \"{other}\" is not supported (box, tent, gaussian)"),
+                ));
+            }
+        };
+        self.finish(props, node)?;
+        Ok(filter)
+    }
+
+    /// A filter's radius or standard deviation: positive, and at most 16 pixels (a sanity
+    /// bound: wider filters blur the image away and only typos ask for them).
+    fn filter_width(&self, props: &mut Props, name: &str, default: f32) -> Result<f32, SceneError> {
+        let Some(n) = props.take(name) else {
+            return Ok(default);
+        };
+        let v = self.float(n)?;
+        if !(v > 0.0 && v <= MAX_FILTER_WIDTH) {
             return Err(self.attr_error(
-                node,
-                "type",
-                format!("rfilter \"{filter}\" is not supported (only \"box\")"),
+                n,
+                "value",
+                format!(
+                    "rfilter {name} {v}: expected more than 0 and at most {MAX_FILTER_WIDTH} pixels"
+                ),
             ));
         }
-        let props = self.props(node, &[])?;
-        self.finish(props, node)
+        Ok(v)
     }
 
     fn read_named_bsdf(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
@@ -1246,11 +1347,24 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn read_shape(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if !matches!(kind.as_str(), "rectangle" | "cube" | "sphere" | "obj") {
+        if kind == "serialized" {
             return Err(self.attr_error(
                 node,
                 "type",
-                format!("shape type \"{kind}\" is not supported (rectangle, cube, sphere, obj)"),
+                "shape type \"serialized\" (Mitsuba's compressed mesh format) is not supported \
+                 yet: convert the mesh to PLY or OBJ (rectangle, cube, sphere, obj, ply)",
+            ));
+        }
+        if !matches!(
+            kind.as_str(),
+            "rectangle" | "cube" | "sphere" | "obj" | "ply"
+        ) {
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!(
+                    "shape type \"{kind}\" is not supported (rectangle, cube, sphere, obj, ply)"
+                ),
             ));
         }
         let material = self.read_shape_material(node)?;
@@ -1271,10 +1385,11 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.scene.materials.push(material);
         let (triangles, spheres) = (self.scene.triangles.len(), self.scene.spheres.len());
         match kind.as_str() {
-            "rectangle" => self.push_mesh(mesh::rectangle(), &common),
-            "cube" => self.push_mesh(mesh::cube(), &common),
+            "rectangle" => self.push_mesh_data(mesh::rectangle_mesh(), &common),
+            "cube" => self.push_mesh_data(mesh::cube_mesh(), &common),
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
-            _ => self.read_obj(&mut props, &common, node)?,
+            "ply" => self.read_mesh_file(&mut props, &common, node, MeshFormat::Ply)?,
+            _ => self.read_mesh_file(&mut props, &common, node, MeshFormat::Obj)?,
         }
         let reach = self.scene.reach_since(triangles, spheres);
         if let Some(message) = super::beyond_extent("this shape", reach) {
@@ -1325,60 +1440,73 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(())
     }
 
-    fn read_obj(
+    /// An `obj` or `ply` shape: its file, relative to the scene's folder.
+    fn read_mesh_file(
         &mut self,
         props: &mut Props,
         common: &ShapeCommon,
         node: Node,
+        format: MeshFormat,
     ) -> Result<(), SceneError> {
+        let name = format.name();
         let Some(file_node) = props.take("filename") else {
             return Err(self.error(
                 node,
-                "<shape type=\"obj\"> needs <string name=\"filename\" value=\"...\"/>",
+                format!(
+                    "<shape type=\"{}\"> needs <string name=\"filename\" value=\"...\"/>",
+                    name.to_ascii_lowercase()
+                ),
             ));
         };
         let file = self.string(file_node)?;
-        // Mitsuba interpolates vertex normals unless face_normals is true; we only have flat
-        // normals, which match only for meshes meant to be faceted.
+        // As in Mitsuba, vertex normals (the file's, or computed when it has none) shade the
+        // mesh smoothly unless face_normals is true.
         let face_normals = props
             .take("face_normals")
             .map(|n| self.boolean(n))
-            .transpose()?;
-        if face_normals != Some(true) {
-            eprintln!(
-                "warning: {}: smooth vertex normals are not supported; using flat face normals \
-                 (set face_normals to true to match)",
-                self.location(node)
-            );
-        }
-        // Texture coordinates are not used, so their orientation does not matter.
-        self.ignore(props, &["flip_tex_coords"], |r, n| r.boolean(n).map(drop))?;
-        let obj_path = self.relative(&file);
-        let triangles = super::obj::load_triangles(&obj_path).map_err(|e| match e {
+            .transpose()?
+            .unwrap_or(false);
+        // Mitsuba flips v (v -> 1 - v) by default for OBJ files, not for PLY.
+        let flip_tex_coords = props
+            .take("flip_tex_coords")
+            .map(|n| self.boolean(n))
+            .transpose()?
+            .unwrap_or(format == MeshFormat::Obj);
+        let mesh_path = self.relative(&file);
+        let loaded = match format {
+            MeshFormat::Obj => super::obj::load_mesh_data(&mesh_path),
+            MeshFormat::Ply => super::ply::load(&mesh_path),
+        };
+        let mut mesh = loaded.map_err(|e| match e {
             SceneError::Io { file, source } => self.error(
                 node,
-                format!("cannot read OBJ file {}: {source}", file.display()),
+                format!("cannot read {name} file {}: {source}", file.display()),
             ),
             SceneError::At { location, message } => SceneError::At {
                 location,
-                message: format!("{message} (OBJ used at {})", self.location(node)),
+                message: format!("{message} ({name} used at {})", self.location(node)),
             },
             SceneError::File { file, message } => SceneError::File {
                 file,
-                message: format!("{message} (OBJ used at {})", self.location(node)),
+                message: format!("{message} ({name} used at {})", self.location(node)),
             },
         })?;
-        self.push_mesh(triangles, common);
+        if face_normals {
+            mesh.normals = None;
+        }
+        if flip_tex_coords && let Some(uvs) = mesh.uvs.as_mut() {
+            for corner in uvs.iter_mut().flatten() {
+                corner.y = 1.0 - corner.y;
+            }
+        }
+        self.scene
+            .push_mesh_data(mesh, common.to_world, common.material, common.flip_normals);
         Ok(())
     }
 
-    fn push_mesh(&mut self, triangles: Vec<[Vec3; 3]>, common: &ShapeCommon) {
-        self.scene.push_mesh(
-            triangles,
-            common.to_world,
-            common.material,
-            common.flip_normals,
-        );
+    fn push_mesh_data(&mut self, mesh: mesh::MeshData, common: &ShapeCommon) {
+        self.scene
+            .push_mesh_data(mesh, common.to_world, common.material, common.flip_normals);
     }
 
     fn relative(&self, file: &str) -> PathBuf {
@@ -1444,6 +1572,22 @@ impl<'a, 'input> Reader<'a, 'input> {
             intensity,
         });
         Ok(())
+    }
+}
+
+/// The mesh files a shape may name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MeshFormat {
+    Obj,
+    Ply,
+}
+
+impl MeshFormat {
+    fn name(self) -> &'static str {
+        match self {
+            MeshFormat::Obj => "OBJ",
+            MeshFormat::Ply => "PLY",
+        }
     }
 }
 

@@ -5,10 +5,12 @@
 
 pub mod bsdf;
 pub mod bvh;
+pub mod filter;
 pub mod gpu_layout;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj;
+pub mod ply;
 pub mod ron_format;
 
 use std::path::{Path, PathBuf};
@@ -27,6 +29,11 @@ pub struct Camera {
     pub fov_x_deg: f32,
     pub width: u32,
     pub height: u32,
+    /// The pixel reconstruction filter (Mitsuba's `rfilter`).
+    pub filter: filter::PixelFilter,
+    /// Camera samples may land beyond the film's edge (Mitsuba's `sample_border`); otherwise
+    /// the filter of a pixel near the edge is cut off at it, as in Mitsuba.
+    pub sample_border: bool,
 }
 
 /// Microfacet normal distributions (Mitsuba's `distribution`).
@@ -193,6 +200,12 @@ impl Material {
 pub struct Triangle {
     pub v: [Vec3; 3],
     pub material: u32,
+    /// Unit vertex normals at the corners, interpolated for shading (Mitsuba's default for a
+    /// mesh that has them); `None` shades with the face normal.
+    pub normals: Option<[Vec3; 3]>,
+    /// Texture coordinates at the corners; `None` gives Mitsuba's default, the barycentrics
+    /// ((0,0), (1,0), (0,1) at the corners).
+    pub uvs: Option<[glam::Vec2; 3]>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -403,6 +416,19 @@ impl Scene {
         out
     }
 
+    /// Adds an object-space mesh, with its vertex normals if it has them, placed by `to_world`
+    /// (see [`place_mesh`]).
+    pub fn push_mesh_data(
+        &mut self,
+        mesh: mesh::MeshData,
+        to_world: glam::Mat4,
+        material: u32,
+        flip_normals: bool,
+    ) {
+        self.triangles
+            .extend(place_mesh(mesh, to_world, material, flip_normals));
+    }
+
     /// Adds object-space triangles placed by `to_world` (see [`place_triangles`]).
     pub fn push_mesh(
         &mut self,
@@ -529,12 +555,53 @@ pub fn place_triangles(
     material: u32,
     flip_normals: bool,
 ) -> impl Iterator<Item = Triangle> {
+    let mesh = mesh::MeshData {
+        triangles,
+        ..mesh::MeshData::default()
+    };
+    place_mesh(mesh, to_world, material, flip_normals)
+}
+
+/// [`place_triangles`] for a mesh that may have vertex normals and texture coordinates: normals
+/// are carried by the inverse transpose of `to_world` (so they stay perpendicular to the surface
+/// under any affine map) and turned with the front side by `flip_normals`; a triangle with a
+/// normal that is zero or not a number after the transform shades flat. Texture coordinates
+/// follow their corners.
+pub fn place_mesh(
+    mesh: mesh::MeshData,
+    to_world: glam::Mat4,
+    material: u32,
+    flip_normals: bool,
+) -> impl Iterator<Item = Triangle> {
     let swap = (to_world.determinant() < 0.0) != flip_normals;
-    triangles.into_iter().map(move |corners| {
-        let [a, b, c] = corners.map(|p| to_world.transform_point3(p));
-        let v = if swap { [a, c, b] } else { [a, b, c] };
-        Triangle { v, material }
-    })
+    let normal_map = glam::Mat3::from_mat4(to_world).inverse().transpose();
+    let sign = if flip_normals { -1.0 } else { 1.0 };
+    let normals = mesh.normals;
+    let uvs = mesh.uvs;
+    mesh.triangles
+        .into_iter()
+        .enumerate()
+        .map(move |(i, corners)| {
+            let [a, b, c] = corners.map(|p| to_world.transform_point3(p));
+            let v = if swap { [a, c, b] } else { [a, b, c] };
+            let normals = normals.as_ref().and_then(|n| {
+                let placed = n.get(i)?.map(|n| (sign * (normal_map * n)).try_normalize());
+                let [Some(na), Some(nb), Some(nc)] = placed else {
+                    return None;
+                };
+                Some(if swap { [na, nc, nb] } else { [na, nb, nc] })
+            });
+            let uvs = uvs
+                .as_ref()
+                .and_then(|uv| uv.get(i))
+                .map(|&[a, b, c]| if swap { [a, c, b] } else { [a, b, c] });
+            Triangle {
+                v,
+                material,
+                normals,
+                uvs,
+            }
+        })
 }
 
 /// The uniform scale of an affine transform made only of uniform scaling, rotation, mirroring
@@ -612,21 +679,32 @@ impl SceneError {
     }
 }
 
-/// Loads a scene by extension: `.xml` (Mitsuba 3), `.ron` (ours) or `.obj` (a bare mesh, given a
-/// default camera and light so it can be looked at).
+/// Loads a scene by extension: `.xml` (Mitsuba 3), `.ron` (ours) or `.obj` / `.ply` (a bare mesh,
+/// given a default camera and light so it can be looked at).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    load_with(path, &[])
+}
+
+/// [`load`] with Mitsuba `-D name=value` parameters (see [`mitsuba::load_with`]); only Mitsuba
+/// XML scenes take them.
+pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
     match ext.as_str() {
-        "xml" => mitsuba::load(path),
+        "xml" => mitsuba::load_with(path, defines),
+        _ if !defines.is_empty() => Err(SceneError::File {
+            file: path.to_path_buf(),
+            message: "-D parameters apply to Mitsuba XML scenes only (their <default>s)".into(),
+        }),
         "ron" => ron_format::load(path),
         "obj" => obj::load_scene(path),
+        "ply" => obj::framed_scene(path, ply::load(path)?.triangles),
         _ => Err(SceneError::File {
             file: path.to_path_buf(),
-            message: "unknown scene format (expected .xml, .ron or .obj)".into(),
+            message: "unknown scene format (expected .xml, .ron, .obj or .ply)".into(),
         }),
     }
 }

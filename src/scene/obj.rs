@@ -1,11 +1,14 @@
-//! Wavefront OBJ meshes through tobj: triangles only (polygons are fan-triangulated), positions
-//! only (flat normals from the winding, counter-clockwise seen from the front). Materials
-//! (`mtllib`, `usemtl`) are ignored: the scene file assigns the BSDF.
+//! Wavefront OBJ meshes through tobj: triangles only (polygons are fan-triangulated), their
+//! front counter-clockwise, with vertex normals (the file's or computed, as Mitsuba does) for
+//! shapes that shade smoothly. Materials (`mtllib`, `usemtl`) are ignored: the scene file
+//! assigns the BSDF.
 
 use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
+use super::filter::PixelFilter;
+use super::mesh::{MeshData, angle_weighted_normals};
 use super::{
     Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Triangle, place_triangles,
 };
@@ -31,6 +34,19 @@ pub fn load_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, SceneError> {
 
 /// The triangles of OBJ `text`; `path` names the file in errors.
 pub fn parse_triangles(path: &Path, text: &str) -> Result<Vec<[Vec3; 3]>, SceneError> {
+    parse_mesh(path, text).map(|mesh| mesh.triangles)
+}
+
+/// The mesh of OBJ file `path` with its vertex normals: the file's (`vn`) where every face
+/// corner names one, otherwise computed as Mitsuba computes them, per vertex as Mitsuba's OBJ
+/// loader tells vertices apart (by position and texture coordinate index).
+pub fn load_mesh_data(path: &Path) -> Result<MeshData, SceneError> {
+    let text = super::read_text(path)?;
+    parse_mesh(path, &text)
+}
+
+/// [`load_mesh_data`] of OBJ `text`; `path` names the file in errors.
+pub fn parse_mesh(path: &Path, text: &str) -> Result<MeshData, SceneError> {
     check_lines(path, text)?;
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -44,32 +60,108 @@ pub fn parse_triangles(path: &Path, text: &str) -> Result<Vec<[Vec3; 3]>, SceneE
                 message: format!("invalid OBJ: {e}"),
             },
         )?;
-    let mut triangles = Vec::new();
+    let mut mesh = MeshData {
+        normals: Some(Vec::new()),
+        ..MeshData::default()
+    };
+    let mut uv_parts = Vec::new();
     for model in &models {
-        let mesh = &model.mesh;
-        let vertex = |i: u32| -> Option<Vec3> {
-            let i = i as usize * 3;
-            let xyz = mesh.positions.get(i..i + 3)?;
-            Some(Vec3::new(xyz[0], xyz[1], xyz[2]))
+        let m = &model.mesh;
+        let out_of_range = || SceneError::File {
+            file: path.to_path_buf(),
+            message: format!("mesh \"{}\" has a face index out of range", model.name),
         };
-        for face in mesh.indices.chunks_exact(3) {
-            let corners = [vertex(face[0]), vertex(face[1]), vertex(face[2])];
-            let [Some(a), Some(b), Some(c)] = corners else {
-                return Err(SceneError::File {
-                    file: path.to_path_buf(),
-                    message: format!("mesh \"{}\" has a face index out of range", model.name),
-                });
-            };
-            triangles.push([a, b, c]);
+        let triple = |values: &[f32], i: u32| -> Option<Vec3> {
+            let i = i as usize * 3;
+            values.get(i..i + 3).map(Vec3::from_slice)
+        };
+        let positions = (0..m.positions.len() / 3)
+            .map(|i| triple(&m.positions, i as u32).unwrap_or_default())
+            .collect::<Vec<_>>();
+        let mut corners = Vec::new();
+        for face in m.indices.chunks_exact(3) {
+            let c = [face[0], face[1], face[2]].map(|i| i as usize);
+            if c.iter().any(|&i| i >= positions.len()) {
+                return Err(out_of_range());
+            }
+            mesh.triangles.push(c.map(|i| positions[i]));
+            corners.push(c);
         }
+        let file_normals = !m.normals.is_empty() && m.normal_indices.len() == m.indices.len();
+        let normals = if file_normals {
+            m.normal_indices
+                .chunks_exact(3)
+                .map(|f| {
+                    let n = [f[0], f[1], f[2]].map(|i| triple(&m.normals, i));
+                    match n {
+                        [Some(a), Some(b), Some(c)] => Ok([a, b, c]),
+                        _ => Err(out_of_range()),
+                    }
+                })
+                .collect::<Result<Vec<_>, _>>()?
+        } else {
+            // Mitsuba's vertices are (position, texture coordinate) pairs: a UV seam splits a
+            // vertex, and its normal with it.
+            let with_uv = m.texcoord_indices.len() == m.indices.len();
+            let mut ids = std::collections::HashMap::new();
+            let mut vertex_positions = Vec::new();
+            let mut vertex_corners = Vec::with_capacity(corners.len());
+            for (t, c) in corners.iter().enumerate() {
+                vertex_corners.push([0, 1, 2].map(|k| {
+                    let uv = if with_uv {
+                        m.texcoord_indices[3 * t + k]
+                    } else {
+                        0
+                    };
+                    *ids.entry((c[k], uv)).or_insert_with(|| {
+                        vertex_positions.push(positions[c[k]]);
+                        vertex_positions.len() - 1
+                    })
+                }));
+            }
+            angle_weighted_normals(&vertex_positions, &vertex_corners)
+        };
+        mesh.normals.get_or_insert_with(Vec::new).extend(normals);
+        // Texture coordinates where every corner of every face names one (as OBJ stores them;
+        // Mitsuba's flip_tex_coords is the loader's business).
+        let with_uv = !m.texcoords.is_empty() && m.texcoord_indices.len() == m.indices.len();
+        let uvs = with_uv
+            .then(|| {
+                m.texcoord_indices
+                    .chunks_exact(3)
+                    .map(|f| {
+                        let uv = [f[0], f[1], f[2]].map(|i| {
+                            let i = i as usize * 2;
+                            m.texcoords.get(i..i + 2).map(glam::Vec2::from_slice)
+                        });
+                        match uv {
+                            [Some(a), Some(b), Some(c)] => Ok([a, b, c]),
+                            _ => Err(out_of_range()),
+                        }
+                    })
+                    .collect::<Result<Vec<_>, _>>()
+            })
+            .transpose()?;
+        uv_parts.push((corners.len(), uvs));
     }
-    if triangles.is_empty() {
+    // A model without texture coordinates in a file that has them takes Mitsuba's default for
+    // a mesh without any: the barycentrics.
+    if uv_parts.iter().any(|(_, uvs)| uvs.is_some()) {
+        let barycentric = [glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y];
+        mesh.uvs = Some(
+            uv_parts
+                .into_iter()
+                .flat_map(|(n, uvs)| uvs.unwrap_or_else(|| vec![barycentric; n]))
+                .collect(),
+        );
+    }
+    if mesh.triangles.is_empty() {
         return Err(SceneError::File {
             file: path.to_path_buf(),
             message: "the OBJ file has no faces".into(),
         });
     }
-    Ok(triangles)
+    Ok(mesh)
 }
 
 /// How many `v`, `vt` and `vn` records precede the current line: what face indices may refer to.
@@ -182,7 +274,11 @@ const OBJ_FOV_X_DEG: f32 = 40.0;
 ///   (distance to the centre squared) makes the irradiance at the centre about 1;
 /// - the default integrator (max depth 12, no Russian roulette).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    let triangles = load_triangles(path)?;
+    framed_scene(path, load_triangles(path)?)
+}
+
+/// The scene of [`load_scene`] around `triangles` (a bare mesh file's, `path` naming it).
+pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, SceneError> {
     let (lo, hi) = triangles.iter().flatten().fold(
         (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
@@ -203,6 +299,8 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
             fov_x_deg: OBJ_FOV_X_DEG,
             width: 512,
             height: 512,
+            filter: PixelFilter::Box,
+            sample_border: false,
         },
         integrator: Integrator::default(),
         spp_hint: None,

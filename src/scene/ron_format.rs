@@ -42,6 +42,7 @@ use std::path::Path;
 use glam::{Mat4, Vec3, Vec4};
 use serde::Deserialize;
 
+use super::filter::PixelFilter;
 use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh};
 use crate::error::Location;
 use crate::ron_span::{self, Item, Key, Kind, Outline, Token};
@@ -324,6 +325,8 @@ impl<'a> Builder<'a> {
             fov_x_deg: c.fov_x,
             width: c.width,
             height: c.height,
+            filter: PixelFilter::Box,
+            sample_border: false,
         };
         let here = self.field("camera");
         let view = camera.target - camera.origin;
