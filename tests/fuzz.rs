@@ -22,6 +22,7 @@ const GRAPHS: &[&str] = &[
     "graphs/hybrid.ron",
     "graphs/hybrid_ppm.ron",
     "graphs/hybrid_all_depths.ron",
+    "graphs/hybrid_pppm.ron",
     "graphs/ppm_only.ron",
 ];
 
@@ -32,6 +33,7 @@ const SCENES: &[&str] = &[
     "tests/refs/scenes/cornell_glass_sphere/scene.xml",
     "tests/refs/scenes/point_light_caustic/scene.xml",
     "tests/refs/scenes/cornell_diffuse_obj/scene.xml",
+    "tests/refs/scenes/materials_cornell/scene.xml",
 ];
 
 /// The bundled meshes: the OBJ twin of cornell_diffuse and one that uses every OBJ form the
