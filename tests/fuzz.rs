@@ -372,3 +372,38 @@ fn tokens_concatenate_back_and_the_line_check_needs_a_line() {
         obj
     ));
 }
+
+/// ASCII PLY mutants (of the smooth sphere with vertex normals), each loaded as a bare `.ply`
+/// scene: it loads and renders finite, or the error names the mutant's file. Would catch: a
+/// panic in the PLY crate or our conversion (indices past the vertex count, a face list cut
+/// short, NaN coordinates or normals), a NaN vertex or normal reaching the GPU.
+#[test]
+fn mutated_ply_files_load_or_name_their_file() {
+    let start = std::time::Instant::now();
+    let gpu = gpu();
+    let dir = Dir::new("ply");
+    let (mut loaded, mut failed, mut rendered) = (0, 0, 0);
+    for (path, how) in mutants(&["tests/data/mitsuba/smooth_sphere.ply"], &dir.0, 17) {
+        match hppm::scene::load(&path) {
+            Err(error) => {
+                failed += 1;
+                let message = error.to_string();
+                assert!(
+                    message.contains(&path.display().to_string()),
+                    "{how}: error without the PLY's name:\n{message}"
+                );
+            }
+            Ok(scene) => {
+                loaded += 1;
+                rendered +=
+                    render_tiny(&gpu, &scene, load_graph("graphs/hybrid.ron"), &how) as usize;
+            }
+        }
+    }
+    eprintln!(
+        "PLY mutants ({MUTANTS_PER_FILE}): {loaded} loaded ({rendered} rendered), {failed} refused \
+         ({:.1} s)",
+        start.elapsed().as_secs_f64()
+    );
+    assert!(loaded + failed == MUTANTS_PER_FILE && failed > 5 && loaded > 0);
+}
