@@ -60,6 +60,10 @@ fn checkerboard_follows_mitsubas_rule() {
     assert_eq!(scaled.eval(Vec2::new(0.1, 0.1)), c0); // (0.4, 0.2)
     assert_eq!(scaled.eval(Vec2::new(0.15, 0.1)), c1); // (0.6, 0.2)
     assert_eq!(scaled.eval(Vec2::new(0.15, 0.3)), c0); // (0.6, 0.6)
+    // As a scalar (a roughness) Mitsuba swaps the colours and takes their luminance.
+    let luminance = |c: Vec3| 0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z;
+    assert_eq!(plain.eval_1(Vec2::new(0.25, 0.25)), luminance(c1));
+    assert_eq!(plain.eval_1(Vec2::new(0.75, 0.25)), luminance(c0));
     let moved = checkerboard(UvTransform::from_mat4(Mat4::from_translation(Vec3::new(
         0.5, 0.0, 7.0,
     ))));
@@ -161,7 +165,11 @@ fn bitmap_lookups_match_hand_computed_values() {
         .flat_map(|y| (0..3).map(move |x| luminance(t(x, y))))
         .sum::<f32>()
         / 6.0;
-    assert!((Texture::Bitmap(repeat).mean() - mean).abs() < 1e-6);
+    // As a scalar, the luminance of the lookup.
+    let at = uv((0.5 + 0.25) / 3.0, 0.5);
+    let repeat = Texture::Bitmap(repeat);
+    assert!((repeat.eval_1(at) - luminance(repeat.eval(at))).abs() < 1e-7);
+    assert!((repeat.mean() - mean).abs() < 1e-6);
 }
 
 /// A diffuse rectangle whose reflectance is `texture` (XML), in a scene written to a temp dir
@@ -334,7 +342,7 @@ fn bad_textures_are_errors_naming_file_line_and_what_is_supported() {
         ),
         (
             "alpha",
-            r#"<bsdf type="roughconductor"><texture type="checkerboard" name="alpha"/></bsdf>"#.into(),
+            r#"<bsdf type="roughplastic"><texture type="checkerboard" name="alpha"/></bsdf>"#.into(),
             vec!["scene.xml:9:", "takes no texture", "specular_reflectance"],
         ),
         (
@@ -355,19 +363,19 @@ fn bad_textures_are_errors_naming_file_line_and_what_is_supported() {
     }
 }
 
-const KERNEL: &str = "#import common::texture::texture_eval
+const KERNEL: &str = "#import common::texture::{texture_eval, texture_eval_1}
 @group(1) @binding(0) var<storage, read> queries: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&out) { return; }
     let q = queries[id.x];
-    out[id.x] = vec4<f32>(texture_eval(u32(q.z), q.xy), 0.0);
+    out[id.x] = vec4<f32>(texture_eval(u32(q.z), q.xy), texture_eval_1(u32(q.z), q.xy));
 }
 ";
 
-/// `texture_eval` in WGSL for each (texture index, uv).
-fn gpu_lookups(scene: &hppm::scene::Scene, queries: &[(u32, Vec2)]) -> Vec<Vec3> {
+/// `texture_eval` and `texture_eval_1` in WGSL for each (texture index, uv).
+fn gpu_lookups(scene: &hppm::scene::Scene, queries: &[(u32, Vec2)]) -> Vec<Vec4> {
     let gpu = gpu();
     let harness = PassHarness::new(&gpu, scene, (4, 4), false);
     let words: Vec<Vec4> = queries
@@ -404,10 +412,10 @@ fn gpu_lookups(scene: &hppm::scene::Scene, queries: &[(u32, Vec2)]) -> Vec<Vec3>
     }
     gpu.queue.submit([encoder.finish()]);
     let values: Vec<Vec4> = gpu.read_pod(&output, queries.len()).expect("readback");
-    values.iter().map(|v| v.truncate()).collect()
+    values
 }
 
-/// The WGSL lookup equals the CPU reference on 4000 uvs over [-3, 4]^2 for a checkerboard
+/// The WGSL lookup (colour and scalar) equals the CPU reference on 4000 uvs over [-3, 4]^2 for a checkerboard
 /// (scaled, rotated, translated) and bitmaps with every wrap mode and both filters, sRGB and
 /// raw (within 2e-5; checker cells within 1e-4 of an edge are skipped, where one rounding may
 /// pick either colour). Would catch a header field out of place, rows and columns swapped,
@@ -469,7 +477,8 @@ fn gpu_lookup_equals_cpu_reference() {
     let gpu = gpu_lookups(&scene, &queries);
     let mut worst = 0.0f32;
     for ((i, uv), got) in queries.iter().zip(&gpu) {
-        let cpu = scene.textures[*i as usize].eval(*uv);
+        let texture = &scene.textures[*i as usize];
+        let cpu = texture.eval(*uv).extend(texture.eval_1(*uv));
         let error = (cpu - *got).abs().max_element() / cpu.abs().max_element().max(1.0);
         worst = worst.max(error);
         assert!(error <= 2e-5, "texture {i} at {uv}: GPU {got}, CPU {cpu}");
@@ -723,4 +732,70 @@ fn hybrid_weighs_caustics_with_the_textured_albedo() {
             "{name}: ratio to the white floor off the albedo by {worst}"
         );
     }
+}
+
+/// A textured roughness: a rough conductor plane whose `alpha` is a checkerboard of 0.05 and
+/// 0.4 renders, in every pixel inside one cell, what the same plane with that constant alpha
+/// renders (same seed, so the same samples; within 1e-4 relative), where the two constant
+/// renders differ by far more. Would catch the roughness texture not applied, Mitsuba's
+/// swapped scalar checker rule not followed, alpha_u and alpha_v textured apart wrongly.
+#[test]
+fn textured_roughness_renders_each_cells_constant_roughness() {
+    let conductor = |alpha: &str| {
+        format!(
+            r#"<bsdf type="roughconductor"><string name="material" value="Al"/><string name="distribution" value="ggx"/>{alpha}</bsdf>"#
+        )
+    };
+    let scene_of = |name: &str, bsdf: &str| {
+        let dir = temp_dir(name);
+        let path = dir.join("scene.xml");
+        std::fs::write(&path, plane_scene(bsdf)).expect("scene");
+        hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let gpu = gpu();
+    let render = |scene: &hppm::scene::Scene| {
+        let mut r = renderer(&gpu, scene, load_graph("graphs/pt.ron"), 11);
+        render_to(&mut r, 4)
+    };
+    let constant = [0.05f32, 0.4].map(|a| {
+        render(&scene_of(
+            &format!("alpha_{a}"),
+            &conductor(&format!(r#"<float name="alpha" value="{a}"/>"#)),
+        ))
+    });
+    let scene = scene_of(
+        "alpha_checker",
+        &conductor(
+            r#"<texture type="checkerboard" name="alpha"><float name="color0" value="0.05"/>
+                <float name="color1" value="0.4"/><transform name="to_uv"><scale x="3" y="3"/></transform></texture>"#,
+        ),
+    );
+    let texture = scene.textures[0].clone();
+    let alphas = pixel_albedos(&scene, |uv| Vec3::splat(texture.eval_1(uv)));
+    let image = render(&scene);
+    let (mut compared, mut distinct, mut worst) = (0, 0, 0.0f32);
+    for (i, a) in alphas.iter().enumerate() {
+        let Some(a) = a else { continue };
+        let which = usize::from((a.x - 0.4).abs() < 1e-3);
+        let (got, want) = (
+            Vec3::from_array(image.pixels[i]),
+            Vec3::from_array(constant[which].pixels[i]),
+        );
+        let other = Vec3::from_array(constant[1 - which].pixels[i]);
+        let scale = want.max_element().max(1e-3);
+        worst = worst.max((got - want).abs().max_element() / scale);
+        distinct += usize::from((other - want).abs().max_element() > 0.1 * scale);
+        compared += 1;
+    }
+    eprintln!(
+        "{compared} pixels, {distinct} where the two roughnesses differ by 10%, largest relative difference {worst:.2e}"
+    );
+    assert!(
+        compared >= 300 && distinct >= 100,
+        "{compared} pixels compared, {distinct} distinct"
+    );
+    assert!(
+        worst <= 1e-4,
+        "a cell renders off its constant roughness by {worst}"
+    );
 }

@@ -108,6 +108,11 @@ struct Material {
     // NO_TEXTURE.
     diffuse_texture: u32,
     specular_texture: u32,
+    // Scalar textures replacing alpha_u and alpha_v, or NO_TEXTURE.
+    alpha_u_texture: u32,
+    alpha_v_texture: u32,
+    pad_a: u32,
+    pad_b: u32,
 }
 
 struct Light {

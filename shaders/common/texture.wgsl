@@ -99,6 +99,21 @@ fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
     return texel(t, x, y) * (w0.x * w0.y) + texel(t, x + 1, y) * (w1.x * w0.y) + texel(t, x, y + 1) * (w0.x * w1.y) + texel(t, x + 1, y + 1) * (w1.x * w1.y);
 }
 
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.212671, 0.715160, 0.072169));
+}
+
+// The scalar value at `uv` (Mitsuba's eval_1, what a roughness reads): a bitmap's luminance, a
+// checkerboard's with its colours the other way round from texture_eval, as Mitsuba has them.
+fn texture_eval_1(index: u32, uv: vec2<f32>) -> f32 {
+    let t = texture_header(index);
+    if t.kind == TEXTURE_CHECKERBOARD {
+        let p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+        return luminance(select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) != upper_half(p.y)));
+    }
+    return luminance(texture_eval(index, uv));
+}
+
 // The material with its textured colours looked up at `uv`: everything after the lookup (BSDF
 // evaluation and sampling, hit-point weights, photon bounces) sees the surface's own values.
 fn textured_material(m: Material, uv: vec2<f32>) -> Material {
@@ -108,6 +123,13 @@ fn textured_material(m: Material, uv: vec2<f32>) -> Material {
     }
     if m.specular_texture != NO_TEXTURE {
         out.specular = texture_eval(m.specular_texture, uv);
+    }
+    // The floor the untextured roughness gets too (src/scene/gpu_layout.rs).
+    if m.alpha_u_texture != NO_TEXTURE {
+        out.alpha_u = max(texture_eval_1(m.alpha_u_texture, uv), 1e-4);
+    }
+    if m.alpha_v_texture != NO_TEXTURE {
+        out.alpha_v = max(texture_eval_1(m.alpha_v_texture, uv), 1e-4);
     }
     return out;
 }

@@ -111,6 +111,10 @@ pub struct GpuMaterial {
     /// `GpuScene::textures`' headers), or `NO_TEXTURE`.
     pub diffuse_texture: u32,
     pub specular_texture: u32,
+    /// The scalar textures that replace `alpha_u` and `alpha_v`, or `NO_TEXTURE`.
+    pub alpha_u_texture: u32,
+    pub alpha_v_texture: u32,
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -214,6 +218,9 @@ fn gpu_material(
         table: 0,
         diffuse_texture: textures.diffuse.unwrap_or(NO_TEXTURE),
         specular_texture: textures.specular.unwrap_or(NO_TEXTURE),
+        alpha_u_texture: textures.alpha_u.unwrap_or(NO_TEXTURE),
+        alpha_v_texture: textures.alpha_v.unwrap_or(NO_TEXTURE),
+        _pad: [0; 2],
     };
     let rough = |m: &mut GpuMaterial, mf: &Microfacet| {
         m.alpha_u = mf.alpha_u.max(1e-4);

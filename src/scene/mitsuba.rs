@@ -205,7 +205,8 @@ struct Sides {
 /// messages.
 const SUPPORTED_TEXTURES: &str = "checkerboard, bitmap";
 const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
-    roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic)";
+    roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic), \
+    alpha, alpha_u, alpha_v (roughconductor, roughdielectric)";
 
 /// The parameters texture `kind` reads, for messages.
 fn texture_parameters(kind: &str) -> &'static str {
@@ -1131,7 +1132,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 Bsdf::RoughDielectric {
                     int_ior,
                     ext_ior,
-                    microfacet: self.microfacet(props, node, true)?,
+                    microfacet: self.microfacet(props, node, true, &mut textures)?,
                 }
             }
             "conductor" | "roughconductor" => {
@@ -1143,7 +1144,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                         eta,
                         k,
                         specular,
-                        microfacet: self.microfacet(props, node, true)?,
+                        microfacet: self.microfacet(props, node, true, &mut textures)?,
                     }
                 } else if eta == Vec3::ZERO
                     && k == Vec3::ONE
@@ -1163,10 +1164,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     self.color_param(props, "diffuse_reflectance", 0.5)?;
                 let (specular, specular_texture) =
                     self.color_param(props, "specular_reflectance", 1.0)?;
-                textures = SideTextures {
-                    diffuse: diffuse_texture,
-                    specular: specular_texture,
-                };
+                (textures.diffuse, textures.specular) = (diffuse_texture, specular_texture);
                 let nonlinear = match props.take("nonlinear") {
                     Some(n) => self.boolean(n)?,
                     None => false,
@@ -1187,7 +1185,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                         diffuse,
                         specular,
                         nonlinear,
-                        microfacet: self.microfacet(props, node, false)?,
+                        microfacet: self.microfacet(props, node, false, &mut textures)?,
                     }
                 }
             }
@@ -1227,6 +1225,19 @@ impl<'a, 'input> Reader<'a, 'input> {
         let Some(node) = props.take(name) else {
             return Ok((Vec3::splat(default), None));
         };
+        match self.texture_node(node, name)? {
+            Some((mean, index)) => Ok((Vec3::splat(mean), Some(index))),
+            None => Ok((self.non_negative_color(node)?, None)),
+        }
+    }
+
+    /// A `<texture>` or `<ref>` given to parameter `name`: its mean and its index in the
+    /// scene's textures (added there the first time); `None` for a node of any other tag.
+    fn texture_node(
+        &self,
+        node: Node<'a, 'input>,
+        name: &str,
+    ) -> Result<Option<(f32, u32)>, SceneError> {
         let add = |texture: Texture| {
             let mut textures = self.textures.borrow_mut();
             textures.push(texture);
@@ -1236,7 +1247,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             "texture" => {
                 let texture = self.read_texture(node)?;
                 let mean = texture.mean();
-                Ok((Vec3::splat(mean), Some(add(texture))))
+                Ok(Some((mean, add(texture))))
             }
             "ref" => {
                 let id = self.required_attr(node, "id")?;
@@ -1252,9 +1263,9 @@ impl<'a, 'input> Reader<'a, 'input> {
                 };
                 let mut index = index.borrow_mut();
                 let i = *index.get_or_insert_with(|| add(texture.clone()));
-                Ok((Vec3::splat(texture.mean()), Some(i)))
+                Ok(Some((texture.mean(), i)))
             }
-            _ => Ok((self.non_negative_color(node)?, None)),
+            _ => Ok(None),
         }
     }
 
@@ -1385,11 +1396,14 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// `distribution`, `alpha` or `alpha_u` + `alpha_v`, `sample_visible` as Mitsuba's
     /// MicrofacetDistribution reads them (Beckmann, alpha 0.1 by default).
+    /// `anisotropic` BSDFs (rough conductors and dielectrics) also take textured roughness,
+    /// recorded in `textures`, as Mitsuba's do (its roughplastic's `alpha` is a number).
     fn microfacet(
         &self,
-        props: &mut Props,
+        props: &mut Props<'a, 'input>,
         node: Node,
         anisotropic: bool,
+        textures: &mut SideTextures,
     ) -> Result<Microfacet, SceneError> {
         let distribution = match props.take("distribution") {
             None => Distribution::Beckmann,
@@ -1405,7 +1419,13 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
             },
         };
-        let alpha = |r: &Self, n: Node| -> Result<f32, SceneError> {
+        let texture = |r: &Self, n: Node<'a, 'input>| -> Result<Option<(f32, u32)>, SceneError> {
+            if !anisotropic {
+                return Ok(None);
+            }
+            r.texture_node(n, "alpha")
+        };
+        let alpha = |r: &Self, n: Node<'a, 'input>| -> Result<f32, SceneError> {
             let v = r.float(n)?;
             if v.is_nan() || v < 0.0 {
                 return Err(r.attr_error(
@@ -1421,13 +1441,24 @@ impl<'a, 'input> Reader<'a, 'input> {
             props.take("alpha_u"),
             props.take("alpha_v"),
         );
+        let textured = |n: Node<'a, 'input>, slot: &mut Option<u32>| match texture(self, n)? {
+            Some((mean, index)) => {
+                *slot = Some(index);
+                Ok(mean)
+            }
+            None => alpha(self, n),
+        };
+        let (mut tu, mut tv) = (None, None);
         let (alpha_u, alpha_v) = match (a, au, av) {
             (Some(a), None, None) => {
-                let v = alpha(self, a)?;
+                let v = textured(a, &mut tu)?;
+                tv = tu;
                 (v, v)
             }
             (None, None, None) => (0.1, 0.1),
-            (None, Some(u), Some(v)) if anisotropic => (alpha(self, u)?, alpha(self, v)?),
+            (None, Some(u), Some(v)) if anisotropic => {
+                (textured(u, &mut tu)?, textured(v, &mut tv)?)
+            }
             (None, Some(u), Some(v)) => {
                 let (x, y) = (alpha(self, u)?, alpha(self, v)?);
                 if x != y {
@@ -1459,6 +1490,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "sample_visible false is not supported (visible normals are always sampled)",
             ));
         }
+        (textures.alpha_u, textures.alpha_v) = (tu, tv);
         Ok(Microfacet {
             distribution,
             alpha_u,

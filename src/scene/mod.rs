@@ -190,11 +190,19 @@ pub struct SideTextures {
     pub diffuse: Option<u32>,
     /// `specular_reflectance` (conductors, plastics).
     pub specular: Option<u32>,
+    /// Roughness `alpha_u` and `alpha_v` (rough conductors and dielectrics), looked up as
+    /// scalars ([`texture::Texture::eval_1`]).
+    pub alpha_u: Option<u32>,
+    pub alpha_v: Option<u32>,
 }
 
 impl SideTextures {
     pub fn any(&self) -> bool {
-        self.diffuse.is_some() || self.specular.is_some()
+        self.all().iter().any(Option::is_some)
+    }
+
+    pub fn all(&self) -> [Option<u32>; 4] {
+        [self.diffuse, self.specular, self.alpha_u, self.alpha_v]
     }
 }
 
@@ -546,9 +554,7 @@ impl Scene {
             let sides = [m.textures.front, m.textures.back];
             let ok = finite(m.emission)
                 && m.bsdfs().all(Bsdf::is_valid)
-                && sides
-                    .iter()
-                    .all(|s| texture_ok(s.diffuse) && texture_ok(s.specular));
+                && sides.iter().all(|s| s.all().into_iter().all(texture_ok));
             if !ok {
                 return fail(format!(
                     "material {i} has a non-finite or non-positive value"

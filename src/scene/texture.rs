@@ -128,6 +128,29 @@ impl Texture {
         }
     }
 
+    /// The scalar value at `uv` (Mitsuba's `eval_1`, what a roughness reads): a bitmap's
+    /// luminance; a checkerboard's colour's luminance, with the colours the other way round
+    /// from [`eval`](Self::eval), as Mitsuba's `Checkerboard::eval_1` has them (`color0` where
+    /// exactly one of the fractional parts is above one half).
+    pub fn eval_1(&self, uv: Vec2) -> f32 {
+        match self {
+            Texture::Checkerboard {
+                color0,
+                color1,
+                to_uv,
+            } => {
+                let p = to_uv.apply(uv);
+                let upper = |x: f32| x - x.floor() > 0.5;
+                luminance(if upper(p.x) != upper(p.y) {
+                    *color0
+                } else {
+                    *color1
+                })
+            }
+            Texture::Bitmap(b) => luminance(b.eval(uv)),
+        }
+    }
+
     /// The scalar mean Mitsuba's `Texture::mean` gives (what plastic's sampling weight uses):
     /// a checkerboard's colours' channel means averaged, a bitmap's mean luminance.
     pub fn mean(&self) -> f32 {
