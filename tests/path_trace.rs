@@ -73,6 +73,7 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
             },
             back: None,
             emission: Vec3::splat(emission),
+            textures: Default::default(),
         }],
         triangles: vec![],
         spheres: vec![Sphere {
@@ -82,6 +83,7 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
             flip_normals: true,
         }],
         point_lights: vec![],
+        textures: vec![],
     }
 }
 

@@ -313,6 +313,7 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
         },
         back: None,
         emission: Vec3::ZERO,
+        textures: Default::default(),
     };
     Scene {
         source: "random".into(),
@@ -354,6 +355,7 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
             })
             .collect(),
         point_lights: Vec::new(),
+        textures: Vec::new(),
     }
 }
 

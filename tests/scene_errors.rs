@@ -277,7 +277,7 @@ fn unsupported_mitsuba_features_are_refused_with_a_location() {
         ),
         (
             r#"<shape type="sphere"><texture name="reflectance" type="bitmap"/></shape>"#,
-            "<texture>",
+            "<texture name=\"reflectance\">",
         ),
     ];
     for (body, word) in cases {

@@ -418,7 +418,8 @@ fn obj_meshes_and_bare_obj_scenes() {
                 reflectance: Vec3::splat(0.8)
             },
             back: None,
-            emission: Vec3::ZERO
+            emission: Vec3::ZERO,
+            textures: Default::default(),
         }]
     );
     assert!(close(s.camera.target, Vec3::ZERO, 1e-6));

@@ -44,7 +44,7 @@ fn shader(path: &str) -> ShaderFile {
         .unwrap_or_else(|| panic!("no pass names {path}"))
 }
 
-/// Every subset of the scene defs (2^3) with and without float atomics.
+/// Every subset of the scene defs with and without float atomics.
 fn every_def_combination() -> Vec<(bool, HashMap<String, naga_oil::compose::ShaderDefValue>)> {
     let names = hppm::passes::SCENE_DEFS;
     let mut out = Vec::new();
@@ -145,7 +145,7 @@ fn function_names(module: &naga::Module) -> Vec<String> {
 
 /// Code for what a scene lacks is compiled out: a diffuse-only scene's kernels have no
 /// dielectric function, a scene without spheres no sphere intersection, a scene without rough
-/// or plastic BSDFs none of their modules.
+/// or plastic BSDFs none of their modules, a scene without textures no texture lookup.
 #[test]
 fn scene_features_compile_code_in_and_out() {
     let load = |p: &str| {
@@ -226,6 +226,23 @@ fn scene_features_compile_code_in_and_out() {
         assert!(
             !has(&materials, path, "sample_thin_dielectric"),
             "{path}: materials scene"
+        );
+    }
+    // Texture lookups only where a material has a texture.
+    let textured = library_with(
+        true,
+        hppm::passes::scene_defs(&load("tests/data/scenes/textured_box.xml").features()),
+    );
+    for path in [
+        "shaders/passes/path_trace.wgsl",
+        "shaders/passes/photon_trace.wgsl",
+    ] {
+        for lib in [&diffuse, &glass, &materials] {
+            assert!(!has(lib, path, "texture_eval"), "{path}: untextured scene");
+        }
+        assert!(
+            has(&textured, path, "texture_eval"),
+            "{path}: textured scene"
         );
     }
     let point_light = library_with(

@@ -82,6 +82,7 @@ fn lit_sphere(mesh: Option<MeshData>) -> Scene {
             },
             emission: Vec3::ZERO,
             back: None,
+            textures: Default::default(),
         }],
         triangles: vec![],
         spheres: vec![],
@@ -89,6 +90,7 @@ fn lit_sphere(mesh: Option<MeshData>) -> Scene {
             position: Vec3::new(3.0, 2.0, 3.0),
             intensity: Vec3::splat(20.0),
         }],
+        textures: vec![],
     };
     match mesh {
         Some(mesh) => scene.push_mesh_data(mesh, Mat4::IDENTITY, 0, false),
@@ -207,10 +209,12 @@ fn shading_normals_create_no_energy_in_a_furnace() {
             },
             emission: Vec3::splat(0.5),
             back: None,
+            textures: Default::default(),
         }],
         triangles: vec![],
         spheres: vec![],
         point_lights: vec![],
+        textures: vec![],
     };
     scene.push_mesh_data(mesh, Mat4::from_scale(Vec3::splat(1.5)), 0, true);
     let image = render(&scene, 256);

@@ -104,6 +104,13 @@ struct Material {
     internal_reflectance: f32,
     // Rough plastic: first entry of its transmittance table in bsdf_tables.
     table: u32,
+    // Textures replacing albedo and specular at each surface point (common::texture), or
+    // NO_TEXTURE.
+    diffuse_texture: u32,
+    specular_texture: u32,
+    // Scalar textures replacing alpha_u and alpha_v, or NO_TEXTURE.
+    alpha_u_texture: u32,
+    alpha_v_texture: u32,
     pad_a: u32,
     pad_b: u32,
 }
@@ -135,6 +142,7 @@ const LIGHT_POINT: u32 = 2u;
 const NO_LIGHT: u32 = 0xffffffffu;
 const NO_HIT: u32 = 0xffffffffu;
 const NO_NORMALS: u32 = 0xffffffffu;
+const NO_TEXTURE: u32 = 0xffffffffu;
 const UNBOUNDED: u32 = 0xffffffffu;
 const T_INFINITE: f32 = 3.0e38;
 const BVH_STACK_SIZE: u32 = 64u;
@@ -152,6 +160,11 @@ const BVH_STACK_SIZE: u32 = 64u;
 @group(0) @binding(9) var<storage, read> triangle_normals: array<TriangleNormals>;
 // One per triangle (Mitsuba's default, the barycentrics, where the mesh has none).
 @group(0) @binding(10) var<storage, read> triangle_uvs: array<TriangleUvs>;
+#ifdef TEXTURES
+// Texture headers then their data, as 32-bit words (src/scene/texture.rs, gpu_words); bound
+// only for scenes with textures.
+@group(0) @binding(11) var<storage, read> textures: array<u32>;
+#endif
 
 struct Hit {
     t: f32,

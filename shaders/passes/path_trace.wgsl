@@ -16,6 +16,9 @@
 #import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin, shading_agrees}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
 #import common::camera::camera_direction
+#ifdef TEXTURES
+#import common::texture::textured_material
+#endif
 #import common::lights::{sample_light, area_light_pdf}
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
@@ -230,6 +233,10 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             surface.shading_normal = -surface.shading_normal;
             cos_o = -cos_o;
         }
+#ifdef TEXTURES
+        // Before any use of the colours: NEE, the bounce, hit-point weights, grid lookups.
+        material = textured_material(material, surface.uv);
+#endif
         if depth == max_depth {
             break;
         }

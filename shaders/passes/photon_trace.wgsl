@@ -21,6 +21,9 @@
 #import common::material::material_sample
 #import common::lights::{pick_light, sample_area_light_point}
 #import common::bsdf::reflect_about
+#ifdef TEXTURES
+#import common::texture::textured_material
+#endif
 #ifdef DIELECTRIC
 #import common::bsdf::sample_dielectric
 #endif
@@ -227,6 +230,10 @@ fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
             surface.shading_normal = -surface.shading_normal;
             cos_i = -cos_i;
         }
+#ifdef TEXTURES
+        // The diffuse bounce and every other lobe scatter with the surface's own colours.
+        material = textured_material(material, surface.uv);
+#endif
         if material.kind == MATERIAL_DIFFUSE {
             // One-sided, as the camera pass: the back of a diffuse surface absorbs.
             if cos_i <= 0.0 || !shading_agrees(surface, wi) {

@@ -375,7 +375,10 @@ fn scene_fingerprint(scene: &GpuScene) -> u64 {
         cast_slice(&scene.bsdf_tables),
     ];
     let mut hash = crate::app::state::Fnv::default();
-    for part in parts {
+    // Textures only when there are some, so untextured scenes keep their fingerprints.
+    let textures: &[u8] = cast_slice(&scene.textures);
+    let textured = (!textures.is_empty()).then_some(textures);
+    for part in parts.into_iter().chain(textured) {
         hash.write(&(part.len() as u64).to_le_bytes());
         hash.write(part);
     }

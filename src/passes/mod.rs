@@ -59,6 +59,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/conductor.wgsl"),
     shader_file!("shaders/common/plastic.wgsl"),
     shader_file!("shaders/common/rough_dielectric.wgsl"),
+    shader_file!("shaders/common/texture.wgsl"),
     shader_file!("shaders/common/material.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
@@ -74,12 +75,14 @@ pub const SCENE_DEFS: &[&str] = &[
     "CONDUCTOR",
     "PLASTIC",
     "ROUGH_DIELECTRIC",
+    "TEXTURES",
 ];
 
 /// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
 /// BSDF, `CONDUCTOR` a conductor with a Fresnel term (smooth or rough), `PLASTIC` a plastic
 /// (smooth or rough), `ROUGH_DIELECTRIC` a rough dielectric, `SPHERES` when it has spheres,
-/// `POINT_LIGHTS` when it has a point light.
+/// `POINT_LIGHTS` when it has a point light, `TEXTURES` when a material has a texture (the
+/// scene then has binding 11).
 pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
     let present = [
         ("DIELECTRIC", features.dielectric),
@@ -88,6 +91,7 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
         ("ROUGH_DIELECTRIC", features.rough_dielectric),
         ("SPHERES", features.spheres),
         ("POINT_LIGHTS", features.point_lights),
+        ("TEXTURES", features.textures),
     ];
     defs_of(present.iter().filter(|(_, on)| *on).map(|(name, _)| *name))
 }

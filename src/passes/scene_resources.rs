@@ -36,7 +36,8 @@ pub const LAYOUTS: &[StructLayout] = &[
     }),
     struct_layout!(GpuMaterial => "Material" in TRACER, {
         albedo, kind, emission, int_ior, specular, ext_ior, eta, alpha_u, k, alpha_v,
-        distribution, back, nonlinear, specular_weight, internal_reflectance, table
+        distribution, back, nonlinear, specular_weight, internal_reflectance, table,
+        diffuse_texture, specular_texture, alpha_u_texture, alpha_v_texture
     }),
     struct_layout!(GpuLight => "Light" in TRACER, {
         position, kind, radiance, prim, select_prob, area
@@ -77,6 +78,12 @@ impl SceneResources {
         let mut buffers = vec![uniform];
         for (label, bytes) in tables {
             buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
+        }
+        // Binding 11, only for a scene with textures (whose shaders are composed with
+        // `TEXTURES`): untextured scenes keep their 10 storage buffers (GL allows 16 a stage).
+        if !scene.textures.is_empty() {
+            let words = cast_slice(&scene.textures);
+            buffers.push(gpu.create_buffer_init("scene textures", words, storage)?);
         }
         let entries: Vec<_> = buffers
             .iter()

@@ -7,7 +7,8 @@ use glam::Vec3;
 
 use super::bsdf::Prepared;
 use super::bvh::{self, BvhNode};
-use super::{Bsdf, Distribution, Microfacet, Scene};
+use super::texture::{self, NO_TEXTURE};
+use super::{Bsdf, Distribution, Microfacet, Scene, SideTextures};
 
 pub const MATERIAL_DIFFUSE: u32 = 0;
 pub const MATERIAL_DIELECTRIC: u32 = 1;
@@ -106,6 +107,13 @@ pub struct GpuMaterial {
     pub internal_reflectance: f32,
     /// Rough plastic: first entry of its transmittance table in `bsdf_tables`.
     pub table: u32,
+    /// The textures that replace `albedo` and `specular` at each surface point (indices of
+    /// `GpuScene::textures`' headers), or `NO_TEXTURE`.
+    pub diffuse_texture: u32,
+    pub specular_texture: u32,
+    /// The scalar textures that replace `alpha_u` and `alpha_v`, or `NO_TEXTURE`.
+    pub alpha_u_texture: u32,
+    pub alpha_v_texture: u32,
     pub _pad: [u32; 2],
 }
 
@@ -174,6 +182,9 @@ pub struct GpuScene {
     pub light_cdf: Vec<f32>,
     /// Tables BSDFs look up (rough plastic's transmittance), addressed by `GpuMaterial::table`.
     pub bsdf_tables: Vec<f32>,
+    /// Every texture, in `texture::gpu_words`' layout; empty (and then not bound at all) when
+    /// no material has one.
+    pub textures: Vec<u32>,
 }
 
 fn mean(v: Vec3) -> f32 {
@@ -181,7 +192,12 @@ fn mean(v: Vec3) -> f32 {
 }
 
 /// The GPU form of one side's BSDF; its rough plastic table (if any) is appended to `tables`.
-fn gpu_material(bsdf: &Bsdf, emission: Vec3, tables: &mut Vec<f32>) -> GpuMaterial {
+fn gpu_material(
+    bsdf: &Bsdf,
+    textures: SideTextures,
+    emission: Vec3,
+    tables: &mut Vec<f32>,
+) -> GpuMaterial {
     let prepared = Prepared::new(*bsdf);
     let mut m = GpuMaterial {
         albedo: [0.0; 3],
@@ -200,6 +216,10 @@ fn gpu_material(bsdf: &Bsdf, emission: Vec3, tables: &mut Vec<f32>) -> GpuMateri
         specular_weight: prepared.specular_weight,
         internal_reflectance: prepared.internal_reflectance,
         table: 0,
+        diffuse_texture: textures.diffuse.unwrap_or(NO_TEXTURE),
+        specular_texture: textures.specular.unwrap_or(NO_TEXTURE),
+        alpha_u_texture: textures.alpha_u.unwrap_or(NO_TEXTURE),
+        alpha_v_texture: textures.alpha_v.unwrap_or(NO_TEXTURE),
         _pad: [0; 2],
     };
     let rough = |m: &mut GpuMaterial, mf: &Microfacet| {
@@ -278,13 +298,14 @@ fn gpu_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<f32>) {
     let mut materials: Vec<GpuMaterial> = scene
         .materials
         .iter()
-        .map(|m| gpu_material(&m.bsdf, m.emission, &mut tables))
+        .map(|m| gpu_material(&m.bsdf, m.textures.front, m.emission, &mut tables))
         .collect();
     for i in 0..scene.materials.len() {
         if let Some(back) = &scene.materials[i].back {
             let index = materials.len() as u32;
             // The back emits nothing: area emitters are one-sided.
-            materials.push(gpu_material(back, Vec3::ZERO, &mut tables));
+            let textures = scene.materials[i].textures.back;
+            materials.push(gpu_material(back, textures, Vec3::ZERO, &mut tables));
             materials[i].back = index;
         }
     }
@@ -460,6 +481,11 @@ impl GpuScene {
             })
             .collect::<Vec<_>>();
         let (materials, bsdf_tables) = gpu_materials(scene);
+        let textures = if scene.features().textures {
+            texture::gpu_words(&scene.textures)
+        } else {
+            Vec::new()
+        };
 
         let (lo, hi) = scene.bounds();
         let scene_radius = 0.5 * (hi - lo).length();
@@ -493,6 +519,7 @@ impl GpuScene {
             lights: non_empty(lights),
             light_cdf: non_empty(light_cdf),
             bsdf_tables: non_empty(bsdf_tables),
+            textures,
         }
     }
 }

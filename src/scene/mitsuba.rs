@@ -10,8 +10,10 @@
 //! with `to_world` and `flip_normals` (`serialized` is named as not supported); BSDFs `diffuse`,
 //! `dielectric`, `thindielectric`, `roughdielectric`, `conductor`, `roughconductor`, `plastic`,
 //! `roughplastic` and `twosided` (README's table lists their parameters), inline or declared
-//! at top level with an `id` and used through `<ref id>`; `area` emitters inside shapes and
-//! top-level `point` emitters.
+//! at top level with an `id` and used through `<ref id>`; textures `checkerboard` and `bitmap`
+//! on the colour parameters (`reflectance`, `diffuse_reflectance`, `specular_reflectance`),
+//! inline or declared at top level with an `id` and used through `<ref name=... id=...>`;
+//! `area` emitters inside shapes and top-level `point` emitters.
 
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
@@ -21,9 +23,10 @@ use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
 use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
+use super::texture::{Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
-    Bsdf, Camera, Distribution, Integrator, Material, Microfacet, PointLight, Scene, SceneError,
-    Sphere, bsdf, mesh,
+    Bsdf, Camera, Distribution, Integrator, Material, MaterialTextures, Microfacet, PointLight,
+    Scene, SceneError, SideTextures, Sphere, bsdf, mesh,
 };
 use crate::error::Location;
 
@@ -76,6 +79,8 @@ pub fn parse_with(
         used: RefCell::new(HashSet::new()),
         declared: Vec::new(),
         named_bsdfs: HashMap::new(),
+        named_textures: HashMap::new(),
+        textures: RefCell::new(Vec::new()),
         scene: empty_scene(path),
         has_integrator: false,
         has_sensor: false,
@@ -83,6 +88,7 @@ pub fn parse_with(
     reader.check_attributes()?;
     reader.read_scene(doc.root_element())?;
     reader.check_defines_used(defines)?;
+    reader.scene.textures = reader.textures.take();
     if !reader.has_sensor {
         return Err(reader.error(doc.root_element(), "the scene has no <sensor>"));
     }
@@ -113,6 +119,7 @@ fn empty_scene(path: &Path) -> Scene {
         triangles: Vec::new(),
         spheres: Vec::new(),
         point_lights: Vec::new(),
+        textures: Vec::new(),
     }
 }
 
@@ -122,9 +129,8 @@ fn allowed_attributes(tag: &str) -> Option<&'static [&'static str]> {
     Some(match tag {
         "scene" => &["version"],
         "default" => &["name", "value"],
-        "integrator" | "sensor" | "sampler" | "film" | "rfilter" | "shape" | "bsdf" | "emitter" => {
-            &["type", "id", "name"]
-        }
+        "integrator" | "sensor" | "sampler" | "film" | "rfilter" | "shape" | "bsdf" | "emitter"
+        | "texture" => &["type", "id", "name"],
         "integer" | "float" | "boolean" | "string" | "rgb" | "spectrum" => &["name", "value"],
         "point" | "vector" => &["name", "value", "x", "y", "z"],
         "transform" => &["name"],
@@ -147,6 +153,9 @@ const PROPERTY_TAGS: &[&str] = &[
     "point",
     "vector",
     "transform",
+    // A texture given to a colour parameter, inline or by reference.
+    "texture",
+    "ref",
 ];
 
 struct Reader<'a, 'input> {
@@ -160,6 +169,10 @@ struct Reader<'a, 'input> {
     /// The names of the scene's `<default>`s, for messages.
     declared: Vec<String>,
     named_bsdfs: HashMap<String, Sides>,
+    /// Textures declared at top level with an `id`, and their index in `textures` once used.
+    named_textures: HashMap<String, (Texture, RefCell<Option<u32>>)>,
+    /// The textures the scene's materials use, in the order first used.
+    textures: RefCell<Vec<Texture>>,
     scene: Scene,
     has_integrator: bool,
     has_sensor: bool,
@@ -179,11 +192,29 @@ impl<'a, 'input> Props<'a, 'input> {
     }
 }
 
-/// A `<bsdf>` as a shape uses it: the front BSDF and, for `twosided`, the back's.
+/// A `<bsdf>` as a shape uses it: the front BSDF and, for `twosided`, the back's, with the
+/// textures of their colour parameters.
 #[derive(Debug, Clone, Copy)]
 struct Sides {
     front: Bsdf,
     back: Option<Bsdf>,
+    textures: MaterialTextures,
+}
+
+/// The texture plugins this loader reads, and the parameters that take a texture, for
+/// messages.
+const SUPPORTED_TEXTURES: &str = "checkerboard, bitmap";
+const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
+    roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic), \
+    alpha, alpha_u, alpha_v (roughconductor, roughdielectric)";
+
+/// The parameters texture `kind` reads, for messages.
+fn texture_parameters(kind: &str) -> &'static str {
+    match kind {
+        "checkerboard" => "color0, color1, to_uv",
+        "bitmap" => "filename, raw, wrap_mode, filter_type, to_uv, accel",
+        _ => "no parameters",
+    }
 }
 
 /// The BSDF plugins this loader reads, for messages.
@@ -385,6 +416,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "shape" => self.read_shape(child)?,
                 "emitter" => self.read_point_light(child)?,
                 "bsdf" => self.read_named_bsdf(child)?,
+                "texture" => self.read_named_texture(child)?,
                 other => return Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
             }
         }
@@ -463,6 +495,21 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn expect_tag(&self, node: Node, allowed: &[&str]) -> Result<(), SceneError> {
         if allowed.contains(&node.tag_name().name()) {
             return Ok(());
+        }
+        if matches!(node.tag_name().name(), "texture" | "ref") {
+            return Err(self.error(
+                node,
+                format!(
+                    "{}: this parameter takes no texture (textures are supported on \
+                     {TEXTURED_PARAMETERS}); expected {}",
+                    describe(node),
+                    allowed
+                        .iter()
+                        .map(|t| format!("<{t}>"))
+                        .collect::<Vec<_>>()
+                        .join(" or ")
+                ),
+            ));
         }
         let expected: Vec<String> = allowed.iter().map(|t| format!("<{t}>")).collect();
         Err(self.error(
@@ -996,9 +1043,14 @@ impl<'a, 'input> Reader<'a, 'input> {
         if kind == "twosided" {
             return self.read_twosided(node);
         }
+        let (front, textures) = self.read_one_sided(node, &kind)?;
         Ok(Sides {
-            front: self.read_one_sided(node, &kind)?,
+            front,
             back: None,
+            textures: MaterialTextures {
+                front: textures,
+                back: SideTextures::default(),
+            },
         })
     }
 
@@ -1026,28 +1078,44 @@ impl<'a, 'input> Reader<'a, 'input> {
             if nested.len() == 2 {
                 return Err(self.error(child, "twosided: at most two nested BSDFs"));
             }
-            nested.push(sides.front);
+            nested.push((sides.front, sides.textures.front));
         }
         match nested.as_slice() {
-            [one] => Ok(Sides {
+            [(one, textures)] => Ok(Sides {
                 front: *one,
                 back: Some(*one),
+                textures: MaterialTextures {
+                    front: *textures,
+                    back: *textures,
+                },
             }),
-            [front, back] => Ok(Sides {
+            [(front, front_textures), (back, back_textures)] => Ok(Sides {
                 front: *front,
                 back: Some(*back),
+                textures: MaterialTextures {
+                    front: *front_textures,
+                    back: *back_textures,
+                },
             }),
             _ => Err(self.error(node, "twosided: a nested <bsdf> is required")),
         }
     }
 
-    fn read_one_sided(&self, node: Node<'a, 'input>, kind: &str) -> Result<Bsdf, SceneError> {
+    /// One side's BSDF and the textures of its colour parameters.
+    fn read_one_sided(
+        &self,
+        node: Node<'a, 'input>,
+        kind: &str,
+    ) -> Result<(Bsdf, SideTextures), SceneError> {
         let mut props = self.props(node, &[])?;
         let props = &mut props;
+        let mut textures = SideTextures::default();
         let bsdf = match kind {
-            "diffuse" => Bsdf::Diffuse {
-                reflectance: self.reflectance(props, "reflectance", 0.5)?,
-            },
+            "diffuse" => {
+                let (reflectance, texture) = self.color_param(props, "reflectance", 0.5)?;
+                textures.diffuse = texture;
+                Bsdf::Diffuse { reflectance }
+            }
             // Mitsuba's defaults: BK7 glass inside, air outside.
             "dielectric" => Bsdf::Dielectric {
                 int_ior: self.ior(props, "int_ior", 1.5046)?,
@@ -1064,20 +1132,25 @@ impl<'a, 'input> Reader<'a, 'input> {
                 Bsdf::RoughDielectric {
                     int_ior,
                     ext_ior,
-                    microfacet: self.microfacet(props, node, true)?,
+                    microfacet: self.microfacet(props, node, true, &mut textures)?,
                 }
             }
             "conductor" | "roughconductor" => {
                 let (eta, k) = self.conductor_index(props)?;
-                let specular = self.reflectance(props, "specular_reflectance", 1.0)?;
+                let (specular, texture) = self.color_param(props, "specular_reflectance", 1.0)?;
+                textures.specular = texture;
                 if kind == "roughconductor" {
                     Bsdf::RoughConductor {
                         eta,
                         k,
                         specular,
-                        microfacet: self.microfacet(props, node, true)?,
+                        microfacet: self.microfacet(props, node, true, &mut textures)?,
                     }
-                } else if eta == Vec3::ZERO && k == Vec3::ONE && specular == Vec3::ONE {
+                } else if eta == Vec3::ZERO
+                    && k == Vec3::ONE
+                    && specular == Vec3::ONE
+                    && texture.is_none()
+                {
                     Bsdf::Mirror
                 } else {
                     Bsdf::Conductor { eta, k, specular }
@@ -1087,8 +1160,11 @@ impl<'a, 'input> Reader<'a, 'input> {
                 // Mitsuba's defaults: polypropylene inside, air outside.
                 let int_ior = self.ior(props, "int_ior", 1.49)?;
                 let ext_ior = self.ior(props, "ext_ior", 1.000277)?;
-                let diffuse = self.reflectance(props, "diffuse_reflectance", 0.5)?;
-                let specular = self.reflectance(props, "specular_reflectance", 1.0)?;
+                let (diffuse, diffuse_texture) =
+                    self.color_param(props, "diffuse_reflectance", 0.5)?;
+                let (specular, specular_texture) =
+                    self.color_param(props, "specular_reflectance", 1.0)?;
+                (textures.diffuse, textures.specular) = (diffuse_texture, specular_texture);
                 let nonlinear = match props.take("nonlinear") {
                     Some(n) => self.boolean(n)?,
                     None => false,
@@ -1109,7 +1185,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                         diffuse,
                         specular,
                         nonlinear,
-                        microfacet: self.microfacet(props, node, false)?,
+                        microfacet: self.microfacet(props, node, false, &mut textures)?,
                     }
                 }
             }
@@ -1133,15 +1209,176 @@ impl<'a, 'input> Reader<'a, 'input> {
                 ),
             ));
         }
-        Ok(bsdf)
+        Ok((bsdf, textures))
     }
 
-    /// A colour parameter in [0, inf), `default` when absent.
-    fn reflectance(&self, props: &mut Props, name: &str, default: f32) -> Result<Vec3, SceneError> {
-        match props.take(name) {
-            Some(n) => self.non_negative_color(n),
-            None => Ok(Vec3::splat(default)),
+    /// A colour parameter that may be textured: a constant (`default` when absent), or a
+    /// `<texture>` (inline, or a `<ref>` to one declared at top level), which is added to the
+    /// scene's textures; the constant is then the texture's mean (Mitsuba's `Texture::mean`,
+    /// what plastic's sampling weight uses).
+    fn color_param(
+        &self,
+        props: &mut Props,
+        name: &str,
+        default: f32,
+    ) -> Result<(Vec3, Option<u32>), SceneError> {
+        let Some(node) = props.take(name) else {
+            return Ok((Vec3::splat(default), None));
+        };
+        match self.texture_node(node, name)? {
+            Some((mean, index)) => Ok((Vec3::splat(mean), Some(index))),
+            None => Ok((self.non_negative_color(node)?, None)),
         }
+    }
+
+    /// A `<texture>` or `<ref>` given to parameter `name`: its mean and its index in the
+    /// scene's textures (added there the first time); `None` for a node of any other tag.
+    fn texture_node(
+        &self,
+        node: Node<'a, 'input>,
+        name: &str,
+    ) -> Result<Option<(f32, u32)>, SceneError> {
+        let add = |texture: Texture| {
+            let mut textures = self.textures.borrow_mut();
+            textures.push(texture);
+            textures.len() as u32 - 1
+        };
+        match node.tag_name().name() {
+            "texture" => {
+                let texture = self.read_texture(node)?;
+                let mean = texture.mean();
+                Ok(Some((mean, add(texture))))
+            }
+            "ref" => {
+                let id = self.required_attr(node, "id")?;
+                let Some((texture, index)) = self.named_textures.get(&id) else {
+                    return Err(self.attr_error(
+                        node,
+                        "id",
+                        format!(
+                            "<ref name=\"{name}\" id=\"{id}\">: no <texture id=\"{id}\"> is declared \
+                             before this"
+                        ),
+                    ));
+                };
+                let mut index = index.borrow_mut();
+                let i = *index.get_or_insert_with(|| add(texture.clone()));
+                Ok(Some((texture.mean(), i)))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    fn read_named_texture(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let id = self.required_attr(node, "id")?;
+        if self.named_textures.contains_key(&id) {
+            return Err(self.attr_error(
+                node,
+                "id",
+                format!("a second <texture id=\"{id}\">: ids must be unique"),
+            ));
+        }
+        let texture = self.read_texture(node)?;
+        self.named_textures
+            .insert(id, (texture, RefCell::new(None)));
+        Ok(())
+    }
+
+    /// A `<texture>`: `checkerboard` or `bitmap`, with Mitsuba's defaults.
+    fn read_texture(&self, node: Node<'a, 'input>) -> Result<Texture, SceneError> {
+        let kind = self.required_attr(node, "type")?;
+        let mut props = self.props(node, &[])?;
+        let to_uv = match props.take("to_uv") {
+            Some(n) => UvTransform::from_mat4(self.transform(n)?),
+            None => UvTransform::IDENTITY,
+        };
+        let texture = match kind.as_str() {
+            "checkerboard" => {
+                let mut color = |name: &str, default: f32| match props.take(name) {
+                    Some(n) => self.non_negative_color(n),
+                    None => Ok(Vec3::splat(default)),
+                };
+                Texture::Checkerboard {
+                    color0: color("color0", 0.4)?,
+                    color1: color("color1", 0.2)?,
+                    to_uv,
+                }
+            }
+            "bitmap" => {
+                let Some(file_node) = props.take("filename") else {
+                    return Err(self.error(
+                        node,
+                        "<texture type=\"bitmap\"> needs <string name=\"filename\" value=...>",
+                    ));
+                };
+                let filename = self.string(file_node)?;
+                let raw = match props.take("raw") {
+                    Some(n) => self.boolean(n)?,
+                    None => false,
+                };
+                // Hardware interpolation on CUDA (Mitsuba's `accel`): no effect here.
+                if let Some(n) = props.take("accel") {
+                    self.boolean(n)?;
+                }
+                let wrap = match props.take("wrap_mode") {
+                    None => WrapMode::Repeat,
+                    Some(n) => match self.string(n)?.as_str() {
+                        "repeat" => WrapMode::Repeat,
+                        "mirror" => WrapMode::Mirror,
+                        "clamp" => WrapMode::Clamp,
+                        other => {
+                            return Err(self.attr_error(
+                                n,
+                                "value",
+                                format!(
+                                    "wrap_mode \"{other}\" is not supported (repeat, mirror, clamp)"
+                                ),
+                            ));
+                        }
+                    },
+                };
+                let filter = match props.take("filter_type") {
+                    None => Filter::Bilinear,
+                    Some(n) => match self.string(n)?.as_str() {
+                        "bilinear" => Filter::Bilinear,
+                        "nearest" => Filter::Nearest,
+                        other => {
+                            return Err(self.attr_error(
+                                n,
+                                "value",
+                                format!(
+                                    "filter_type \"{other}\" is not supported (bilinear, nearest)"
+                                ),
+                            ));
+                        }
+                    },
+                };
+                let path = self.relative(&filename);
+                let bitmap = Bitmap::load(&path, raw, wrap, filter, to_uv)
+                    .map_err(|message| self.attr_error(file_node, "value", message))?;
+                Texture::Bitmap(bitmap)
+            }
+            other => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    format!("texture type \"{other}\" is not supported ({SUPPORTED_TEXTURES})"),
+                ));
+            }
+        };
+        if let Some((name, unknown)) = props.entries.first() {
+            return Err(self.attr_error(
+                *unknown,
+                "name",
+                format!(
+                    "{}: unknown property \"{name}\" for {} (it takes {})",
+                    describe(*unknown),
+                    describe_object(node),
+                    texture_parameters(&kind)
+                ),
+            ));
+        }
+        Ok(texture)
     }
 
     fn distinct_iors(&self, node: Node, int_ior: f32, ext_ior: f32) -> Result<(), SceneError> {
@@ -1159,11 +1396,14 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// `distribution`, `alpha` or `alpha_u` + `alpha_v`, `sample_visible` as Mitsuba's
     /// MicrofacetDistribution reads them (Beckmann, alpha 0.1 by default).
+    /// `anisotropic` BSDFs (rough conductors and dielectrics) also take textured roughness,
+    /// recorded in `textures`, as Mitsuba's do (its roughplastic's `alpha` is a number).
     fn microfacet(
         &self,
-        props: &mut Props,
+        props: &mut Props<'a, 'input>,
         node: Node,
         anisotropic: bool,
+        textures: &mut SideTextures,
     ) -> Result<Microfacet, SceneError> {
         let distribution = match props.take("distribution") {
             None => Distribution::Beckmann,
@@ -1179,7 +1419,13 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
             },
         };
-        let alpha = |r: &Self, n: Node| -> Result<f32, SceneError> {
+        let texture = |r: &Self, n: Node<'a, 'input>| -> Result<Option<(f32, u32)>, SceneError> {
+            if !anisotropic {
+                return Ok(None);
+            }
+            r.texture_node(n, "alpha")
+        };
+        let alpha = |r: &Self, n: Node<'a, 'input>| -> Result<f32, SceneError> {
             let v = r.float(n)?;
             if v.is_nan() || v < 0.0 {
                 return Err(r.attr_error(
@@ -1195,13 +1441,24 @@ impl<'a, 'input> Reader<'a, 'input> {
             props.take("alpha_u"),
             props.take("alpha_v"),
         );
+        let textured = |n: Node<'a, 'input>, slot: &mut Option<u32>| match texture(self, n)? {
+            Some((mean, index)) => {
+                *slot = Some(index);
+                Ok(mean)
+            }
+            None => alpha(self, n),
+        };
+        let (mut tu, mut tv) = (None, None);
         let (alpha_u, alpha_v) = match (a, au, av) {
             (Some(a), None, None) => {
-                let v = alpha(self, a)?;
+                let v = textured(a, &mut tu)?;
+                tv = tu;
                 (v, v)
             }
             (None, None, None) => (0.1, 0.1),
-            (None, Some(u), Some(v)) if anisotropic => (alpha(self, u)?, alpha(self, v)?),
+            (None, Some(u), Some(v)) if anisotropic => {
+                (textured(u, &mut tu)?, textured(v, &mut tv)?)
+            }
             (None, Some(u), Some(v)) => {
                 let (x, y) = (alpha(self, u)?, alpha(self, v)?);
                 if x != y {
@@ -1233,6 +1490,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "sample_visible false is not supported (visible normals are always sampled)",
             ));
         }
+        (textures.alpha_u, textures.alpha_v) = (tu, tv);
         Ok(Microfacet {
             distribution,
             alpha_u,
@@ -1326,11 +1584,13 @@ impl<'a, 'input> Reader<'a, 'input> {
         let sides = bsdf.unwrap_or(Sides {
             front: DEFAULT_BSDF,
             back: None,
+            textures: MaterialTextures::default(),
         });
         Ok(Material {
             bsdf: sides.front,
             back: sides.back,
             emission: emission.unwrap_or(Vec3::ZERO),
+            textures: sides.textures,
         })
     }
 

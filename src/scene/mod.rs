@@ -12,6 +12,7 @@ pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 pub mod ron_format;
+pub mod texture;
 
 use std::path::{Path, PathBuf};
 
@@ -177,6 +178,38 @@ pub struct Material {
     pub back: Option<Bsdf>,
     /// Radiance emitted on the front (normal) side; zero for non-emitters.
     pub emission: Vec3,
+    /// Textures in place of the sides' colour parameters (indices into `Scene::textures`).
+    pub textures: MaterialTextures,
+}
+
+/// The textures of one side's colour parameters; `None` keeps the BSDF's constant (which for a
+/// textured parameter holds the texture's mean, what plastic's sampling weight uses).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SideTextures {
+    /// `reflectance` (diffuse) or `diffuse_reflectance` (plastics).
+    pub diffuse: Option<u32>,
+    /// `specular_reflectance` (conductors, plastics).
+    pub specular: Option<u32>,
+    /// Roughness `alpha_u` and `alpha_v` (rough conductors and dielectrics), looked up as
+    /// scalars ([`texture::Texture::eval_1`]).
+    pub alpha_u: Option<u32>,
+    pub alpha_v: Option<u32>,
+}
+
+impl SideTextures {
+    pub fn any(&self) -> bool {
+        self.all().iter().any(Option::is_some)
+    }
+
+    pub fn all(&self) -> [Option<u32>; 4] {
+        [self.diffuse, self.specular, self.alpha_u, self.alpha_v]
+    }
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MaterialTextures {
+    pub front: SideTextures,
+    pub back: SideTextures,
 }
 
 impl Material {
@@ -186,6 +219,7 @@ impl Material {
             bsdf,
             back: None,
             emission,
+            textures: MaterialTextures::default(),
         }
     }
 
@@ -260,6 +294,8 @@ pub struct SceneFeatures {
     pub point_lights: bool,
     pub triangles: bool,
     pub spheres: bool,
+    /// Some shape's material has a texture.
+    pub textures: bool,
 }
 
 impl SceneFeatures {
@@ -313,6 +349,8 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub spheres: Vec<Sphere>,
     pub point_lights: Vec<PointLight>,
+    /// Textures the materials use (`Material::textures` indexes them).
+    pub textures: Vec<texture::Texture>,
 }
 
 impl Scene {
@@ -468,6 +506,7 @@ impl Scene {
                 f.delta |= bsdf.is_delta();
             }
             f.area_lights |= m.emission.max_element() > 0.0;
+            f.textures |= m.textures.front.any() || m.textures.back.any();
         }
         f
     }
@@ -510,8 +549,12 @@ impl Scene {
         if cam.width == 0 || cam.height == 0 {
             return fail("the film has zero size".into());
         }
+        let texture_ok = |t: Option<u32>| t.is_none_or(|t| (t as usize) < self.textures.len());
         for (i, m) in self.materials.iter().enumerate() {
-            let ok = finite(m.emission) && m.bsdfs().all(Bsdf::is_valid);
+            let sides = [m.textures.front, m.textures.back];
+            let ok = finite(m.emission)
+                && m.bsdfs().all(Bsdf::is_valid)
+                && sides.iter().all(|s| s.all().into_iter().all(texture_ok));
             if !ok {
                 return fail(format!(
                     "material {i} has a non-finite or non-positive value"

@@ -310,6 +310,7 @@ pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, Sce
             },
             back: None,
             emission: Vec3::ZERO,
+            textures: Default::default(),
         }],
         triangles: place_triangles(triangles, Mat4::IDENTITY, 0, false).collect(),
         spheres: Vec::new(),
@@ -317,6 +318,7 @@ pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, Sce
             position: light,
             intensity: Vec3::splat((light - center).length_squared()),
         }],
+        textures: Vec::new(),
     };
     scene.validate()?;
     Ok(scene)

@@ -281,6 +281,7 @@ impl<'a> Builder<'a> {
             triangles: Vec::new(),
             spheres: Vec::new(),
             point_lights: Vec::new(),
+            textures: Vec::new(),
         };
         if let Some(message) =
             super::beyond_extent("the camera", scene.camera.origin.abs().max_element() as f64)

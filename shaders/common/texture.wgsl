@@ -1,0 +1,136 @@
+#define_import_path common::texture
+
+// Mitsuba 3's checkerboard and bitmap textures; the CPU reference is src/scene/texture.rs
+// (Texture::eval), which this must equal. Compiled in only for scenes with textures.
+
+#ifdef TEXTURES
+#import common::scene::{Material, NO_TEXTURE, textures}
+
+const TEXTURE_CHECKERBOARD: u32 = 0u;
+const HEADER_WORDS: u32 = 12u;
+const WRAP_REPEAT: u32 = 0u;
+const WRAP_MIRROR: u32 = 1u;
+const FILTER_NEAREST: u32 = 1u;
+// Texture coordinates are clamped to this before texel indices are taken (as on the CPU).
+const UV_LIMIT: f32 = 1.0e4;
+
+struct TextureHeader {
+    kind: u32,
+    width: i32,
+    height: i32,
+    wrap: u32,
+    filter_type: u32,
+    data: u32,
+    to_u: vec3<f32>,
+    to_v: vec3<f32>,
+}
+
+fn word_f32(i: u32) -> f32 {
+    return bitcast<f32>(textures[i]);
+}
+
+fn texture_header(index: u32) -> TextureHeader {
+    let h = index * HEADER_WORDS;
+    return TextureHeader(
+        textures[h],
+        i32(textures[h + 1u]),
+        i32(textures[h + 2u]),
+        textures[h + 3u],
+        textures[h + 4u],
+        textures[h + 5u],
+        vec3<f32>(word_f32(h + 6u), word_f32(h + 7u), word_f32(h + 8u)),
+        vec3<f32>(word_f32(h + 9u), word_f32(h + 10u), word_f32(h + 11u)),
+    );
+}
+
+fn word_rgb(i: u32) -> vec3<f32> {
+    return vec3<f32>(word_f32(i), word_f32(i + 1u), word_f32(i + 2u));
+}
+
+// Euclidean remainder (the result is in [0, n) for n > 0).
+fn rem_euclid(i: i32, n: i32) -> i32 {
+    let r = i % n;
+    return select(r, r + n, r < 0);
+}
+
+// Dr.Jit's tex_wrap for one texel index of a row or column of n.
+fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
+    if mode == WRAP_REPEAT {
+        return rem_euclid(i, n);
+    }
+    if mode == WRAP_MIRROR {
+        let m = rem_euclid(i, 2 * n);
+        return select(m, 2 * n - 1 - m, m >= n);
+    }
+    return clamp(i, 0, n - 1);
+}
+
+fn texel(t: TextureHeader, x: i32, y: i32) -> vec3<f32> {
+    let wx = wrap_texel(x, t.width, t.wrap);
+    let wy = wrap_texel(y, t.height, t.wrap);
+    return word_rgb(t.data + 3u * u32(wy * t.width + wx));
+}
+
+fn upper_half(x: f32) -> bool {
+    return x - floor(x) > 0.5;
+}
+
+// Texture `index` at texture coordinates `uv`.
+fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
+    let t = texture_header(index);
+    var p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+    if t.kind == TEXTURE_CHECKERBOARD {
+        return select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) == upper_half(p.y));
+    }
+    // A NaN coordinate (which equals nothing) reads 0, an infinite one the limit, as on the CPU.
+    p = select(p, vec2<f32>(0.0), p != p);
+    p = clamp(p, vec2<f32>(-UV_LIMIT), vec2<f32>(UV_LIMIT));
+    let res = vec2<f32>(f32(t.width), f32(t.height));
+    if t.filter_type == FILTER_NEAREST {
+        let i = floor(p * res);
+        return texel(t, i32(i.x), i32(i.y));
+    }
+    let f = p * res - 0.5;
+    let i = floor(f);
+    let w1 = f - i;
+    let w0 = vec2<f32>(1.0) - w1;
+    let x = i32(i.x);
+    let y = i32(i.y);
+    return texel(t, x, y) * (w0.x * w0.y) + texel(t, x + 1, y) * (w1.x * w0.y) + texel(t, x, y + 1) * (w0.x * w1.y) + texel(t, x + 1, y + 1) * (w1.x * w1.y);
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.212671, 0.715160, 0.072169));
+}
+
+// The scalar value at `uv` (Mitsuba's eval_1, what a roughness reads): a bitmap's luminance, a
+// checkerboard's with its colours the other way round from texture_eval, as Mitsuba has them.
+fn texture_eval_1(index: u32, uv: vec2<f32>) -> f32 {
+    let t = texture_header(index);
+    if t.kind == TEXTURE_CHECKERBOARD {
+        let p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+        return luminance(select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) != upper_half(p.y)));
+    }
+    return luminance(texture_eval(index, uv));
+}
+
+// The material with its textured colours looked up at `uv`: everything after the lookup (BSDF
+// evaluation and sampling, hit-point weights, photon bounces) sees the surface's own values.
+fn textured_material(m: Material, uv: vec2<f32>) -> Material {
+    var out = m;
+    if m.diffuse_texture != NO_TEXTURE {
+        out.albedo = texture_eval(m.diffuse_texture, uv);
+    }
+    if m.specular_texture != NO_TEXTURE {
+        out.specular = texture_eval(m.specular_texture, uv);
+    }
+    // The floor the untextured roughness gets too (src/scene/gpu_layout.rs).
+    if m.alpha_u_texture != NO_TEXTURE {
+        out.alpha_u = max(texture_eval_1(m.alpha_u_texture, uv), 1e-4);
+    }
+    if m.alpha_v_texture != NO_TEXTURE {
+        out.alpha_v = max(texture_eval_1(m.alpha_v_texture, uv), 1e-4);
+    }
+    return out;
+}
+#endif
