@@ -13,6 +13,7 @@ use common::*;
 use glam::Vec3;
 use hppm::passes::hit_points::GpuPhotonHit;
 use hppm::passes::photon_grid::{self, PhotonGrid, PhotonGridInfo, PhotonGridParams};
+use hppm::passes::pppm::RadiusSchedule;
 
 /// shaders/common/spatial_hash.wgsl's `grid_cell` from the grid's centre (`photon_cell`).
 fn cell_of(info: &PhotonGridInfo, p: Vec3) -> [i32; 3] {
@@ -148,19 +149,17 @@ fn the_photon_grid_lists_every_photon_once_and_finds_all_within_its_radius() {
     let iteration = 7;
     h.run(&mut pass, iteration, 1);
     let grid = &out["grid"];
-    let header_bytes = std::mem::size_of::<PhotonGridInfo>();
-    let info: PhotonGridInfo = bytemuck::pod_read_unaligned(
-        &gpu.read_buffer(&grid.buffer, 0, header_bytes as u64)
-            .expect("readback")[..header_bytes],
-    );
+    let info: PhotonGridInfo = grid.read_header(&gpu).expect("readback");
     let built = Built {
         info,
         words: grid.read(&gpu).expect("readback"),
     };
 
     let u = &h.scene().uniform;
-    let expected_radius =
-        0.03 * u.scene_radius as f64 * photon_grid::radius_scale(0.7f32 as f64, iteration);
+    let scale = RadiusSchedule::new(0.7f32 as f64)
+        .ratio_at(iteration)
+        .sqrt();
+    let expected_radius = 0.03 * u.scene_radius as f64 * scale;
     assert!(
         (info.radius as f64 - expected_radius).abs() <= 1e-6 * expected_radius,
         "radius {} against the schedule's {expected_radius}",

@@ -399,11 +399,7 @@ fn caustic_hits_near_origin(
     });
     let photon_hits = h.prepare(&photon_trace::KIND, &mut pass, &[])["photon_hits"].clone();
     h.run(&mut pass, 0, PHOTON_SEED);
-    let header_bytes = std::mem::size_of::<PhotonHitsHeader>();
-    let header: PhotonHitsHeader = bytemuck::pod_read_unaligned(
-        &gpu.read_buffer(&photon_hits.buffer, 0, header_bytes as u64)
-            .expect("readback")[..header_bytes],
-    );
+    let header: PhotonHitsHeader = photon_hits.read_header(gpu).expect("readback");
     assert_eq!(header.dropped, 0, "the photon hits buffer overflowed");
     let hits: Vec<GpuPhotonHit> = photon_hits.read(gpu).expect("readback");
     hits[..header.count as usize]

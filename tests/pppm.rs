@@ -139,10 +139,7 @@ fn pppm_adds_each_iterations_density_estimate_to_the_pixel_sums() {
             &wiring,
         );
         let rule = |gpu: &hppm::gpu::GpuContext| -> RadiusRule {
-            let bytes = gpu
-                .read_buffer(&out["radii"].buffer, 0, 16)
-                .expect("readback");
-            bytemuck::pod_read_unaligned(&bytes[..16])
+            out["radii"].read_header(gpu).expect("readback")
         };
         gpu.wait().expect("wait");
         assert_eq!(rule(&gpu).scale, schedule.scale_at(FIRST), "first scale");

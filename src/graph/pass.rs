@@ -228,6 +228,20 @@ impl Resource {
         let read = gpu.read_buffer(&self.buffer, self.kind.header_bytes, bytes)?;
         Ok(bytemuck::pod_collect_to_vec(&read[..bytes as usize]))
     }
+
+    /// Its header read back as `T`, which must be the kind's header.
+    pub fn read_header<T: bytemuck::Pod>(&self, gpu: &GpuContext) -> Result<T, crate::Error> {
+        let bytes = self.kind.header_bytes;
+        if std::mem::size_of::<T>() as u64 != bytes {
+            return Err(crate::Error::Other(format!(
+                "{} has a {bytes}-byte header, not {}",
+                self.kind.name,
+                std::any::type_name::<T>()
+            )));
+        }
+        let read = gpu.read_buffer(&self.buffer, 0, bytes)?;
+        Ok(bytemuck::pod_read_unaligned(&read[..bytes as usize]))
+    }
 }
 
 /// What the render shares with every pass (the scene on the GPU, say), keyed by type, so that

@@ -25,6 +25,7 @@ use crate::graph::pass::{
 use crate::graph::transport::{Transport, TransportCtx};
 use crate::passes::SceneResources;
 use crate::passes::hit_points::PHOTON_HITS;
+use crate::passes::pppm::RadiusSchedule;
 use crate::{shader_file, struct_layout};
 
 const SHADER: ShaderFile = shader_file!("shaders/passes/photon_grid.wgsl");
@@ -134,15 +135,6 @@ impl Default for PhotonGridParams {
     }
 }
 
-/// r_i / r_1 for global iteration `iteration` (0 for the first): the square root of
-/// prod_{k=1}^{iteration} (k + alpha) / (k + 1), summed in logarithms in f64.
-pub fn radius_scale(alpha: f64, iteration: u64) -> f64 {
-    let log_sum: f64 = (1..=iteration)
-        .map(|k| ((k as f64 + alpha) / (k as f64 + 1.0)).ln())
-        .sum();
-    (0.5 * log_sum).exp()
-}
-
 struct Prepared {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
@@ -157,8 +149,7 @@ struct Prepared {
 pub struct PhotonGrid {
     params: PhotonGridParams,
     prepared: Option<Prepared>,
-    /// (iteration, log of r_i^2 / r_1^2), so that the next iteration's radius costs one step.
-    schedule: (u64, f64),
+    schedule: RadiusSchedule,
 }
 
 impl PhotonGrid {
@@ -166,24 +157,8 @@ impl PhotonGrid {
         Self {
             params,
             prepared: None,
-            schedule: (0, 0.0),
+            schedule: RadiusSchedule::new(params.alpha as f64),
         }
-    }
-
-    /// r_i / r_1 at global `iteration`, stepping on from the last one asked (a shard's
-    /// iterations are `n` apart; a resumed render starts anywhere).
-    fn scale_at(&mut self, iteration: u64) -> f64 {
-        let alpha = self.params.alpha as f64;
-        let (last, log) = self.schedule;
-        let log = if iteration >= last {
-            log + ((last + 1)..=iteration)
-                .map(|k| ((k as f64 + alpha) / (k as f64 + 1.0)).ln())
-                .sum::<f64>()
-        } else {
-            2.0 * radius_scale(alpha, iteration).ln()
-        };
-        self.schedule = (iteration, log);
-        (0.5 * log).exp()
     }
 }
 
@@ -245,7 +220,8 @@ impl Pass for PhotonGrid {
     }
 
     fn execute(&mut self, ctx: &ExecCtx<'_>, recorder: &mut Recorder<'_>) -> Result<(), Error> {
-        let scale = self.scale_at(ctx.iteration);
+        // pppm's schedule: the same product, stepped in the same order on any shard or resume.
+        let scale = self.schedule.ratio_at(ctx.iteration).sqrt();
         let Some(p) = &self.prepared else {
             return Ok(());
         };
@@ -270,38 +246,5 @@ impl Pass for PhotonGrid {
         use crate::passes::paths::{CAUSTIC, DEEP_CAUSTIC};
         let photons = ctx.inputs.get("photon_hits")?;
         Some(photons.relabel(CAUSTIC, DEEP_CAUSTIC))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_radius_schedule_is_knaus_and_zwickers_product() {
-        let alpha = 0.7f64;
-        let mut product = 1.0f64;
-        for i in 0..2000u64 {
-            if i > 0 {
-                product *= (i as f64 + alpha) / (i as f64 + 1.0);
-            }
-            let scale = radius_scale(alpha, i);
-            assert!(
-                (scale * scale - product).abs() <= 1e-12 * product,
-                "iteration {i}"
-            );
-        }
-        // Stepping one iteration at a time agrees with the closed product, and jumps too.
-        let mut grid = PhotonGrid::new(PhotonGridParams::default());
-        for i in [0u64, 1, 2, 3, 10, 11, 500, 7, 8] {
-            let stepped = grid.scale_at(i);
-            assert!(
-                (stepped - radius_scale(0.7f32 as f64, i)).abs() < 1e-12,
-                "iteration {i}"
-            );
-        }
-        // r_i^2 falls as i^(alpha - 1): the variance and bias both vanish (Knaus & Zwicker).
-        let ratio = radius_scale(alpha, 20_000).powi(2) / radius_scale(alpha, 10_000).powi(2);
-        assert!((ratio - 2f64.powf(alpha - 1.0)).abs() < 1e-4, "{ratio}");
     }
 }
