@@ -9,8 +9,6 @@ mod common;
 use common::pass_harness::PassHarness;
 use common::*;
 use glam::{Mat4, Vec2, Vec3, Vec4};
-use hppm::gpu::binding::{Access, bind_buffers};
-use hppm::gpu::shaders::ShaderFile;
 use hppm::scene::texture::{Bitmap, Filter, Texture, UvTransform, WrapMode, srgb_to_linear};
 
 fn temp_dir(name: &str) -> std::path::PathBuf {
@@ -382,37 +380,7 @@ fn gpu_lookups(scene: &hppm::scene::Scene, queries: &[(u32, Vec2)]) -> Vec<Vec4>
         .iter()
         .map(|(i, uv)| Vec4::new(uv.x, uv.y, *i as f32, 0.0))
         .collect();
-    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-    let input = gpu
-        .create_buffer_init("queries", bytemuck::cast_slice(&words), usage)
-        .expect("queries");
-    let output = gpu
-        .create_buffer("values", (queries.len() * 16) as u64, usage)
-        .expect("values");
-    let (layout, group) = bind_buffers(
-        &gpu.device,
-        "texture test",
-        &[(Access::Read, &input), (Access::ReadWrite, &output)],
-    );
-    let file = ShaderFile {
-        path: "tests/textures.rs (kernel)",
-        source: KERNEL,
-    };
-    let pipeline = harness
-        .shaders
-        .compute_pipeline(&gpu, &file, "main", &[&harness.scene().layout, &layout])
-        .expect("pipeline");
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &harness.scene().bind_group, &[]);
-        pass.set_bind_group(1, &group, &[]);
-        pass.dispatch_workgroups(queries.len().div_ceil(64) as u32, 1, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let values: Vec<Vec4> = gpu.read_pod(&output, queries.len()).expect("readback");
-    values
+    harness.run_kernel("tests/textures.rs (kernel)", KERNEL, &words, queries.len())
 }
 
 /// The WGSL lookup (colour and scalar) equals the CPU reference on 4000 uvs over [-3, 4]^2 for a checkerboard

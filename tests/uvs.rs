@@ -9,8 +9,6 @@ mod common;
 use common::pass_harness::PassHarness;
 use common::*;
 use glam::{Vec2, Vec3, Vec4};
-use hppm::gpu::binding::{Access, bind_buffers};
-use hppm::gpu::shaders::ShaderFile;
 
 const KERNEL: &str = "#import common::scene::{intersect_scene, surface_at, NO_HIT}
 @group(1) @binding(0) var<storage, read> rays: array<vec4<f32>>;
@@ -38,37 +36,8 @@ fn gpu_uvs(scene: &hppm::scene::Scene, rays: &[(Vec3, Vec3)]) -> Vec<Option<Vec2
         .iter()
         .flat_map(|(o, d)| [o.extend(1.0), d.normalize().extend(0.0)])
         .collect();
-    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-    let input = gpu
-        .create_buffer_init("rays", bytemuck::cast_slice(&words), usage)
-        .expect("rays");
-    let output = gpu
-        .create_buffer("uvs", (rays.len() * 16) as u64, usage)
-        .expect("uvs");
-    let (layout, group) = bind_buffers(
-        &gpu.device,
-        "uv test",
-        &[(Access::Read, &input), (Access::ReadWrite, &output)],
-    );
-    let file = ShaderFile {
-        path: "tests/uvs.rs (kernel)",
-        source: KERNEL,
-    };
-    let pipeline = harness
-        .shaders
-        .compute_pipeline(&gpu, &file, "main", &[&harness.scene().layout, &layout])
-        .expect("pipeline");
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &harness.scene().bind_group, &[]);
-        pass.set_bind_group(1, &group, &[]);
-        pass.dispatch_workgroups(rays.len().div_ceil(64) as u32, 1, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let values: Vec<Vec4> = gpu.read_pod(&output, rays.len()).expect("readback");
-    values
+    harness
+        .run_kernel("tests/uvs.rs (kernel)", KERNEL, &words, rays.len())
         .iter()
         .map(|v| (v.x >= 0.0).then(|| Vec2::new(v.x, v.y)))
         .collect()

@@ -54,6 +54,46 @@ impl<'a> PassHarness<'a> {
         self.shared.get::<SceneResources>().expect("scene")
     }
 
+    /// Runs a test kernel (`main`, 64 invocations per workgroup, scene at group 0) that reads
+    /// `input` at group 1 binding 0 and writes `outputs` vec4s at binding 1; returns them.
+    pub fn run_kernel(
+        &self,
+        path: &'static str,
+        source: &'static str,
+        input: &[glam::Vec4],
+        outputs: usize,
+    ) -> Vec<glam::Vec4> {
+        use hppm::gpu::binding::{Access, bind_buffers};
+        let gpu = self.gpu;
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let input = gpu
+            .create_buffer_init("kernel input", bytemuck::cast_slice(input), usage)
+            .expect("kernel input");
+        let output = gpu
+            .create_buffer("kernel output", (outputs * 16) as u64, usage)
+            .expect("kernel output");
+        let (layout, group) = bind_buffers(
+            &gpu.device,
+            path,
+            &[(Access::Read, &input), (Access::ReadWrite, &output)],
+        );
+        let file = hppm::gpu::shaders::ShaderFile { path, source };
+        let pipeline = self
+            .shaders
+            .compute_pipeline(gpu, &file, "main", &[&self.scene().layout, &layout])
+            .expect("pipeline");
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &self.scene().bind_group, &[]);
+            pass.set_bind_group(1, &group, &[]);
+            pass.dispatch_workgroups(outputs.div_ceil(64) as u32, 1, 1);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        gpu.read_pod(&output, outputs).expect("readback")
+    }
+
     /// Prepares `pass` (of `kind`) alone with `inputs`; returns its allocated outputs.
     pub fn prepare(
         &self,
