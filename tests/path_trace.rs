@@ -83,6 +83,7 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
             flip_normals: true,
         }],
         point_lights: vec![],
+        emitters: Default::default(),
         textures: vec![],
     }
 }

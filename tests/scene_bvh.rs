@@ -355,6 +355,7 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
             })
             .collect(),
         point_lights: Vec::new(),
+        emitters: Default::default(),
         textures: Vec::new(),
     }
 }

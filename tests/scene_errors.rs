@@ -222,7 +222,37 @@ fn unsupported_mitsuba_features_are_refused_with_a_location() {
             r#"<shape type="sphere"><emitter type="point"/></shape>"#,
             "only \"area\"",
         ),
-        (r#"<emitter type="constant"/>"#, "constant"),
+        (r#"<emitter type="sunsky"/>"#, "sunsky"),
+        (r#"<emitter type="envmap"/>"#, "filename"),
+        (
+            r#"<emitter type="envmap"><string name="filename" value="missing.exr"/></emitter>"#,
+            "missing.exr",
+        ),
+        (
+            r#"<emitter type="constant"/><emitter type="constant"/>"#,
+            "second environment",
+        ),
+        (r#"<emitter type="area"/>"#, "inside the <shape>"),
+        (
+            r#"<emitter type="spot"><float name="cutoff_angle" value="10"/><float name="beam_width" value="20"/></emitter>"#,
+            "beam_width",
+        ),
+        (
+            r#"<emitter type="spot"><float name="cutoff_angle" value="200"/></emitter>"#,
+            "0 to 180",
+        ),
+        (
+            r#"<emitter type="spot"><transform name="to_world"><scale x="2"/></transform></emitter>"#,
+            "round",
+        ),
+        (
+            r#"<emitter type="directional"><vector name="direction" x="0" y="0" z="0"/></emitter>"#,
+            "zero",
+        ),
+        (
+            r#"<emitter type="constant"><rgb name="radiance" value="-1"/></emitter>"#,
+            "negative",
+        ),
         (
             r#"<shape type="sphere"><emitter type="area"/></shape>"#,
             "radiance",

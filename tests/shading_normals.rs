@@ -90,6 +90,7 @@ fn lit_sphere(mesh: Option<MeshData>) -> Scene {
             position: Vec3::new(3.0, 2.0, 3.0),
             intensity: Vec3::splat(20.0),
         }],
+        emitters: Default::default(),
         textures: vec![],
     };
     match mesh {
@@ -214,6 +215,7 @@ fn shading_normals_create_no_energy_in_a_furnace() {
         triangles: vec![],
         spheres: vec![],
         point_lights: vec![],
+        emitters: Default::default(),
         textures: vec![],
     };
     scene.push_mesh_data(mesh, Mat4::from_scale(Vec3::splat(1.5)), 0, true);

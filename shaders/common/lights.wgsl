@@ -1,10 +1,13 @@
 #define_import_path common::lights
 
-#import common::scene::{scene_info, lights, light_cdf, triangles, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, SurfacePoint, triangle_point}
+#import common::scene::{scene_info, lights, light_cdf, triangles, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, SurfacePoint, triangle_point}
 #ifdef SPHERES
 #import common::scene::{spheres, sphere_point}
 #endif
 #import common::sampling::{sample_triangle_barycentrics, sample_uniform_sphere}
+#ifdef ENVIRONMENT
+#import common::environment::sample_environment_light
+#endif
 
 struct LightSample {
     // Unit direction from the shading point to the light.
@@ -15,9 +18,10 @@ struct LightSample {
     position: vec3<f32>,
     normal: vec3<f32>,
     error: vec3<f32>,
-    // Radiance arriving along `dir` (area lights), or intensity / distance^2 (point lights).
+    // Radiance arriving along `dir` (area and environment lights), intensity x falloff /
+    // distance^2 (point and spot lights) or irradiance (directional lights).
     radiance: vec3<f32>,
-    // Solid-angle density of this sample including the light choice; for point lights, the
+    // Solid-angle density of this sample including the light choice; for delta lights, the
     // probability of choosing the light.
     pdf: f32,
     is_delta: bool,
@@ -63,8 +67,20 @@ fn area_light_pdf(index: u32, dist: f32, cos_light: f32) -> f32 {
 }
 
 #ifdef POINT_LIGHTS
-// A point light seen from `from_point`: a delta direction; `pdf` is the light's selection
-// probability.
+// Mitsuba's spot falloff (src/emitters/spot.cpp): full within the beam width of the axis, zero
+// past the cutoff, linear in angle between.
+fn spot_falloff(light: Light, cos_theta: f32) -> f32 {
+    if cos_theta <= cos(light.cutoff) {
+        return 0.0;
+    }
+    if cos_theta >= cos(light.beam_width) {
+        return 1.0;
+    }
+    return clamp((light.cutoff - acos(clamp(cos_theta, -1.0, 1.0))) / (light.cutoff - light.beam_width), 0.0, 1.0);
+}
+
+// A point or spot light seen from `from_point`: a delta direction; `pdf` is the light's
+// selection probability.
 fn sample_point_light(light: Light, from_point: vec3<f32>) -> LightSample {
     var result: LightSample;
     result.valid = false;
@@ -80,12 +96,39 @@ fn sample_point_light(light: Light, from_point: vec3<f32>) -> LightSample {
     result.normal = vec3<f32>(0.0);
     result.error = vec3<f32>(0.0);
     result.radiance = light.radiance / dist2;
+#ifdef SPOT_LIGHTS
+    if light.kind == LIGHT_SPOT {
+        result.radiance *= spot_falloff(light, -dot(result.dir, light.axis));
+    }
+#endif
     result.pdf = light.select_prob;
     result.is_delta = true;
-    result.valid = true;
+    result.valid = max(result.radiance.x, max(result.radiance.y, result.radiance.z)) > 0.0;
     return result;
 }
 #endif
+
+// Where a shadow ray towards a light at infinity may stop: twice as far from `from_point` as
+// anything in the scene's bounding sphere can be.
+fn distant_point(from_point: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+    let center = 0.5 * (scene_info.bounds_min + scene_info.bounds_max);
+    return from_point + dir * (2.0 * (length(from_point - center) + scene_info.scene_radius));
+}
+
+// A light at infinity in direction `dir` (unit, towards it), for a shadow ray.
+fn distant_sample(from_point: vec3<f32>, dir: vec3<f32>, radiance: vec3<f32>, pdf: f32, is_delta: bool) -> LightSample {
+    var result: LightSample;
+    result.dir = dir;
+    result.position = distant_point(from_point, dir);
+    result.distance = length(result.position - from_point);
+    result.normal = vec3<f32>(0.0);
+    result.error = vec3<f32>(0.0);
+    result.radiance = radiance;
+    result.pdf = pdf;
+    result.is_delta = is_delta;
+    result.valid = pdf > 0.0 && result.distance > 0.0;
+    return result;
+}
 
 fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample {
     var result: LightSample;
@@ -99,8 +142,19 @@ fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
         return result;
     }
 #ifdef POINT_LIGHTS
-    if light.kind == LIGHT_POINT {
+    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT {
         return sample_point_light(light, from_point);
+    }
+#endif
+#ifdef DIRECTIONAL_LIGHTS
+    if light.kind == LIGHT_DIRECTIONAL {
+        return distant_sample(from_point, -light.axis, light.radiance, light.select_prob, true);
+    }
+#endif
+#ifdef ENVIRONMENT
+    if light.kind == LIGHT_CONSTANT || light.kind == LIGHT_ENVMAP {
+        let s = sample_environment_light(light, u);
+        return distant_sample(from_point, s.dir, s.radiance, light.select_prob * s.pdf, false);
     }
 #endif
     let point = sample_area_light_point(light, u);

@@ -3,7 +3,8 @@
 // Shader defs (src/shaders.rs, from the scene): SPHERES compiles in sphere intersection,
 // DIELECTRIC the smooth and thin dielectric BSDFs, CONDUCTOR the smooth and rough conductors,
 // PLASTIC plastic and rough plastic, ROUGH_DIELECTRIC the rough dielectric, POINT_LIGHTS
-// point-light sampling. Code for what a scene
+// point and spot lights, SPOT_LIGHTS spot lights, DIRECTIONAL_LIGHTS directional lights,
+// ENVIRONMENT a constant or map light seen by escaping rays. Code for what a scene
 // lacks is left out of every kernel.
 
 // The scene every pass shares (bind group 0). Layouts mirror src/scene/gpu_layout.rs.
@@ -34,6 +35,11 @@ struct SceneUniform {
     // A sphere around every specular surface (radius 0 when there is none).
     specular_center: vec3<f32>,
     specular_radius: f32,
+    // The constant or map light escaping rays see, or NO_LIGHT.
+    environment: u32,
+    pad_env_a: u32,
+    pad_env_b: u32,
+    pad_env_c: u32,
 }
 
 struct BvhNode {
@@ -116,14 +122,24 @@ struct Material {
 }
 
 struct Light {
+    // Point and spot lights: position.
     position: vec3<f32>,
     kind: u32,
+    // Intensity (point, spot), radiance (area, constant; 1 for maps) or irradiance
+    // (directional).
     radiance: vec3<f32>,
+    // Area lights: the triangle or sphere.
     prim: u32,
+    // Spot: the axis it shines along. Directional: the direction its light travels.
+    axis: vec3<f32>,
     select_prob: f32,
+    // Area lights: their area. Distant lights: the area of the disc their photons leave from.
     area: f32,
-    pad_a: u32,
-    pad_b: u32,
+    // Environment maps: where their table starts in bsdf_tables (common::environment).
+    table: u32,
+    // Spot: cutoff angle and beam width, radians.
+    cutoff: f32,
+    beam_width: f32,
 }
 
 const MATERIAL_DIFFUSE: u32 = 0u;
@@ -139,6 +155,10 @@ const NO_BACK: u32 = 0xffffffffu;
 const LIGHT_TRIANGLE: u32 = 0u;
 const LIGHT_SPHERE: u32 = 1u;
 const LIGHT_POINT: u32 = 2u;
+const LIGHT_SPOT: u32 = 3u;
+const LIGHT_DIRECTIONAL: u32 = 4u;
+const LIGHT_CONSTANT: u32 = 5u;
+const LIGHT_ENVMAP: u32 = 6u;
 const NO_LIGHT: u32 = 0xffffffffu;
 const NO_HIT: u32 = 0xffffffffu;
 const NO_NORMALS: u32 = 0xffffffffu;

@@ -20,6 +20,9 @@
 #import common::texture::textured_material
 #endif
 #import common::lights::{sample_light, area_light_pdf}
+#ifdef ENVIRONMENT
+#import common::environment::escaped
+#endif
 #import common::bsdf::reflect_about
 #ifdef DIELECTRIC
 #import common::bsdf::sample_dielectric
@@ -202,6 +205,23 @@ fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, w
     return e.value * ls.radiance * weight / ls.pdf;
 }
 
+#ifdef ENVIRONMENT
+// The environment seen by a path that escapes, under the same rules as an area light's
+// emission: dropped when photon mapping counts it (reached from a photon-mapped vertex through
+// specular ones), MIS-weighted against light sampling after a non-delta vertex.
+fn environment_emission(path: PathState) -> vec3<f32> {
+    if scene_info.environment == NO_LIGHT || (path.after_delta && path.after_merge) {
+        return vec3<f32>(0.0);
+    }
+    let seen = escaped(path.dir);
+    var weight = 1.0;
+    if !path.after_delta {
+        weight = power_heuristic(path.bsdf_pdf, seen.pdf);
+    }
+    return seen.radiance * weight;
+}
+#endif
+
 fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
     var result = vec3<f32>(0.0);
@@ -211,6 +231,9 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
         *rays += 1u;
         let hit = intersect_scene(path.origin, path.dir);
         if hit.prim == NO_HIT {
+#ifdef ENVIRONMENT
+            result += path.throughput * environment_emission(path);
+#endif
             break;
         }
         var surface = surface_at(hit, path.origin, path.dir);

@@ -16,10 +16,16 @@
 // out changes nothing but the cost. The flux is divided by the cone's density instead.
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
-#import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, intersect_photon, surface_at, offset_ray_origin, spawn_origin, shading_agrees, photon_shading_correction}
+#import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, shading_agrees, photon_shading_correction}
 #import common::material::material_sample
 #import common::lights::{pick_light, sample_area_light_point}
+#ifdef SPOT_LIGHTS
+#import common::lights::spot_falloff
+#endif
+#ifdef ENVIRONMENT
+#import common::environment::sample_environment_light
+#endif
 #import common::bsdf::reflect_about
 #ifdef TEXTURES
 #import common::texture::textured_material
@@ -142,21 +148,69 @@ fn normalised(emitted: Photon) -> Photon {
 }
 
 #ifdef POINT_LIGHTS
+// Point lights send photons over the sphere of directions, spot lights over their cutoff cone;
+// when aiming, over the cone towards the specular surfaces instead if that one is narrower
+// (what leaves outside either cone carries no caustic).
 fn emit_point_photon(light: Light, u: vec2<f32>) -> Photon {
     var photon: Photon;
     photon.origin = light.position;
-    let aim = aim_at_specular(light.position, u);
-    if aim.valid {
-        photon.dir = aim.dir;
-        photon.flux = light.radiance * (aim.solid_angle / light.select_prob);
-    } else {
-        // Intensity I over the sphere of directions: power 4 pi I.
-        photon.dir = sample_uniform_sphere(u);
-        photon.flux = light.radiance * (4.0 * PI / light.select_prob);
+    var solid_angle = 4.0 * PI;
+    var one_minus_cos = 2.0;
+#ifdef SPOT_LIGHTS
+    if light.kind == LIGHT_SPOT {
+        // 1 - cos(c) without cancellation.
+        let s = sin(0.5 * light.cutoff);
+        one_minus_cos = 2.0 * s * s;
+        solid_angle = 2.0 * PI * one_minus_cos;
     }
+#endif
+    let aim = aim_at_specular(light.position, u);
+    if aim.valid && aim.solid_angle < solid_angle {
+        photon.dir = aim.dir;
+        solid_angle = aim.solid_angle;
+    } else if one_minus_cos < 2.0 {
+        photon.dir = sample_cone(light.axis, one_minus_cos, u);
+    } else {
+        photon.dir = sample_uniform_sphere(u);
+    }
+    // Intensity I over a solid angle with uniform density: I x solid angle per photon.
+    photon.flux = light.radiance * (solid_angle / light.select_prob);
+#ifdef SPOT_LIGHTS
+    if light.kind == LIGHT_SPOT {
+        photon.flux *= spot_falloff(light, dot(photon.dir, light.axis));
+    }
+#endif
     return photon;
 }
 #endif
+
+// A photon from a light at infinity arriving from unit direction `towards_light`: it crosses a
+// disc facing that direction, as large as the scene's bounding sphere (or, when aiming, the
+// sphere around the specular surfaces: a photon missing it never meets one), placed beyond the
+// scene. `radiance` over `pdf` is what the direction sample carries per unit area.
+fn emit_distant_photon(light: Light, towards_light: vec3<f32>, radiance: vec3<f32>, pdf: f32, u: vec2<f32>) -> Photon {
+    var photon: Photon;
+    photon.valid = false;
+    let scene_center = 0.5 * (scene_info.bounds_min + scene_info.bounds_max);
+    var center = scene_center;
+    var radius = scene_info.scene_radius;
+    if params.aim != 0u && params.mode == MODE_CAUSTIC && scene_info.specular_radius > 0.0 {
+        center = scene_info.specular_center;
+        radius = scene_info.specular_radius;
+    }
+    if !(radius > 0.0) || !(pdf > 0.0) {
+        photon.flux = vec3<f32>(0.0);
+        return photon;
+    }
+    let disc = radius * square_to_disk_concentric(u);
+    let frame = basis_from_normal(towards_light);
+    // Far enough along the direction that the disc's plane lies outside the bounding sphere.
+    let back = 1.01 * (length(center - scene_center) + scene_info.scene_radius) + radius;
+    photon.origin = center + frame[0] * disc.x + frame[1] * disc.y + towards_light * back;
+    photon.dir = -towards_light;
+    photon.flux = radiance * (PI * radius * radius / (pdf * light.select_prob));
+    return photon;
+}
 
 fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
     var photon: Photon;
@@ -171,8 +225,19 @@ fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
     let u_position = rng_next_vec2(rng);
     let u_direction = rng_next_vec2(rng);
 #ifdef POINT_LIGHTS
-    if light.kind == LIGHT_POINT {
+    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT {
         return normalised(emit_point_photon(light, u_direction));
+    }
+#endif
+#ifdef DIRECTIONAL_LIGHTS
+    if light.kind == LIGHT_DIRECTIONAL {
+        return normalised(emit_distant_photon(light, -light.axis, light.radiance, 1.0, u_position));
+    }
+#endif
+#ifdef ENVIRONMENT
+    if light.kind == LIGHT_CONSTANT || light.kind == LIGHT_ENVMAP {
+        let s = sample_environment_light(light, u_direction);
+        return normalised(emit_distant_photon(light, s.dir, s.radiance, s.pdf, u_position));
     }
 #endif
     let point = sample_area_light_point(light, u_position);

@@ -52,6 +52,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/scene.wgsl"),
     shader_file!("shaders/common/pixel_filter.wgsl"),
     shader_file!("shaders/common/camera.wgsl"),
+    shader_file!("shaders/common/environment.wgsl"),
     shader_file!("shaders/common/lights.wgsl"),
     shader_file!("shaders/common/fresnel.wgsl"),
     shader_file!("shaders/common/microfacet.wgsl"),
@@ -72,6 +73,9 @@ pub const SCENE_DEFS: &[&str] = &[
     "DIELECTRIC",
     "SPHERES",
     "POINT_LIGHTS",
+    "SPOT_LIGHTS",
+    "DIRECTIONAL_LIGHTS",
+    "ENVIRONMENT",
     "CONDUCTOR",
     "PLASTIC",
     "ROUGH_DIELECTRIC",
@@ -81,7 +85,8 @@ pub const SCENE_DEFS: &[&str] = &[
 /// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
 /// BSDF, `CONDUCTOR` a conductor with a Fresnel term (smooth or rough), `PLASTIC` a plastic
 /// (smooth or rough), `ROUGH_DIELECTRIC` a rough dielectric, `SPHERES` when it has spheres,
-/// `POINT_LIGHTS` when it has a point light, `TEXTURES` when a material has a texture (the
+/// `POINT_LIGHTS` when it has a point or spot light, `SPOT_LIGHTS` a spot light,
+/// `DIRECTIONAL_LIGHTS` a directional light, `ENVIRONMENT` a constant or map light, `TEXTURES` when a material has a texture (the
 /// scene then has binding 11).
 pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
     let present = [
@@ -91,6 +96,9 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
         ("ROUGH_DIELECTRIC", features.rough_dielectric),
         ("SPHERES", features.spheres),
         ("POINT_LIGHTS", features.point_lights),
+        ("SPOT_LIGHTS", features.spot_lights),
+        ("DIRECTIONAL_LIGHTS", features.directional_lights),
+        ("ENVIRONMENT", features.environment),
         ("TEXTURES", features.textures),
     ];
     defs_of(present.iter().filter(|(_, on)| *on).map(|(name, _)| *name))

@@ -23,7 +23,7 @@ pub const LAYOUTS: &[StructLayout] = &[
         camera_origin, tan_half_x, camera_right, tan_half_y, camera_up, width, camera_forward,
         height, bounds_min, bounds_max, scene_radius, num_triangles, num_spheres,
         num_lights, max_depth, rr_depth, filter_kind, filter_param, sample_border, specular_center,
-        specular_radius
+        specular_radius, environment
     }),
     struct_layout!(BvhNode => "BvhNode" in TRACER, { min, left_or_first, max, count }),
     struct_layout!(GpuTriangle => "Triangle" in TRACER, {
@@ -40,7 +40,7 @@ pub const LAYOUTS: &[StructLayout] = &[
         diffuse_texture, specular_texture, alpha_u_texture, alpha_v_texture
     }),
     struct_layout!(GpuLight => "Light" in TRACER, {
-        position, kind, radiance, prim, select_prob, area
+        position, kind, radiance, prim, axis, select_prob, area, table, cutoff, beam_width
     }),
 ];
 

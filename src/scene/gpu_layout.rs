@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use super::bsdf::Prepared;
 use super::bvh::{self, BvhNode};
+use super::emitter::Environment;
 use super::texture::{self, NO_TEXTURE};
 use super::{Bsdf, Distribution, Microfacet, Scene, SideTextures};
 
@@ -26,6 +27,10 @@ pub const NO_BACK: u32 = u32::MAX;
 pub const LIGHT_TRIANGLE: u32 = 0;
 pub const LIGHT_SPHERE: u32 = 1;
 pub const LIGHT_POINT: u32 = 2;
+pub const LIGHT_SPOT: u32 = 3;
+pub const LIGHT_DIRECTIONAL: u32 = 4;
+pub const LIGHT_CONSTANT: u32 = 5;
+pub const LIGHT_ENVMAP: u32 = 6;
 
 /// `normals` of a triangle without vertex normals.
 pub const NO_NORMALS: u32 = u32::MAX;
@@ -120,17 +125,27 @@ pub struct GpuMaterial {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuLight {
-    /// Point lights: position. Area lights: unused.
+    /// Point and spot lights: position. Others: unused.
     pub position: [f32; 3],
     pub kind: u32,
-    /// Point lights: intensity (W/sr). Area lights: emitted radiance.
+    /// Point and spot lights: intensity (W/sr). Area, constant and map lights: emitted
+    /// radiance (a map's texels carry its own). Directional lights: irradiance.
     pub radiance: [f32; 3],
     /// Triangle or sphere index of an area light.
     pub prim: u32,
-    /// Probability that next-event estimation picks this light.
+    /// Spot lights: the unit axis they shine along. Directional lights: the unit direction
+    /// the light travels in.
+    pub axis: [f32; 3],
+    /// Probability that next-event estimation (and photon emission) picks this light.
     pub select_prob: f32,
+    /// Area lights: their area. Constant and map lights: the area of the disc their photons
+    /// leave from (the scene's bounding sphere's cross-section).
     pub area: f32,
-    pub _pad: [u32; 2],
+    /// Environment maps: the first index of their table in `bsdf_tables`.
+    pub table: u32,
+    /// Spot lights: cutoff angle and beam width in radians.
+    pub cutoff: f32,
+    pub beam_width: f32,
 }
 
 /// Camera, bounds, counts and integrator settings: one uniform shared by every pass.
@@ -163,6 +178,9 @@ pub struct GpuSceneUniform {
     /// photons are aimed at it: a photon that misses it can never cross a specular vertex.
     pub specular_center: [f32; 3],
     pub specular_radius: f32,
+    /// The index of the constant or map light that escaping rays see, or `NO_LIGHT`.
+    pub environment: u32,
+    pub _pad_environment: [u32; 3],
 }
 
 /// Everything the GPU needs to trace rays through a scene. Arrays are never empty (a zeroed
@@ -312,8 +330,9 @@ fn gpu_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<f32>) {
     (materials, tables)
 }
 
-/// Lights with their unnormalised power (what NEE picks in proportion to).
-fn collect_lights(scene: &Scene) -> Vec<(GpuLight, f32)> {
+/// Lights with their unnormalised power (what NEE and photon emission pick in proportion to);
+/// an environment map's table is appended to `tables`.
+fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> {
     let mut lights = Vec::new();
     let emission = |m: u32| {
         scene
@@ -321,15 +340,16 @@ fn collect_lights(scene: &Scene) -> Vec<(GpuLight, f32)> {
             .get(m as usize)
             .map_or(Vec3::ZERO, |mat| mat.emission)
     };
+    let light = |kind, radiance: Vec3| GpuLight {
+        kind,
+        radiance: radiance.to_array(),
+        ..Zeroable::zeroed()
+    };
     let area_light = |kind, prim, radiance: Vec3, area: f32| {
         let light = GpuLight {
-            position: [0.0; 3],
-            kind,
-            radiance: radiance.to_array(),
             prim,
-            select_prob: 0.0,
             area,
-            _pad: [0; 2],
+            ..light(kind, radiance)
         };
         // One-sided Lambertian emitter: power = pi * area * radiance.
         (light, std::f32::consts::PI * area * mean(radiance))
@@ -353,16 +373,56 @@ fn collect_lights(scene: &Scene) -> Vec<(GpuLight, f32)> {
     }
     for p in &scene.point_lights {
         if p.intensity.max_element() > 0.0 {
-            let light = GpuLight {
+            let point = GpuLight {
                 position: p.position.to_array(),
-                kind: LIGHT_POINT,
-                radiance: p.intensity.to_array(),
-                prim: 0,
-                select_prob: 0.0,
-                area: 0.0,
-                _pad: [0; 2],
+                ..light(LIGHT_POINT, p.intensity)
             };
-            lights.push((light, 4.0 * std::f32::consts::PI * mean(p.intensity)));
+            lights.push((point, 4.0 * std::f32::consts::PI * mean(p.intensity)));
+        }
+    }
+    for s in &scene.emitters.spots {
+        if s.intensity.max_element() > 0.0 && s.cutoff > 0.0 {
+            let spot = GpuLight {
+                position: s.position.to_array(),
+                axis: s.axis.to_array(),
+                cutoff: s.cutoff,
+                beam_width: s.beam_width,
+                ..light(LIGHT_SPOT, s.intensity)
+            };
+            lights.push((spot, mean(s.power())));
+        }
+    }
+    // Distant lights send their photons from a disc as large as the scene's bounding sphere:
+    // their power is what crosses it.
+    let (lo, hi) = scene.bounds();
+    let disc_area = std::f32::consts::PI * (0.5 * (hi - lo).length()).powi(2);
+    for d in &scene.emitters.directionals {
+        if d.irradiance.max_element() > 0.0 {
+            let directional = GpuLight {
+                axis: d.direction.to_array(),
+                area: disc_area,
+                ..light(LIGHT_DIRECTIONAL, d.irradiance)
+            };
+            lights.push((directional, disc_area * mean(d.irradiance)));
+        }
+    }
+    if let Some(env) = &scene.emitters.environment {
+        let power = disc_area * mean(env.radiance_integral());
+        let environment = match env {
+            Environment::Constant { radiance } => light(LIGHT_CONSTANT, *radiance),
+            Environment::Map(map) => GpuLight {
+                table: map.append_gpu_table(tables),
+                ..light(LIGHT_ENVMAP, Vec3::ONE)
+            },
+        };
+        if power > 0.0 {
+            lights.push((
+                GpuLight {
+                    area: disc_area,
+                    ..environment
+                },
+                power,
+            ));
         }
     }
     lights
@@ -419,7 +479,8 @@ impl GpuScene {
     pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
         let boxes = bvh::scene_boxes(scene);
         let bvh = bvh::build_sah(&boxes, 4);
-        let (lights, light_cdf) = normalise_lights(collect_lights(scene));
+        let (materials, mut bsdf_tables) = gpu_materials(scene);
+        let (lights, light_cdf) = normalise_lights(collect_lights(scene, &mut bsdf_tables));
         let mut light_of_prim = vec![NO_LIGHT; scene.triangles.len() + scene.spheres.len()];
         for (i, l) in lights.iter().enumerate() {
             let prim = match l.kind {
@@ -480,7 +541,6 @@ impl GpuScene {
                 _pad: 0,
             })
             .collect::<Vec<_>>();
-        let (materials, bsdf_tables) = gpu_materials(scene);
         let textures = if scene.features().textures {
             texture::gpu_words(&scene.textures)
         } else {
@@ -496,6 +556,10 @@ impl GpuScene {
         uniform.num_triangles = triangles.len() as u32;
         uniform.num_spheres = spheres.len() as u32;
         uniform.num_lights = lights.len() as u32;
+        uniform.environment = lights
+            .iter()
+            .position(|l| matches!(l.kind, LIGHT_CONSTANT | LIGHT_ENVMAP))
+            .map_or(NO_LIGHT, |i| i as u32);
         uniform.max_depth = scene.integrator.max_depth.unwrap_or(UNBOUNDED);
         uniform.rr_depth = scene.integrator.rr_depth.unwrap_or(UNBOUNDED);
         if let Some((center, radius)) = specular_bounds(scene) {

@@ -96,6 +96,40 @@ pub fn cube() -> Vec<[Vec3; 3]> {
     cube_mesh().triangles
 }
 
+/// Segments of the triangle fan that stands for Mitsuba's analytic `disk`.
+pub const DISK_SEGMENTS: usize = 256;
+
+/// Mitsuba's `disk` (radius 1 at z=0 facing +z) as a fan of [`DISK_SEGMENTS`] triangles whose
+/// rim is pushed out so that the fan's area is exactly pi: an emitting disk keeps its power and
+/// its image moves by at most 0.01% of the radius. Texture coordinates are Mitsuba's polar ones,
+/// (r, phi / 2 pi), with the centre at each triangle's middle angle.
+pub fn disk_mesh() -> MeshData {
+    let n = DISK_SEGMENTS;
+    let step = 2.0 * std::f64::consts::PI / n as f64;
+    // n triangles of area r^2 sin(step) / 2 sum to pi.
+    let rim = (2.0 * std::f64::consts::PI / (n as f64 * step.sin())).sqrt();
+    let corner = |k: usize| {
+        let phi = step * k as f64;
+        Vec3::new((rim * phi.cos()) as f32, (rim * phi.sin()) as f32, 0.0)
+    };
+    let mut mesh = MeshData {
+        uvs: Some(Vec::with_capacity(n)),
+        ..MeshData::default()
+    };
+    for k in 0..n {
+        mesh.triangles.push([Vec3::ZERO, corner(k), corner(k + 1)]);
+        let v = |k: f64| (k / n as f64) as f32;
+        if let Some(uvs) = &mut mesh.uvs {
+            uvs.push([
+                Vec2::new(0.0, v(k as f64 + 0.5)),
+                Vec2::new(1.0, v(k as f64)),
+                Vec2::new(1.0, v(k as f64 + 1.0)),
+            ]);
+        }
+    }
+    mesh
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -147,5 +181,22 @@ mod tests {
                 assert_eq!(c, Vec2::new(0.5 * p.x + 0.5, 0.5 * p.y + 0.5));
             }
         }
+    }
+
+    /// The fan's area is the disk's (pi): an emitting disk keeps Mitsuba's power.
+    #[test]
+    fn the_disk_fan_has_the_disks_area_and_faces_up() {
+        let mesh = disk_mesh();
+        let area: f64 = mesh
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| v.as_dvec3());
+                let n = (b - a).cross(c - a);
+                assert!(n.z > 0.0, "a triangle faces down");
+                0.5 * n.length()
+            })
+            .sum();
+        assert!((area - std::f64::consts::PI).abs() < 1e-5, "area {area}");
     }
 }

@@ -22,8 +22,9 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
+use super::emitter::{DirectionalLight, EnvMap, Environment, SpotLight};
 use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
-use super::texture::{Bitmap, Filter, Texture, UvTransform, WrapMode};
+use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
     Bsdf, Camera, Distribution, Integrator, Material, MaterialTextures, Microfacet, PointLight,
     Scene, SceneError, SideTextures, Sphere, bsdf, mesh,
@@ -119,6 +120,7 @@ fn empty_scene(path: &Path) -> Scene {
         triangles: Vec::new(),
         spheres: Vec::new(),
         point_lights: Vec::new(),
+        emitters: Default::default(),
         textures: Vec::new(),
     }
 }
@@ -414,7 +416,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "integrator" => self.read_integrator(child)?,
                 "sensor" => self.read_sensor(child)?,
                 "shape" => self.read_shape(child)?,
-                "emitter" => self.read_point_light(child)?,
+                "emitter" => self.read_emitter(child)?,
                 "bsdf" => self.read_named_bsdf(child)?,
                 "texture" => self.read_named_texture(child)?,
                 other => return Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
@@ -1617,13 +1619,14 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
         if !matches!(
             kind.as_str(),
-            "rectangle" | "cube" | "sphere" | "obj" | "ply"
+            "rectangle" | "cube" | "disk" | "sphere" | "obj" | "ply"
         ) {
             return Err(self.attr_error(
                 node,
                 "type",
                 format!(
-                    "shape type \"{kind}\" is not supported (rectangle, cube, sphere, obj, ply)"
+                    "shape type \"{kind}\" is not supported (rectangle, cube, disk, sphere, obj, \
+                     ply)"
                 ),
             ));
         }
@@ -1647,6 +1650,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         match kind.as_str() {
             "rectangle" => self.push_mesh_data(mesh::rectangle_mesh(), &common),
             "cube" => self.push_mesh_data(mesh::cube_mesh(), &common),
+            "disk" => self.push_mesh_data(mesh::disk_mesh(), &common),
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
             "ply" => self.read_mesh_file(&mut props, &common, node, MeshFormat::Ply)?,
             _ => self.read_mesh_file(&mut props, &common, node, MeshFormat::Obj)?,
@@ -1797,19 +1801,86 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(radiance)
     }
 
-    fn read_point_light(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+    /// A scene-level emitter: `point`, `spot`, `directional`, `constant` or `envmap`.
+    fn read_emitter(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if kind != "point" {
+        let mut props = self.props(node, &[])?;
+        match kind.as_str() {
+            "point" => self.read_point_light(&mut props, node)?,
+            "spot" => self.read_spot_light(&mut props, node)?,
+            "directional" => self.read_directional_light(&mut props, node)?,
+            "constant" | "envmap" => {
+                if self.scene.emitters.environment.is_some() {
+                    return Err(self.error(
+                        node,
+                        "a second environment emitter (constant or envmap): Mitsuba allows one \
+                         per scene",
+                    ));
+                }
+                let environment = if kind == "constant" {
+                    Environment::Constant {
+                        radiance: self.color_or(&mut props, "radiance", Vec3::ONE)?,
+                    }
+                } else {
+                    Environment::Map(self.read_envmap(&mut props, node)?)
+                };
+                self.scene.emitters.environment = Some(environment);
+            }
+            "area" => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    "an \"area\" emitter goes inside the <shape> that emits",
+                ));
+            }
+            _ => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    format!(
+                        "emitter type \"{kind}\" is not supported (point, spot, directional, \
+                         constant, envmap; area inside a shape)"
+                    ),
+                ));
+            }
+        }
+        self.finish(props, node)
+    }
+
+    /// A non-negative colour property, or `default` when it is absent.
+    fn color_or(&self, props: &mut Props, name: &str, default: Vec3) -> Result<Vec3, SceneError> {
+        props
+            .take(name)
+            .map(|n| self.non_negative_color(n))
+            .transpose()
+            .map(|c| c.unwrap_or(default))
+    }
+
+    /// A float property in degrees, or `default`, as radians within [0, 180].
+    fn angle_or(&self, props: &mut Props, name: &str, default: f32) -> Result<f32, SceneError> {
+        let Some(n) = props.take(name) else {
+            return Ok(default.to_radians());
+        };
+        let degrees = self.float(n)?;
+        if !(0.0..=180.0).contains(&degrees) {
             return Err(self.attr_error(
-                node,
-                "type",
-                format!(
-                    "emitter type \"{kind}\" at scene level is not supported (only \"point\"; \
-                     area emitters go inside a shape)"
-                ),
+                n,
+                "value",
+                format!("{}: an angle from 0 to 180 degrees", describe(n)),
             ));
         }
-        let mut props = self.props(node, &[])?;
+        Ok(degrees.to_radians())
+    }
+
+    fn check_light_reach(&self, node: Node, what: &str, position: Vec3) -> Result<(), SceneError> {
+        let reach = position.abs().max_element() as f64;
+        match super::beyond_extent(what, reach) {
+            Some(message) => Err(self.error(node, message)),
+            None => Ok(()),
+        }
+    }
+
+    fn read_point_light(&mut self, props: &mut Props, node: Node) -> Result<(), SceneError> {
         let mut position = props
             .take("position")
             .map(|n| self.point(n))
@@ -1818,21 +1889,157 @@ impl<'a, 'input> Reader<'a, 'input> {
         if let Some(n) = props.take("to_world") {
             position = self.transform(n)?.transform_point3(position);
         }
-        let intensity = match props.take("intensity") {
-            Some(n) => self.non_negative_color(n)?,
-            None => Vec3::ONE,
-        };
-        self.finish(props, node)?;
-        let reach = position.abs().max_element() as f64;
-        if let Some(message) = super::beyond_extent("this point light", reach) {
-            return Err(self.error(node, message));
-        }
+        let intensity = self.color_or(props, "intensity", Vec3::ONE)?;
+        self.check_light_reach(node, "this point light", position)?;
         self.scene.point_lights.push(PointLight {
             position,
             intensity,
         });
         Ok(())
     }
+
+    /// Mitsuba's `spot`: it shines along `to_world`'s +z from its translation.
+    fn read_spot_light(&mut self, props: &mut Props, node: Node) -> Result<(), SceneError> {
+        if let Some(n) = props.take("texture") {
+            return Err(self.error(n, "a spot light's projected texture is not supported"));
+        }
+        let to_world = match props.take("to_world") {
+            Some(n) => {
+                let m = self.transform(n)?;
+                if !is_similarity(Mat3::from_mat4(m)) {
+                    return Err(self.error(
+                        n,
+                        "a spot light's to_world must be a rotation, uniform scale and \
+                         translation (its cone would not be round)",
+                    ));
+                }
+                m
+            }
+            None => Mat4::IDENTITY,
+        };
+        let intensity = self.color_or(props, "intensity", Vec3::ONE)?;
+        let cutoff = self.angle_or(props, "cutoff_angle", 20.0)?;
+        let beam_width = self.angle_or(props, "beam_width", cutoff.to_degrees() * 0.75)?;
+        if beam_width > cutoff {
+            return Err(self.error(
+                node,
+                "beam_width is larger than cutoff_angle (Mitsuba requires beam_width <= \
+                 cutoff_angle)",
+            ));
+        }
+        let position = to_world.transform_point3(Vec3::ZERO);
+        let axis = to_world.transform_vector3(Vec3::Z).normalize_or_zero();
+        self.check_light_reach(node, "this spot light", position)?;
+        self.scene.emitters.spots.push(SpotLight {
+            position,
+            axis,
+            intensity,
+            cutoff,
+            beam_width,
+        });
+        Ok(())
+    }
+
+    /// Mitsuba's `directional`: `direction` (or `to_world`'s +z) is where its light travels.
+    fn read_directional_light(&mut self, props: &mut Props, node: Node) -> Result<(), SceneError> {
+        let direction = match (props.take("direction"), props.take("to_world")) {
+            (Some(_), Some(n)) => {
+                return Err(self.error(
+                    n,
+                    "give a directional light `direction` or `to_world`, not both",
+                ));
+            }
+            (Some(n), None) => (self.point(n)?, n),
+            (None, Some(n)) => (self.transform(n)?.transform_vector3(Vec3::Z), n),
+            (None, None) => (Vec3::Z, node),
+        };
+        let Some(unit) = direction.0.try_normalize() else {
+            return Err(self.error(direction.1, "the light's direction is zero"));
+        };
+        let irradiance = self.color_or(props, "irradiance", Vec3::ONE)?;
+        self.scene.emitters.directionals.push(DirectionalLight {
+            direction: unit,
+            irradiance,
+        });
+        Ok(())
+    }
+
+    /// Mitsuba's `envmap`: a lat-long image (EXR, or Radiance HDR), times `scale`, turned by
+    /// `to_world` (a rotation).
+    fn read_envmap(&self, props: &mut Props, node: Node) -> Result<EnvMap, SceneError> {
+        let Some(file_node) = props.take("filename") else {
+            return Err(self.error(
+                node,
+                "<emitter type=\"envmap\"> needs <string name=\"filename\" value=\"...\"/>",
+            ));
+        };
+        let file = self.relative(&self.string(file_node)?);
+        let scale = match props.take("scale") {
+            Some(n) => {
+                let v = self.float(n)?;
+                if !(v >= 0.0 && v.is_finite()) {
+                    return Err(self.attr_error(n, "value", "scale must be a non-negative number"));
+                }
+                v
+            }
+            None => 1.0,
+        };
+        let to_world = match props.take("to_world") {
+            Some(n) => {
+                let m = Mat3::from_mat4(self.transform(n)?);
+                if !is_similarity(m) || (m.determinant() - 1.0).abs() > 1e-3 {
+                    return Err(self.error(n, "an envmap's to_world must be a rotation"));
+                }
+                m
+            }
+            None => Mat3::IDENTITY,
+        };
+        for name in ["mis_compensation", "filter_type"] {
+            if let Some(n) = props.take(name) {
+                let ok = match name {
+                    "filter_type" => self.string(n)? == "bilinear",
+                    _ => !self.boolean(n)?,
+                };
+                if !ok {
+                    return Err(
+                        self.error(n, format!("{} is not supported for envmap", describe(n)))
+                    );
+                }
+            }
+        }
+        let (width, height, texels) =
+            texture::read_image(&file, false).map_err(|e| self.error(file_node, e))?;
+        if height < 2 {
+            return Err(self.error(
+                file_node,
+                format!(
+                    "{}: an environment map needs at least 2 rows",
+                    file.display()
+                ),
+            ));
+        }
+        Ok(EnvMap {
+            width,
+            height,
+            texels: texels.into_iter().map(|t| t * scale).collect(),
+            to_world,
+            source: file,
+        })
+    }
+}
+
+/// Whether `m` is a rotation (or reflection) times a uniform scale: its columns orthogonal
+/// and of one length.
+fn is_similarity(m: Mat3) -> bool {
+    let g = m.transpose() * m;
+    let s = g.x_axis.x;
+    let tol = 1e-4 * s;
+    s > 0.0
+        && (g.y_axis.y - s).abs() <= tol
+        && (g.z_axis.z - s).abs() <= tol
+        && g.x_axis.y.abs() <= tol
+        && g.x_axis.z.abs() <= tol
+        && g.y_axis.z.abs() <= tol
 }
 
 /// The mesh files a shape may name.

@@ -5,6 +5,7 @@
 
 pub mod bsdf;
 pub mod bvh;
+pub mod emitter;
 pub mod filter;
 pub mod gpu_layout;
 pub mod mesh;
@@ -291,7 +292,12 @@ pub struct SceneFeatures {
     pub delta: bool,
     /// Some shape emits (an area light).
     pub area_lights: bool,
+    /// Point or spot lights (delta positions).
     pub point_lights: bool,
+    pub spot_lights: bool,
+    pub directional_lights: bool,
+    /// A `constant` or `envmap` emitter: escaping rays see it.
+    pub environment: bool,
     pub triangles: bool,
     pub spheres: bool,
     /// Some shape's material has a texture.
@@ -305,7 +311,7 @@ impl SceneFeatures {
     }
 
     pub fn has_lights(&self) -> bool {
-        self.area_lights || self.point_lights
+        self.area_lights || self.point_lights || self.directional_lights || self.environment
     }
 }
 
@@ -331,7 +337,13 @@ impl std::fmt::Display for SceneFeatures {
                 ("plastic", self.plastic),
                 ("rough dielectric", self.rough_dielectric),
             ]),
-            list(&[("area", self.area_lights), ("point", self.point_lights)]),
+            list(&[
+                ("area", self.area_lights),
+                ("point", self.point_lights && !self.spot_lights),
+                ("point+spot", self.point_lights && self.spot_lights),
+                ("directional", self.directional_lights),
+                ("environment", self.environment),
+            ]),
             list(&[("triangles", self.triangles), ("spheres", self.spheres)]),
         )
     }
@@ -349,6 +361,8 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub spheres: Vec<Sphere>,
     pub point_lights: Vec<PointLight>,
+    /// Spot, directional and environment lights.
+    pub emitters: emitter::Emitters,
     /// Textures the materials use (`Material::textures` indexes them).
     pub textures: Vec<texture::Texture>,
 }
@@ -369,9 +383,10 @@ impl Scene {
             lo = lo.min(s.center - s.radius);
             hi = hi.max(s.center + s.radius);
         }
-        for p in &self.point_lights {
-            lo = lo.min(p.position);
-            hi = hi.max(p.position);
+        let positions = self.point_lights.iter().map(|p| p.position);
+        for p in positions.chain(self.emitters.spots.iter().map(|s| s.position)) {
+            lo = lo.min(p);
+            hi = hi.max(p);
         }
         if lo.x > hi.x {
             return (self.camera.origin, self.camera.origin);
@@ -383,7 +398,11 @@ impl Scene {
     /// magnitude and the half-diagonal of the bounds of its shapes, point lights and camera
     /// origin (in f64, which cannot overflow). `None` when there is nothing to render.
     pub fn extent(&self) -> Option<f64> {
-        if self.triangles.is_empty() && self.spheres.is_empty() && self.point_lights.is_empty() {
+        if self.triangles.is_empty()
+            && self.spheres.is_empty()
+            && self.point_lights.is_empty()
+            && self.emitters.spots.is_empty()
+        {
             return None;
         }
         let (lo, hi) = self.bounds();
@@ -449,6 +468,10 @@ impl Scene {
             p.position *= s;
             p.intensity *= s * s;
         }
+        for spot in &mut out.emitters.spots {
+            spot.position *= s;
+            spot.intensity *= s * s;
+        }
         out.camera.origin *= s;
         out.camera.target *= s;
         out
@@ -485,7 +508,10 @@ impl Scene {
         let mut f = SceneFeatures {
             triangles: !self.triangles.is_empty(),
             spheres: !self.spheres.is_empty(),
-            point_lights: !self.point_lights.is_empty(),
+            point_lights: !self.point_lights.is_empty() || !self.emitters.spots.is_empty(),
+            spot_lights: !self.emitters.spots.is_empty(),
+            directional_lights: !self.emitters.directionals.is_empty(),
+            environment: self.emitters.environment.is_some(),
             ..SceneFeatures::default()
         };
         let shape_materials = self
@@ -583,6 +609,34 @@ impl Scene {
         for (i, p) in self.point_lights.iter().enumerate() {
             if !finite(p.position) || !finite(p.intensity) {
                 return fail(format!("point light {i} has a non-finite number"));
+            }
+        }
+        for (i, l) in self.emitters.spots.iter().enumerate() {
+            let angles_ok =
+                l.beam_width >= 0.0 && l.beam_width <= l.cutoff && l.cutoff <= std::f32::consts::PI;
+            if !finite(l.position) || !finite(l.intensity) || !finite(l.axis) || !angles_ok {
+                return fail(format!(
+                    "spot light {i} has a non-finite number or bad angles"
+                ));
+            }
+        }
+        for (i, l) in self.emitters.directionals.iter().enumerate() {
+            if !finite(l.direction) || !finite(l.irradiance) {
+                return fail(format!("directional light {i} has a non-finite number"));
+            }
+        }
+        if let Some(env) = &self.emitters.environment {
+            let ok = match env {
+                emitter::Environment::Constant { radiance } => finite(*radiance),
+                emitter::Environment::Map(map) => {
+                    map.width >= 1
+                        && map.height >= 2
+                        && map.texels.len() == (map.width * map.height) as usize
+                        && map.texels.iter().all(|t| finite(*t))
+                }
+            };
+            if !ok {
+                return fail("the environment light has a non-finite number or a bad size".into());
             }
         }
         self.check_extent()

@@ -318,6 +318,7 @@ pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, Sce
             position: light,
             intensity: Vec3::splat((light - center).length_squared()),
         }],
+        emitters: Default::default(),
         textures: Vec::new(),
     };
     scene.validate()?;

@@ -281,6 +281,7 @@ impl<'a> Builder<'a> {
             triangles: Vec::new(),
             spheres: Vec::new(),
             point_lights: Vec::new(),
+            emitters: Default::default(),
             textures: Vec::new(),
         };
         if let Some(message) =

@@ -221,8 +221,7 @@ impl Bitmap {
         }
     }
 
-    /// Reads `path`: OpenEXR as linear RGB, PNG, JPEG and BMP (8 or 16 bits, grey or colour; alpha
-    /// dropped) decoded from sRGB unless `raw`. The error names the file.
+    /// Reads `path` (see [`read_image`]) as a bitmap texture. The error names the file.
     pub fn load(
         path: &Path,
         raw: bool,
@@ -230,50 +229,8 @@ impl Bitmap {
         filter: Filter,
         to_uv: UvTransform,
     ) -> Result<Self, String> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .unwrap_or("")
-            .to_ascii_lowercase();
-        let fail = |why: String| format!("bitmap texture {}: {why}", path.display());
-        let (width, height, texels) = match ext.as_str() {
-            "exr" => {
-                let image = crate::image::Image::read_exr(path).map_err(|e| fail(e.to_string()))?;
-                let texels = image.pixels.iter().map(|p| Vec3::from_array(*p)).collect();
-                (image.width, image.height, texels)
-            }
-            "png" | "jpg" | "jpeg" | "bmp" => {
-                let image = ::image::open(path).map_err(|e| fail(e.to_string()))?;
-                let rgb = image.to_rgb32f();
-                let decode = |x: f32| if raw { x } else { srgb_to_linear(x) };
-                let texels = rgb
-                    .pixels()
-                    .map(|p| Vec3::new(decode(p.0[0]), decode(p.0[1]), decode(p.0[2])))
-                    .collect();
-                (rgb.width(), rgb.height(), texels)
-            }
-            _ => {
-                return Err(fail(
-                    "unknown image format (supported: .png, .jpg, .jpeg, .bmp, .exr)".into(),
-                ));
-            }
-        };
-        if width == 0 || height == 0 {
-            return Err(fail("the image is empty".into()));
-        }
-        if width.max(height) > MAX_SIDE {
-            return Err(fail(format!(
-                "{width}x{height} texels: at most {MAX_SIDE} a side are supported"
-            )));
-        }
-        let texels: Vec<Vec3> = texels;
-        if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
-            return Err(fail(format!(
-                "texel ({}, {}) is not a finite number",
-                i as u32 % width,
-                i as u32 / width
-            )));
-        }
+        let (width, height, texels) =
+            read_image(path, raw).map_err(|e| format!("bitmap texture {e}"))?;
         Ok(Self {
             width,
             height,
@@ -284,6 +241,63 @@ impl Bitmap {
             source: path.to_path_buf(),
         })
     }
+}
+
+/// Reads an image as linear RGB texels, row by row from the top: OpenEXR and Radiance HDR as
+/// they are, PNG, JPEG and BMP (8 or 16 bits, grey or colour; alpha dropped) decoded from sRGB
+/// unless `raw`. Refuses empty images, images over [`MAX_SIDE`] a side and non-finite texels;
+/// the error begins with the file's name.
+pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let fail = |why: String| format!("{}: {why}", path.display());
+    let (width, height, texels): (u32, u32, Vec<Vec3>) = match ext.as_str() {
+        "exr" => {
+            let image = crate::image::Image::read_exr(path).map_err(|e| fail(e.to_string()))?;
+            let texels = image.pixels.iter().map(|p| Vec3::from_array(*p)).collect();
+            (image.width, image.height, texels)
+        }
+        "hdr" => {
+            let image = ::image::open(path).map_err(|e| fail(e.to_string()))?;
+            let rgb = image.to_rgb32f();
+            let texels = rgb.pixels().map(|p| Vec3::from_array(p.0)).collect();
+            (rgb.width(), rgb.height(), texels)
+        }
+        "png" | "jpg" | "jpeg" | "bmp" => {
+            let image = ::image::open(path).map_err(|e| fail(e.to_string()))?;
+            let rgb = image.to_rgb32f();
+            let decode = |x: f32| if raw { x } else { srgb_to_linear(x) };
+            let texels = rgb
+                .pixels()
+                .map(|p| Vec3::new(decode(p.0[0]), decode(p.0[1]), decode(p.0[2])))
+                .collect();
+            (rgb.width(), rgb.height(), texels)
+        }
+        _ => {
+            return Err(fail(
+                "unknown image format (supported: .png, .jpg, .jpeg, .bmp, .exr, .hdr)".into(),
+            ));
+        }
+    };
+    if width == 0 || height == 0 {
+        return Err(fail("the image is empty".into()));
+    }
+    if width.max(height) > MAX_SIDE {
+        return Err(fail(format!(
+            "{width}x{height} texels: at most {MAX_SIDE} a side are supported"
+        )));
+    }
+    if let Some(i) = texels.iter().position(|t| !t.is_finite()) {
+        return Err(fail(format!(
+            "texel ({}, {}) is not a finite number",
+            i as u32 % width,
+            i as u32 / width
+        )));
+    }
+    Ok((width, height, texels))
 }
 
 /// `GpuMaterial`'s texture fields when the parameter has none.

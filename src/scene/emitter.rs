@@ -1,0 +1,236 @@
+//! Lights that are not shapes, beside point lights: Mitsuba 3's `spot`, `directional`,
+//! `constant` and `envmap`, with what their GPU form needs (an environment map's texels and its
+//! sampling tables) and their analytic power (what photon emission must reproduce).
+
+use std::f32::consts::PI;
+use std::path::PathBuf;
+
+use glam::{Mat3, Vec2, Vec3};
+
+/// Mitsuba's `spot`: intensity `intensity` along its axis, full out to `beam_width` from it,
+/// falling linearly in angle to zero at `cutoff` (src/emitters/spot.cpp, `falloff_curve`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpotLight {
+    pub position: Vec3,
+    /// Unit direction the spot shines along (its local +z).
+    pub axis: Vec3,
+    /// W/sr per RGB channel on the axis.
+    pub intensity: Vec3,
+    /// Radians; `beam_width` <= `cutoff`.
+    pub cutoff: f32,
+    pub beam_width: f32,
+}
+
+impl SpotLight {
+    /// The falloff towards a direction at cosine `cos_theta` from the axis.
+    pub fn falloff(&self, cos_theta: f32) -> f32 {
+        if cos_theta <= self.cutoff.cos() {
+            return 0.0;
+        }
+        if cos_theta >= self.beam_width.cos() {
+            return 1.0;
+        }
+        ((self.cutoff - cos_theta.clamp(-1.0, 1.0).acos()) / (self.cutoff - self.beam_width))
+            .clamp(0.0, 1.0)
+    }
+
+    /// Emitted power: the integral of intensity x falloff over the sphere, in closed form,
+    /// 2 pi I [1 - (sin c - sin b) / (c - b)] for cutoff c > beam width b (2 pi I (1 - cos c)
+    /// when they are equal).
+    pub fn power(&self) -> Vec3 {
+        let (c, b) = (self.cutoff as f64, self.beam_width as f64);
+        let solid = if c - b > 1e-9 {
+            1.0 - (c.sin() - b.sin()) / (c - b)
+        } else {
+            1.0 - c.cos()
+        };
+        self.intensity * (2.0 * std::f64::consts::PI * solid) as f32
+    }
+}
+
+/// Mitsuba's `directional`: irradiance `irradiance` on a plane facing it, arriving along
+/// `direction` from infinitely far.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectionalLight {
+    /// Unit direction the light travels in.
+    pub direction: Vec3,
+    pub irradiance: Vec3,
+}
+
+/// The light arriving from infinitely far in every direction a ray escapes to.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Environment {
+    /// Mitsuba's `constant`: the same radiance from every direction.
+    Constant { radiance: Vec3 },
+    /// Mitsuba's `envmap`.
+    Map(EnvMap),
+}
+
+impl Environment {
+    /// Radiance arriving from world direction `dir` (unit, pointing away from the scene).
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Environment::Constant { radiance } => *radiance,
+            Environment::Map(map) => map.eval(dir),
+        }
+    }
+
+    /// The integral of radiance over all directions (W / m^2 / sr x sr per channel): the power
+    /// that crosses a disc of area A facing every direction in turn is A times this.
+    pub fn radiance_integral(&self) -> Vec3 {
+        match self {
+            Environment::Constant { radiance } => *radiance * (4.0 * PI),
+            Environment::Map(map) => map.radiance_integral(),
+        }
+    }
+}
+
+/// A latitude-longitude environment map in Mitsuba 3's conventions (src/emitters/envmap.cpp):
+/// a local direction d has u = atan2(d.x, -d.z) / 2 pi (texel centres, wrapping in u) and
+/// v = acos(d.y) / pi (rows at v = i / (H - 1), the first and last on the poles), radiance
+/// bilinear between the four nearest texels, times `scale` (already applied to `texels`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnvMap {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGB, row by row from the top (v = 0, local +y), scale applied.
+    pub texels: Vec<Vec3>,
+    /// Rotation from the map's local frame to the world.
+    pub to_world: Mat3,
+    pub source: PathBuf,
+}
+
+/// Mitsuba's luminance weights (Rec. 709), which it samples an environment map by.
+fn luminance(c: Vec3) -> f32 {
+    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
+}
+
+impl EnvMap {
+    fn texel(&self, x: i64, y: i64) -> Vec3 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let x = x.rem_euclid(w);
+        let y = y.clamp(0, h - 1);
+        self.texels[(y * w + x) as usize]
+    }
+
+    /// The map's (u, v) of a local direction.
+    pub fn uv(local: Vec3) -> Vec2 {
+        let u = local.x.atan2(-local.z) / (2.0 * PI);
+        let v = local.y.clamp(-1.0, 1.0).acos() / PI;
+        Vec2::new(u - u.floor(), v)
+    }
+
+    /// Bilinear radiance at (u, v): texel-centred in u, align-corners in v.
+    pub fn eval_uv(&self, uv: Vec2) -> Vec3 {
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y.clamp(0.0, 1.0) * (self.height - 1) as f32;
+        let (x0, y0) = (x.floor(), y.floor().min((self.height - 2) as f32));
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let top = self.texel(x0, y0).lerp(self.texel(x0 + 1, y0), fx);
+        let bottom = self.texel(x0, y0 + 1).lerp(self.texel(x0 + 1, y0 + 1), fx);
+        top.lerp(bottom, fy)
+    }
+
+    /// Radiance from world direction `dir`.
+    pub fn eval(&self, dir: Vec3) -> Vec3 {
+        self.eval_uv(Self::uv(self.to_world.transpose() * dir))
+    }
+
+    /// Sampling cells: the W x (H - 1) patches between texel centres, over which radiance is
+    /// bilinear. Each weighs the mean luminance of its corners times sin(theta) at its middle
+    /// row, so a cell with any light has a positive weight.
+    fn cell_weights(&self) -> Vec<f64> {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let mut weights = Vec::with_capacity((w * (h - 1)) as usize);
+        for y in 0..h - 1 {
+            let sin_theta = ((y as f64 + 0.5) / (h - 1) as f64 * std::f64::consts::PI).sin();
+            for x in 0..w {
+                let corners = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)];
+                let lum: f64 = corners
+                    .iter()
+                    .map(|&(cx, cy)| luminance(self.texel(cx, cy)).max(0.0) as f64)
+                    .sum::<f64>()
+                    / 4.0;
+                weights.push(lum * sin_theta);
+            }
+        }
+        weights
+    }
+
+    /// The integral of radiance over the sphere, by the midpoint rule on a grid four times
+    /// finer than the texels in each direction.
+    pub fn radiance_integral(&self) -> Vec3 {
+        let (nu, nv) = (self.width as usize * 4, (self.height as usize - 1) * 4);
+        let mut sum = glam::DVec3::ZERO;
+        for j in 0..nv {
+            let v = (j as f32 + 0.5) / nv as f32;
+            let sin_theta = (v * PI).sin() as f64;
+            for i in 0..nu {
+                let u = (i as f32 + 0.5) / nu as f32;
+                sum += self.eval_uv(Vec2::new(u, v)).as_dvec3() * sin_theta;
+            }
+        }
+        let cell = 2.0 * std::f64::consts::PI * std::f64::consts::PI / (nu * nv) as f64;
+        (sum * cell).as_vec3()
+    }
+
+    /// The map as the GPU reads it, appended to a table of f32 (see `gpu_table`'s layout in
+    /// shaders/common/environment.wgsl): returns its first index.
+    pub fn append_gpu_table(&self, table: &mut Vec<f32>) -> u32 {
+        let start = table.len() as u32;
+        let to_local = self.to_world.transpose();
+        // Rows of the world-to-local rotation.
+        for r in 0..3 {
+            table.extend(to_local.row(r).to_array());
+        }
+        table.extend([self.width as f32, self.height as f32, 0.0]);
+        for t in &self.texels {
+            table.extend(t.to_array());
+        }
+        let weights = self.cell_weights();
+        let w = self.width as usize;
+        let rows: Vec<f64> = weights.chunks(w).map(|r| r.iter().sum()).collect();
+        let total: f64 = rows.iter().sum();
+        // Marginal CDF over rows, then each row's conditional CDF, then each cell's probability.
+        let mut running = 0.0;
+        for r in &rows {
+            running += r;
+            table.push(if total > 0.0 {
+                (running / total) as f32
+            } else {
+                0.0
+            });
+        }
+        for (row, sum) in weights.chunks(w).zip(&rows) {
+            let mut running = 0.0;
+            for c in row {
+                running += c;
+                table.push(if *sum > 0.0 {
+                    (running / sum) as f32
+                } else {
+                    0.0
+                });
+            }
+        }
+        for c in &weights {
+            table.push(if total > 0.0 { (c / total) as f32 } else { 0.0 });
+        }
+        start
+    }
+}
+
+/// Lights beside shapes and point lights.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Emitters {
+    pub spots: Vec<SpotLight>,
+    pub directionals: Vec<DirectionalLight>,
+    /// At most one (Mitsuba allows one environment emitter).
+    pub environment: Option<Environment>,
+}
+
+impl Emitters {
+    pub fn is_empty(&self) -> bool {
+        self.spots.is_empty() && self.directionals.is_empty() && self.environment.is_none()
+    }
+}
