@@ -20,11 +20,12 @@ use hppm::scene::mitsuba;
 
 /// A Mitsuba scene from `body` with a 24x24 box-filtered camera at (0, 4, 4) looking at the
 /// origin, and `max_depth`.
-fn xml(body: &str, max_depth: u32) -> Scene {
+fn xml(body: &str, max_depth: i32) -> Scene {
     xml_seen_from("0, 4, 4", body, max_depth)
 }
 
-fn xml_seen_from(origin: &str, body: &str, max_depth: u32) -> Scene {
+/// `max_depth` -1 is unbounded (with Mitsuba's Russian roulette from depth 5).
+fn xml_seen_from(origin: &str, body: &str, max_depth: i32) -> Scene {
     let sensor = format!(
         r#"<sensor type="perspective">
     <float name="fov" value="40"/>
@@ -410,4 +411,140 @@ fn a_sphere_under_an_environment_map_has_the_quadrature_radiance() {
     );
     let worst = worst.0;
     assert!(worst < 0.05, "worst 4x4 block {:.3} off", worst);
+}
+
+/// `sun_sky_textured` (tests/refs: an HDR sky `envmap`, a `directional` sun, a checkerboard
+/// floor, rough plastic, Mitsuba's default Gaussian filter), from tests/refs/README.md.
+const SUN_SKY: common::convergence::MitsubaFigures = common::convergence::MitsubaFigures {
+    scene: "tests/refs/scenes/sun_sky_textured/scene.xml",
+    reference: "sun_sky_textured",
+    pixels_256: 0.00031,
+    blocks_256: 1.7e-5,
+    noise: 6.3e-7,
+};
+
+/// `hybrid` (which has nothing to photon-map here: no specular surface) at 32 spp within the
+/// bound scaled to 32 spp. Catches a sky turned or mirrored against Mitsuba's convention, a
+/// sun of the wrong strength or direction, a lost or doubled light, and a filter that is not
+/// Mitsuba's (a 10% energy loss fails the block metric several times over). Measured on
+/// lavapipe: 0.0029 and 1.3e-4 against bounds 0.0037 and 2.1e-4.
+#[test]
+fn sun_sky_textured_matches_mitsuba_at_32_spp() {
+    SUN_SKY.check("graphs/hybrid.ron", 32, 1);
+}
+
+/// The issue's acceptance figure: `pt` and `hybrid` at 256 spp within 1.5x Mitsuba's own
+/// 256-spp error plus twice the reference's noise, pixels and 8x8 blocks.
+#[test]
+#[ignore]
+fn sun_sky_textured_converges_to_mitsuba_at_256_spp() {
+    for graph in ["graphs/pt.ron", "graphs/hybrid.ron"] {
+        SUN_SKY.check(graph, 256, 0);
+    }
+}
+
+/// The mean of `image` over pixels whose primary ray (through the pixel centre) meets the
+/// floor y = 0 at x within `x_range`.
+fn floor_band_mean(scene: &Scene, image: &Image, x_range: (f32, f32)) -> Vec3 {
+    let (mut sum, mut n) = (Vec3::ZERO, 0);
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let (o, d) = camera_ray(scene, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            let p = o + d * (-o.y / d.y);
+            if p.x > x_range.0 && p.x < x_range.1 && p.z.abs() < 1.5 {
+                sum += Vec3::from_array(image.pixels[(y * image.width + x) as usize]);
+                n += 1;
+            }
+        }
+    }
+    assert!(n > 20, "only {n} pixels in the band {x_range:?}");
+    sum / n as f32
+}
+
+/// A sun at 45 degrees on a floor beside a vertical mirror (x = 1, one unit high, facing the
+/// sun), max_depth 3 so that the floor gets exactly its direct light and the mirror's caustic:
+/// the band x in (0, 1) has E cos 45 twice (the camera's NEE once, photons from the sun through
+/// the mirror once), the mirror's shadow (1, 2) nothing, the rest E cos 45, all times albedo /
+/// pi. Only photons can render the caustic of a delta light through a mirror. Catches distant
+/// photons that miss the specular surfaces (a disc in the wrong place or of the wrong size),
+/// flux per photon off by the disc's area, the caustic counted twice or not at all.
+#[test]
+fn a_suns_caustic_off_a_mirror_has_the_analytic_irradiance() {
+    let scene = xml_seen_from(
+        "0, 6, 0.01",
+        &format!(
+            r#"{}
+            <shape type="rectangle">
+                <transform name="to_world"><rotate y="1" angle="-90"/><scale x="1" y="0.5" z="2"/><translate x="1" y="0.5"/></transform>
+                <bsdf type="conductor"><string name="material" value="none"/></bsdf>
+            </shape>
+            <emitter type="directional"><vector name="direction" x="1" y="-1" z="0"/><rgb name="irradiance" value="1, 0.8, 0.6"/></emitter>"#,
+            floor(r#"<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>"#)
+        ),
+        3,
+    );
+    let direct =
+        Vec3::new(1.0, 0.8, 0.6) * (0.5 * std::f32::consts::FRAC_1_SQRT_2 / std::f32::consts::PI);
+    let image = render(&scene, "graphs/hybrid.ron", 512, 4);
+    // Bands a little inside their edges: the photon map's radius blurs the caustic's.
+    let bands = [
+        ((-1.7, -0.3), direct),
+        ((0.25, 0.75), 2.0 * direct),
+        ((1.3, 1.7), Vec3::ZERO),
+    ];
+    for (range, expected) in bands {
+        let got = floor_band_mean(&scene, &image, range);
+        eprintln!("band {range:?}: {got:?} against {expected:?}");
+        let off = ((got - expected).abs() / (expected + Vec3::splat(0.01))).max_element();
+        assert!(off < 0.02, "band {range:?}: {got:?} against {expected:?}");
+    }
+}
+
+/// A furnace under the sky: a white diffuse sphere (albedo 1) beside a glass sphere under a
+/// constant environment of radiance 1 is radiance 1 everywhere (nothing absorbs, every path
+/// ends in the sky), through every graph. The glass throws the sky's caustic onto the white
+/// sphere, which photons from the environment render in the photon-mapping graphs: a caustic
+/// counted twice or not at all, environment photons of the wrong flux, or escaping rays
+/// weighted wrongly against light sampling move the mean by more than the tolerance (the
+/// caustic is printed; the test requires it to be at least 2% of the image, four times the
+/// tolerance).
+#[test]
+fn spheres_under_a_constant_sky_are_a_furnace_through_every_graph() {
+    let scene = xml_seen_from(
+        "0, 0.5, 1.9",
+        r#"<shape type="sphere"><point name="center" x="-0.45" y="0" z="0"/><float name="radius" value="0.5"/>
+            <bsdf type="diffuse"><rgb name="reflectance" value="1"/></bsdf></shape>
+        <shape type="sphere"><point name="center" x="0.55" y="0" z="0.1"/><float name="radius" value="0.45"/>
+            <bsdf type="dielectric"><float name="int_ior" value="1.5"/></bsdf></shape>
+        <emitter type="constant"><rgb name="radiance" value="1"/></emitter>"#,
+        -1,
+    );
+    let gpu = gpu();
+    for graph in [
+        "graphs/pt.ron",
+        "graphs/hybrid.ron",
+        "graphs/hybrid_ppm.ron",
+        "graphs/hybrid_first_vertex.ron",
+        "graphs/ppm_only.ron",
+    ] {
+        let mut r = renderer(&gpu, &scene, load_graph(graph), 6);
+        let image = render_to(&mut r, 128);
+        let caustic = r
+            .aovs()
+            .expect("aovs")
+            .iter()
+            .find(|(s, _)| *s == "caustic")
+            .map_or(0.0, |(_, c)| c.mean()[0]);
+        let mean = image.mean();
+        eprintln!("{graph}: mean {mean:?}, caustic {caustic:.4}");
+        for c in mean {
+            assert!(
+                (c - 1.0).abs() < 0.005,
+                "{graph}: image mean {mean:?}, not 1"
+            );
+        }
+        if graph.contains("hybrid") {
+            assert!(caustic > 0.02, "{graph}: the caustic is only {caustic}");
+        }
+    }
 }

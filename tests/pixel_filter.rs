@@ -10,6 +10,7 @@ use common::*;
 use hppm::gpu::GpuContext;
 use hppm::gpu::binding::{Access, bind_buffers};
 use hppm::gpu::shaders::ShaderFile;
+use hppm::passes::rng::Stream;
 use hppm::scene::filter::PixelFilter;
 
 const SAMPLES: usize = 1 << 16;
@@ -265,6 +266,61 @@ fn filtered_edges_match_mitsubas_renders() {
                 (ours - theirs).abs() <= tolerance,
                 "{filter:?}, edge at {edge}: column {i} is {ours:.4}, Mitsuba's {theirs:.4} \
                  (tolerance {tolerance:.4})"
+            );
+        }
+    }
+}
+
+/// One iteration of the splatting camera (4 samples a pixel, Gaussian filter) against a CPU
+/// splat of the very same samples: the edge scene's radiance is 1 exactly where a sample's film
+/// x is past the edge, each sample's position comes from its random stream (the CPU mirror in
+/// src/passes/rng.rs), and each pixel is its neighbours' filter-weighted mean. Catches a
+/// sample splatted from the wrong place (another stream, a half-pixel shift), a wrong weight
+/// or reach, neighbours outside the film counted, and a pixel normalised by the wrong sum.
+#[test]
+fn one_splatting_iteration_matches_a_cpu_splat_of_the_same_samples() {
+    let (width, height, edge, spp) = (16u32, 8u32, 7.37f64, 4u32);
+    let xml = edge_scene(width, height, edge, r#"<rfilter type="gaussian"/>"#);
+    let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
+    let graph = hppm::graph::parse_graph(
+        Path::new("splat_pt.ron"),
+        r#"(version: 1, nodes: [(name: "camera", pass: "path_trace",
+            params: (samples_per_iteration: 4))], edges: [], output: "camera.radiance")"#,
+        hppm::passes::registry(),
+    )
+    .expect("graph");
+    let gpu = gpu();
+    let seed = 5;
+    let mut r = renderer(&gpu, &scene, graph, seed);
+    let image = render_to(&mut r, spp as u64);
+    let filter = scene.camera.filter;
+    let word = hppm::passes::rng::camera_seed(seed);
+    // Every sample's film position and radiance.
+    let mut samples = Vec::new();
+    for y in 0..height {
+        for x in 0..width {
+            for s in 0..spp {
+                let mut stream = Stream::new(y * width + x, s, word);
+                let (ux, uy) = (stream.next_f32(), stream.next_f32());
+                let (fx, fy) = (x as f64 + ux as f64, y as f64 + uy as f64);
+                samples.push((fx, fy, if fx >= edge { 1.0 } else { 0.0 }));
+            }
+        }
+    }
+    for y in 0..height {
+        for x in 0..width {
+            let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
+            let (mut sum, mut weight) = (0.0, 0.0);
+            for &(fx, fy, value) in &samples {
+                let w = filter.eval(fx - cx) * filter.eval(fy - cy);
+                sum += w * value;
+                weight += w;
+            }
+            let expected = sum / weight;
+            let got = image.pixels[(y * width + x) as usize][0] as f64;
+            assert!(
+                (got - expected).abs() < 1e-4,
+                "pixel ({x}, {y}): {got} against the CPU splat's {expected}"
             );
         }
     }

@@ -27,8 +27,13 @@ fn film_position(pixel: vec2<u32>, u: vec2<f32>) -> vec2<f32> {
 // Direction of a primary ray for a camera sample of `pixel` drawn from the uniform pair `u`
 // (see film_position). Row 0 is the top of the image.
 fn camera_direction(pixel: vec2<u32>, u: vec2<f32>) -> vec3<f32> {
+    return camera_direction_through(film_position(pixel, u));
+}
+
+// Direction of the primary ray through film position `position` (pixels from the top left).
+fn camera_direction_through(position: vec2<f32>) -> vec3<f32> {
     let size = vec2<f32>(f32(scene_info.width), f32(scene_info.height));
-    let film = film_position(pixel, u) / size;
+    let film = position / size;
     let x = (2.0 * film.x - 1.0) * scene_info.tan_half_x;
     let y = (1.0 - 2.0 * film.y) * scene_info.tan_half_y;
     return normalize(scene_info.camera_forward + x * scene_info.camera_right + y * scene_info.camera_up);

@@ -28,19 +28,30 @@ struct LightSample {
     valid: bool,
 }
 
-// Index of the light whose CDF interval contains u (binary search over inclusive prefix sums).
-fn pick_light(u: f32) -> u32 {
+// Index of the light whose interval of the CDF from `start` contains u (binary search over
+// inclusive prefix sums).
+fn pick_in_light_cdf(start: u32, u: f32) -> u32 {
     var lo = 0u;
     var hi = scene_info.num_lights - 1u;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if u < light_cdf[mid] {
+        if u < light_cdf[start + mid] {
             hi = mid;
         } else {
             lo = mid + 1u;
         }
     }
     return lo;
+}
+
+// A light for next-event estimation, with probability `select_prob`.
+fn pick_light(u: f32) -> u32 {
+    return pick_in_light_cdf(0u, u);
+}
+
+// A light to emit a photon from, with probability `emit_prob`.
+fn pick_emitting_light(u: f32) -> u32 {
+    return pick_in_light_cdf(scene_info.num_lights, u);
 }
 
 // A point on an area light with its front-facing normal and error bound.

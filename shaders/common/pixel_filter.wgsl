@@ -18,6 +18,21 @@ fn filter_radius(kind: u32, param: f32) -> f32 {
     return param;
 }
 
+// The 1D filter at `x` pixels from the centre, unnormalised, as Mitsuba defines it (the box
+// [-1/2, 1/2), the tent 1 - |x| / r, the Gaussian less its value at 4 stddev, clamped at 0):
+// the weight of a splatted sample.
+fn filter_weight(kind: u32, param: f32, x: f32) -> f32 {
+    if kind == FILTER_GAUSSIAN {
+        let r = 4.0 * param;
+        let k = -0.5 / (param * param);
+        return max(exp(k * x * x) - exp(k * r * r), 0.0);
+    }
+    if kind == FILTER_TENT {
+        return max(1.0 - abs(x) / param, 0.0);
+    }
+    return select(0.0, 1.0, x >= -0.5 && x < 0.5);
+}
+
 // erf by Abramowitz & Stegun 7.1.26 (absolute error below 1.5e-7).
 fn erf_approx(z: f32) -> f32 {
     let a = abs(z);

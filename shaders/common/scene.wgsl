@@ -140,6 +140,11 @@ struct Light {
     // Spot: cutoff angle and beam width, radians.
     cutoff: f32,
     beam_width: f32,
+    // Probability that a photon leaves this light (select_prob is NEE's).
+    emit_prob: f32,
+    pad_a: u32,
+    pad_b: u32,
+    pad_c: u32,
 }
 
 const MATERIAL_DIFFUSE: u32 = 0u;

@@ -10,12 +10,21 @@
 // specular vertices is kept; photons stop there (photon_trace.wgsl). Delta lobes (mirror,
 // dielectrics, smooth conductor, plastic's coating) are the specular vertices.
 // With `trace_beyond` 0 (photon mapping only) a path stops at its first photon-mapped vertex.
+//
+// With `splat` (a tent or Gaussian pixel filter, samples kept on the film) the pass filters as
+// Mitsuba's film does: a sample lands uniformly in its pixel and adds filter-weighted radiance
+// to every pixel within the filter's radius (entry point `splat`, run after `main`, gathers
+// each pixel's share from its neighbours' samples), each pixel the weighted mean. A sample that
+// records hit points keeps the filter-distributed position instead (the caustic's pixel filter
+// is the distribution of its hit points) and counts `fis_weight`, the weight a splatted sample
+// brings a pixel on average, so that both kinds of sample estimate the same filtered pixel.
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
 #import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin, shading_agrees}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
-#import common::camera::camera_direction
+#import common::camera::{camera_direction, camera_direction_through}
+#import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
 #import common::texture::textured_material
 #endif
@@ -45,8 +54,10 @@ struct PathTraceParams {
     trace_beyond: u32,
     // 1: look caustics up in the photon grid at diffuse vertices past the hit points.
     lookups: u32,
-    pad_a: u32,
-    pad_b: u32,
+    // 1: splat samples through the pixel filter (see the top of the file).
+    splat: u32,
+    // What a filter-distributed sample counts when splatting (1 otherwise).
+    fis_weight: f32,
     pad_c: u32,
 }
 
@@ -57,8 +68,15 @@ struct PhotonGridIn {
 
 @group(1) @binding(0) var<uniform> params: PathTraceParams;
 @group(1) @binding(1) var<storage, read_write> radiance: array<vec4<f32>>;
-// [rays low, rays high, discarded low, discarded high]: 64-bit totals from 32-bit atomics.
-@group(1) @binding(2) var<storage, read_write> counters: array<atomic<u32>, 4>;
+// The counters, [rays low, rays high, discarded low, discarded high] (64-bit totals from 32-bit
+// atomics), then this iteration's splatted samples (radiance, and 1 in w; 0 for a sample that
+// is not splatted or was dropped), samples_per_iteration per pixel.
+struct Film {
+    counters: array<atomic<u32>, 4>,
+    samples: array<vec4<f32>>,
+}
+
+@group(1) @binding(2) var<storage, read_write> film: Film;
 @group(1) @binding(3) var<storage, read_write> hit_points: HitPointBuffer;
 // The estimator's radii as of the previous iteration (0: none yet, take the rule's first).
 @group(1) @binding(4) var<storage, read> radii: RadiusBuffer;
@@ -76,9 +94,9 @@ fn add_u64(index: u32, value: u32) {
     if value == 0u {
         return;
     }
-    let old = atomicAdd(&counters[index], value);
+    let old = atomicAdd(&film.counters[index], value);
     if old > 0xffffffffu - value {
-        atomicAdd(&counters[index + 1u], 1u);
+        atomicAdd(&film.counters[index + 1u], 1u);
     }
 }
 
@@ -222,8 +240,19 @@ fn environment_emission(path: PathState) -> vec3<f32> {
 }
 #endif
 
-fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
-    var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
+// The primary ray of a sample: through a uniform point of the pixel when it is splatted, else
+// with the pixel filter's distribution. Always the stream's first two numbers (`splat` finds
+// the point again from them).
+fn primary_direction(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> vec3<f32> {
+    let u = rng_next_vec2(rng);
+    if splatted {
+        return camera_direction_through(vec2<f32>(pixel) + u);
+    }
+    return camera_direction(pixel, u);
+}
+
+fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+    var path = PathState(scene_info.camera_origin, primary_direction(pixel, splatted, rng), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
     var result = vec3<f32>(0.0);
     let max_depth = min(params.max_depth, SAFETY_MAX_DEPTH);
     // `depth` counts segments traced so far (Mitsuba's rule).
@@ -379,21 +408,34 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     var sum = vec3<f32>(0.0);
+    var weight = 0.0;
     var accepted = 0u;
     var rays = 0u;
-    for (var s = 0u; s < params.samples_per_iteration; s++) {
+    let spp = params.samples_per_iteration;
+    for (var s = 0u; s < spp; s++) {
         var rng = rng_stream(pixel_index, params.sample_base + s, params.seed);
         let sink = HitPointSink(pixel_index, recording && s == 0u);
-        let sample = trace_path(id.xy, sink, &rng, &rays);
+        let splatted = params.splat != 0u && !sink.enabled;
+        let sample = trace_path(id.xy, sink, splatted, &rng, &rays);
         // One NaN or Inf sample (or one that would overflow the sum) must not poison the
         // pixel: drop it and count it.
-        let next = sum + sample;
+        if splatted {
+            let keep = !any_not_finite(sample);
+            film.samples[pixel_index * spp + s] = select(vec4<f32>(0.0), vec4<f32>(sample, 1.0), keep);
+            accepted += u32(keep);
+            continue;
+        }
+        if params.splat != 0u {
+            film.samples[pixel_index * spp + s] = vec4<f32>(0.0);
+        }
+        let next = sum + sample * params.fis_weight;
         if !any_not_finite(next) {
             sum = next;
+            weight += params.fis_weight;
             accepted += 1u;
         }
     }
-    let total = radiance[pixel_index] + vec4<f32>(sum, f32(accepted));
+    let total = radiance[pixel_index] + vec4<f32>(sum, weight);
     if any_not_finite(total.xyz) {
         accepted = 0u;
     } else {
@@ -401,4 +443,46 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     add_u64(COUNTER_RAYS, rays);
     add_u64(COUNTER_DISCARDED, params.samples_per_iteration - accepted);
+}
+
+// Each pixel's share of this iteration's splatted samples within the filter's reach: the
+// filter's weight at the sample's offset from the pixel centre, separable in x and y.
+@compute @workgroup_size(8, 8, 1)
+fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= scene_info.width || id.y >= scene_info.height {
+        return;
+    }
+    let kind = scene_info.filter_kind;
+    let param = scene_info.filter_param;
+    let reach = i32(ceil(filter_radius(kind, param) - 0.5));
+    let size = vec2<i32>(i32(scene_info.width), i32(scene_info.height));
+    let center = vec2<f32>(id.xy) + 0.5;
+    let spp = params.samples_per_iteration;
+    var sum = vec3<f32>(0.0);
+    var weight = 0.0;
+    for (var dy = -reach; dy <= reach; dy++) {
+        for (var dx = -reach; dx <= reach; dx++) {
+            let q = vec2<i32>(id.xy) + vec2<i32>(dx, dy);
+            if any(q < vec2<i32>(0)) || any(q >= size) {
+                continue;
+            }
+            let q_index = u32(q.y) * scene_info.width + u32(q.x);
+            for (var s = 0u; s < spp; s++) {
+                let sample = film.samples[q_index * spp + s];
+                if sample.w == 0.0 {
+                    continue;
+                }
+                var rng = rng_stream(q_index, params.sample_base + s, params.seed);
+                let offset = vec2<f32>(q) + rng_next_vec2(&rng) - center;
+                let w = filter_weight(kind, param, offset.x) * filter_weight(kind, param, offset.y);
+                sum += w * sample.xyz;
+                weight += w;
+            }
+        }
+    }
+    let pixel_index = id.y * scene_info.width + id.x;
+    let total = radiance[pixel_index] + vec4<f32>(sum, weight);
+    if weight > 0.0 && !any_not_finite(total.xyz) {
+        radiance[pixel_index] = total;
+    }
 }

@@ -19,7 +19,7 @@
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
 #import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, shading_agrees, photon_shading_correction}
 #import common::material::material_sample
-#import common::lights::{pick_light, sample_area_light_point}
+#import common::lights::{pick_emitting_light, sample_area_light_point}
 #ifdef SPOT_LIGHTS
 #import common::lights::spot_falloff
 #endif
@@ -174,7 +174,7 @@ fn emit_point_photon(light: Light, u: vec2<f32>) -> Photon {
         photon.dir = sample_uniform_sphere(u);
     }
     // Intensity I over a solid angle with uniform density: I x solid angle per photon.
-    photon.flux = light.radiance * (solid_angle / light.select_prob);
+    photon.flux = light.radiance * (solid_angle / light.emit_prob);
 #ifdef SPOT_LIGHTS
     if light.kind == LIGHT_SPOT {
         photon.flux *= spot_falloff(light, dot(photon.dir, light.axis));
@@ -208,7 +208,7 @@ fn emit_distant_photon(light: Light, towards_light: vec3<f32>, radiance: vec3<f3
     let back = 1.01 * (length(center - scene_center) + scene_info.scene_radius) + radius;
     photon.origin = center + frame[0] * disc.x + frame[1] * disc.y + towards_light * back;
     photon.dir = -towards_light;
-    photon.flux = radiance * (PI * radius * radius / (pdf * light.select_prob));
+    photon.flux = radiance * (PI * radius * radius / (pdf * light.emit_prob));
     return photon;
 }
 
@@ -218,8 +218,8 @@ fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
     if scene_info.num_lights == 0u {
         return photon;
     }
-    let light = lights[pick_light(rng_next_f32(rng))];
-    if light.select_prob <= 0.0 {
+    let light = lights[pick_emitting_light(rng_next_f32(rng))];
+    if light.emit_prob <= 0.0 {
         return photon;
     }
     let u_position = rng_next_vec2(rng);
@@ -247,11 +247,11 @@ fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
         // part of the cone behind the light carries nothing.
         photon.dir = aim.dir;
         let cos_light = max(dot(aim.dir, point.normal), 0.0);
-        photon.flux = light.radiance * (cos_light * light.area * aim.solid_angle / light.select_prob);
+        photon.flux = light.radiance * (cos_light * light.area * aim.solid_angle / light.emit_prob);
     } else {
         // One-sided Lambertian emitter of radiance L and area A: power pi A L.
         photon.dir = sample_cosine_hemisphere(point.normal, u_direction);
-        photon.flux = light.radiance * (PI * light.area / light.select_prob);
+        photon.flux = light.radiance * (PI * light.area / light.emit_prob);
     }
     photon.origin = offset_ray_origin(point.position, point.error, point.normal, photon.dir);
     return normalised(photon);

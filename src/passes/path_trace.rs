@@ -24,6 +24,8 @@ use crate::passes::hit_points::{
 };
 use crate::passes::photon_grid::PHOTON_GRID;
 use crate::passes::{depth_rule, resolve_depths};
+use crate::scene::filter::{FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, PixelFilter};
+use crate::scene::gpu_layout::GpuSceneUniform;
 use crate::shader_file;
 
 const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/path_trace.wgsl");
@@ -162,11 +164,17 @@ struct GpuParams {
     record: u32,
     trace_beyond: u32,
     lookups: u32,
-    _pad: [u32; 3],
+    splat: u32,
+    fis_weight: f32,
+    _pad: u32,
 }
 
 struct Prepared {
     pipeline: wgpu::ComputePipeline,
+    /// The `splat` entry point, when the pixel filter is splatted.
+    splat: Option<wgpu::ComputePipeline>,
+    /// What a filter-distributed sample counts while splatting.
+    fis_weight: f32,
     scene: wgpu::BindGroup,
     bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
@@ -212,6 +220,31 @@ impl PathTrace {
     }
 }
 
+/// Whether samples are splatted through the pixel filter as Mitsuba's film does: for a tent or
+/// Gaussian filter with samples kept on the film. (With `sample_border` samples also land
+/// beyond the film, which no pixel's invocation traces: those filters keep their distributed
+/// sample positions.)
+fn splats(scene: &GpuSceneUniform) -> bool {
+    scene.filter_kind != FILTER_BOX && scene.sample_border == 0
+}
+
+/// The weight a splatted sample brings an interior pixel on average: the filter's integral over
+/// the plane (in pixels, separable), what a filter-distributed sample then counts.
+fn filter_weight_per_sample(scene: &GpuSceneUniform) -> f32 {
+    let filter = match scene.filter_kind {
+        FILTER_TENT => PixelFilter::Tent {
+            radius: scene.filter_param,
+        },
+        FILTER_GAUSSIAN => PixelFilter::Gaussian {
+            stddev: scene.filter_param,
+        },
+        _ => PixelFilter::Box,
+    };
+    let r = filter.radius() as f64;
+    let line = filter.integral(r) - filter.integral(-r);
+    (line * line) as f32
+}
+
 impl Pass for PathTrace {
     fn output_len(&self, _slot: &str, ctx: &PrepareCtx<'_>) -> Result<u64, Error> {
         let (_, _, merge_slots) = self.depths(ctx)?;
@@ -233,9 +266,19 @@ impl Pass for PathTrace {
             std::mem::size_of::<GpuParams>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
+        let splat = splats(&scene.uniform);
+        // The counters, then room for one iteration's splatted samples (16 bytes each).
+        let film_bytes = if splat {
+            ctx.pixels()
+                .checked_mul(self.params.samples_per_iteration as u64 * 16)
+                .and_then(|b| b.checked_add(16))
+                .ok_or_else(|| Error::Other("path_trace: the splat buffer overflows".into()))?
+        } else {
+            32
+        };
         let counters = gpu.create_buffer(
-            "path_trace counters",
-            16,
+            "path_trace counters and film samples",
+            film_bytes,
             wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
@@ -311,8 +354,20 @@ impl Pass for PathTrace {
         let pipeline =
             ctx.shaders
                 .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
+        let splat_pipeline = splat
+            .then(|| {
+                ctx.shaders
+                    .compute_pipeline(gpu, &SHADER, "splat", &[&scene.layout, &layout])
+            })
+            .transpose()?;
         self.prepared = Some(Prepared {
             pipeline,
+            splat: splat_pipeline,
+            fis_weight: if splat {
+                filter_weight_per_sample(&scene.uniform)
+            } else {
+                1.0
+            },
             scene: scene.bind_group.clone(),
             bind_group,
             params,
@@ -344,7 +399,9 @@ impl Pass for PathTrace {
             record: record as u32,
             trace_beyond: self.params.trace_beyond as u32,
             lookups: p.lookups as u32,
-            _pad: [0; 3],
+            splat: p.splat.is_some() as u32,
+            fis_weight: p.fis_weight,
+            _pad: 0,
         };
         ctx.gpu
             .queue
@@ -355,6 +412,14 @@ impl Pass for PathTrace {
             &[&p.scene, &p.bind_group],
             [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
         );
+        if let Some(splat) = &p.splat {
+            recorder.dispatch(
+                "path_trace splat",
+                splat,
+                &[&p.scene, &p.bind_group],
+                [p.width.div_ceil(WORKGROUP), p.height.div_ceil(WORKGROUP), 1],
+            );
+        }
         Ok(())
     }
 

@@ -40,7 +40,8 @@ pub const LAYOUTS: &[StructLayout] = &[
         diffuse_texture, specular_texture, alpha_u_texture, alpha_v_texture
     }),
     struct_layout!(GpuLight => "Light" in TRACER, {
-        position, kind, radiance, prim, axis, select_prob, area, table, cutoff, beam_width
+        position, kind, radiance, prim, axis, select_prob, area, table, cutoff, beam_width,
+        emit_prob
     }),
 ];
 

@@ -136,7 +136,8 @@ pub struct GpuLight {
     /// Spot lights: the unit axis they shine along. Directional lights: the unit direction
     /// the light travels in.
     pub axis: [f32; 3],
-    /// Probability that next-event estimation (and photon emission) picks this light.
+    /// Probability that next-event estimation picks this light: Mitsuba's rule, each emitter
+    /// (a shape, a point or distant light) alike, and within a shape its parts by power.
     pub select_prob: f32,
     /// Area lights: their area. Constant and map lights: the area of the disc their photons
     /// leave from (the scene's bounding sphere's cross-section).
@@ -146,6 +147,10 @@ pub struct GpuLight {
     /// Spot lights: cutoff angle and beam width in radians.
     pub cutoff: f32,
     pub beam_width: f32,
+    /// Probability that a photon leaves this light: its share of the scene's power, so that
+    /// photons carry equal flux.
+    pub emit_prob: f32,
+    pub _pad: [u32; 3],
 }
 
 /// Camera, bounds, counts and integrator settings: one uniform shared by every pass.
@@ -196,7 +201,8 @@ pub struct GpuScene {
     pub spheres: Vec<GpuSphere>,
     pub materials: Vec<GpuMaterial>,
     pub lights: Vec<GpuLight>,
-    /// Inclusive prefix sums of `select_prob`, searched to pick a light.
+    /// Inclusive prefix sums of `select_prob` (searched to pick a light for NEE), then of
+    /// `emit_prob` (to pick one for a photon): twice as many entries as lights.
     pub light_cdf: Vec<f32>,
     /// Tables BSDFs look up (rough plastic's transmittance), addressed by `GpuMaterial::table`.
     pub bsdf_tables: Vec<f32>,
@@ -330,9 +336,17 @@ fn gpu_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<f32>) {
     (materials, tables)
 }
 
-/// Lights with their unnormalised power (what NEE and photon emission pick in proportion to);
-/// an environment map's table is appended to `tables`.
-fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> {
+/// A light, its unnormalised power and the emitter it is part of.
+struct LightEntry {
+    light: GpuLight,
+    power: f32,
+    emitter: u64,
+}
+
+/// Lights with their power and emitter: emitting triangles of one material are one emitter
+/// (the Mitsuba loader gives every shape its own material), every other light its own. An
+/// environment map's table is appended to `tables`.
+fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<LightEntry> {
     let mut lights = Vec::new();
     let emission = |m: u32| {
         scene
@@ -345,14 +359,25 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> 
         radiance: radiance.to_array(),
         ..Zeroable::zeroed()
     };
-    let area_light = |kind, prim, radiance: Vec3, area: f32| {
+    // Emitters after the triangles' materials are numbered from here.
+    let mut next = scene.materials.len() as u64;
+    let mut own = move || {
+        next += 1;
+        next
+    };
+    let entry = |light, power, emitter| LightEntry {
+        light,
+        power,
+        emitter,
+    };
+    let area_light = |kind, prim, radiance: Vec3, area: f32, emitter| {
         let light = GpuLight {
             prim,
             area,
             ..light(kind, radiance)
         };
         // One-sided Lambertian emitter: power = pi * area * radiance.
-        (light, std::f32::consts::PI * area * mean(radiance))
+        entry(light, std::f32::consts::PI * area * mean(radiance), emitter)
     };
     for (i, t) in scene.triangles.iter().enumerate() {
         let radiance = emission(t.material);
@@ -361,14 +386,21 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> 
         let [a, b, c] = t.v.map(|v| v.as_dvec3());
         let area = (0.5 * (b - a).cross(c - a).length()) as f32;
         if radiance.max_element() > 0.0 && area > 0.0 {
-            lights.push(area_light(LIGHT_TRIANGLE, i as u32, radiance, area));
+            let emitter = t.material as u64;
+            lights.push(area_light(
+                LIGHT_TRIANGLE,
+                i as u32,
+                radiance,
+                area,
+                emitter,
+            ));
         }
     }
     for (i, s) in scene.spheres.iter().enumerate() {
         let radiance = emission(s.material);
         let area = 4.0 * std::f32::consts::PI * s.radius * s.radius;
         if radiance.max_element() > 0.0 && area > 0.0 {
-            lights.push(area_light(LIGHT_SPHERE, i as u32, radiance, area));
+            lights.push(area_light(LIGHT_SPHERE, i as u32, radiance, area, own()));
         }
     }
     for p in &scene.point_lights {
@@ -377,7 +409,8 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> 
                 position: p.position.to_array(),
                 ..light(LIGHT_POINT, p.intensity)
             };
-            lights.push((point, 4.0 * std::f32::consts::PI * mean(p.intensity)));
+            let power = 4.0 * std::f32::consts::PI * mean(p.intensity);
+            lights.push(entry(point, power, own()));
         }
     }
     for s in &scene.emitters.spots {
@@ -389,7 +422,7 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> 
                 beam_width: s.beam_width,
                 ..light(LIGHT_SPOT, s.intensity)
             };
-            lights.push((spot, mean(s.power())));
+            lights.push(entry(spot, mean(s.power()), own()));
         }
     }
     // Distant lights send their photons from a disc as large as the scene's bounding sphere:
@@ -403,7 +436,7 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> 
                 area: disc_area,
                 ..light(LIGHT_DIRECTIONAL, d.irradiance)
             };
-            lights.push((directional, disc_area * mean(d.irradiance)));
+            lights.push(entry(directional, disc_area * mean(d.irradiance), own()));
         }
     }
     if let Some(env) = &scene.emitters.environment {
@@ -416,37 +449,52 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<(GpuLight, f32)> 
             },
         };
         if power > 0.0 {
-            lights.push((
-                GpuLight {
-                    area: disc_area,
-                    ..environment
-                },
-                power,
-            ));
+            let environment = GpuLight {
+                area: disc_area,
+                ..environment
+            };
+            lights.push(entry(environment, power, own()));
         }
     }
     lights
 }
 
-/// Normalises light powers into selection probabilities and their CDF.
-fn normalise_lights(mut lights: Vec<(GpuLight, f32)>) -> (Vec<GpuLight>, Vec<f32>) {
-    let total: f64 = lights.iter().map(|(_, p)| *p as f64).sum();
-    let mut cdf = Vec::with_capacity(lights.len());
-    let mut running = 0.0f64;
-    for (light, power) in &mut lights {
-        let prob = if total > 0.0 {
-            *power as f64 / total
-        } else {
-            0.0
-        };
-        light.select_prob = prob as f32;
-        running += prob;
-        cdf.push(running as f32);
+/// Selection probabilities and their CDFs: for NEE each emitter with power alike and its
+/// parts by power (Mitsuba 3 picks emitters uniformly), for photons every light by power.
+fn normalise_lights(entries: Vec<LightEntry>) -> (Vec<GpuLight>, Vec<f32>) {
+    let total: f64 = entries.iter().map(|e| e.power as f64).sum();
+    let mut emitter_power: std::collections::HashMap<u64, f64> = Default::default();
+    for e in &entries {
+        *emitter_power.entry(e.emitter).or_default() += e.power as f64;
     }
-    if let Some(last) = cdf.last_mut() {
-        *last = 1.0;
+    let emitters = emitter_power.values().filter(|&&p| p > 0.0).count() as f64;
+    let mut lights: Vec<GpuLight> = Vec::with_capacity(entries.len());
+    for e in &entries {
+        let share = |part: f64, whole: f64| if whole > 0.0 { part / whole } else { 0.0 };
+        let of_emitter = share(e.power as f64, emitter_power[&e.emitter]);
+        lights.push(GpuLight {
+            select_prob: (share(1.0, emitters) * of_emitter) as f32,
+            emit_prob: share(e.power as f64, total) as f32,
+            ..e.light
+        });
     }
-    (lights.into_iter().map(|(l, _)| l).collect(), cdf)
+    let cdf = |prob: &dyn Fn(&GpuLight) -> f32| {
+        let mut running = 0.0f64;
+        let mut cdf: Vec<f32> = lights
+            .iter()
+            .map(|l| {
+                running += prob(l) as f64;
+                running as f32
+            })
+            .collect();
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
+        cdf
+    };
+    let mut cdfs = cdf(&|l| l.select_prob);
+    cdfs.extend(cdf(&|l| l.emit_prob));
+    (lights, cdfs)
 }
 
 fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {

@@ -76,5 +76,6 @@ pub fn render_to(renderer: &mut Renderer<'_>, spp: u64) -> Image {
 pub fn relmse(image: &Image, reference: &Image) -> f64 {
     image.relmse(reference).unwrap_or_else(|e| panic!("{e}"))
 }
+pub mod convergence;
 pub mod pass_harness;
 pub mod rng;
