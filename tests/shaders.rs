@@ -44,19 +44,51 @@ fn shader(path: &str) -> ShaderFile {
         .unwrap_or_else(|| panic!("no pass names {path}"))
 }
 
-/// Every subset of the scene defs with and without float atomics.
+/// The light defs, which guard light sampling and emission only: their sets below, against
+/// every subset of the other defs (every subset of all of them is 8x as many compositions).
+const LIGHT_DEFS: [&str; 4] = [
+    "POINT_LIGHTS",
+    "SPOT_LIGHTS",
+    "DIRECTIONAL_LIGHTS",
+    "ENVIRONMENT",
+];
+const LIGHT_SETS: [&[&str]; 6] = [
+    &[],
+    &["POINT_LIGHTS"],
+    &["POINT_LIGHTS", "SPOT_LIGHTS"],
+    &["DIRECTIONAL_LIGHTS"],
+    &["ENVIRONMENT"],
+    &LIGHT_DEFS,
+];
+
+/// Every subset of the scene defs other than the light defs, with each light set, with and
+/// without float atomics.
 fn every_def_combination() -> Vec<(bool, HashMap<String, naga_oil::compose::ShaderDefValue>)> {
-    let names = hppm::passes::SCENE_DEFS;
+    let names: Vec<&str> = hppm::passes::SCENE_DEFS
+        .iter()
+        .copied()
+        .filter(|n| !LIGHT_DEFS.contains(n))
+        .collect();
+    assert!(
+        LIGHT_DEFS
+            .iter()
+            .all(|d| hppm::passes::SCENE_DEFS.contains(d)),
+        "a light def is no longer a scene def"
+    );
     let mut out = Vec::new();
     for float_atomics in [true, false] {
         for mask in 0..(1u32 << names.len()) {
-            let defs = names
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| mask & (1 << i) != 0)
-                .map(|(_, n)| (n.to_string(), naga_oil::compose::ShaderDefValue::Bool(true)))
-                .collect();
-            out.push((float_atomics, defs));
+            for lights in LIGHT_SETS {
+                let defs = names
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| mask & (1 << i) != 0)
+                    .map(|(_, n)| *n)
+                    .chain(lights.iter().copied())
+                    .map(|n| (n.to_string(), naga_oil::compose::ShaderDefValue::Bool(true)))
+                    .collect();
+                out.push((float_atomics, defs));
+            }
         }
     }
     out
