@@ -8,13 +8,19 @@
 // Only Lambertian vertices are photon-mapped (a hit point's weight is albedo / pi): glossy and
 // plastic-base vertices are path traced (NEE with MIS), and emission reached from them through
 // specular vertices is kept; photons stop there (photon_trace.wgsl). Delta lobes (mirror,
-// dielectrics, smooth conductor, plastic's coating) are the specular vertices.
+// dielectrics, smooth conductor, plastic's coating) are the specular vertices, and with GLOSSY
+// (a `glossy_threshold` above 0) so are microfacet lobes smoother than the threshold: after a
+// photon-mapped vertex, their next-event estimation and the emission reached through them (and
+// further specular vertices) are left to photons, in the share `PathState.mapped`.
 // With `trace_beyond` 0 (photon mapping only) a path stops at its first photon-mapped vertex.
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
 #import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin, shading_agrees}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
+#ifdef GLOSSY
+#import common::material::{material_specular_eval, material_specular_share}
+#endif
 #import common::camera::camera_direction
 #ifdef TEXTURES
 #import common::texture::textured_material
@@ -42,7 +48,8 @@ struct PathTraceParams {
     trace_beyond: u32,
     // 1: look caustics up in the photon grid at diffuse vertices past the hit points.
     lookups: u32,
-    pad_a: u32,
+    // Microfacet lobes smoother than this are specular vertices (read with GLOSSY only).
+    glossy_threshold: f32,
     pad_b: u32,
     pad_c: u32,
 }
@@ -93,6 +100,13 @@ struct PathState {
     diffuse_vertices: u32,
     // Distance travelled from the camera, for the pixel footprint at a hit point.
     travelled: f32,
+    // GLOSSY only. Per channel, the share of the throughput whose light photon mapping carries
+    // if the path now meets it through specular lobes only: 1 from a photon-mapped vertex on,
+    // kept through specular lobes, cut to the coating's share at a rough plastic whose coating
+    // is specular, 0 after any other lobe.
+    mapped: vec3<f32>,
+    // GLOSSY only: the last vertex was not diffuse, so `mapped` applies to what is reached now.
+    after_specular: bool,
 }
 
 // Where the camera pass hands a sample over to photon mapping.
@@ -177,7 +191,8 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
 
 // Next-event estimation at a vertex with a non-Lambertian, non-delta lobe: the BSDF evaluated
 // towards one light sample, MIS-weighted against sampling the BSDF. `wi` is local, in `frame`.
-fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, wi: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+// With GLOSSY the `mapped` share of the specular lobes' part is left out (photons carry it).
+fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, wi: vec3<f32>, mapped: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
     let ls = sample_light(surface.position, u_pick, u);
@@ -188,7 +203,12 @@ fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, w
         return vec3<f32>(0.0);
     }
     let e = material_eval(material, wi, ls.dir * frame, true);
-    if max_component(e.value) <= 0.0 {
+#ifdef GLOSSY
+    let value = e.value - mapped * material_specular_eval(material, wi, ls.dir * frame, e, params.glossy_threshold);
+#else
+    let value = e.value;
+#endif
+    if max_component(value) <= 0.0 {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
@@ -199,11 +219,11 @@ fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, w
     if !ls.is_delta {
         weight = power_heuristic(ls.pdf, e.pdf);
     }
-    return e.value * ls.radiance * weight / ls.pdf;
+    return value * ls.radiance * weight / ls.pdf;
 }
 
 fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
-    var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
+    var path = PathState(scene_info.camera_origin, camera_direction(pixel, rng_next_vec2(rng)), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false);
     var result = vec3<f32>(0.0);
     let max_depth = min(params.max_depth, SAFETY_MAX_DEPTH);
     // `depth` counts segments traced so far (Mitsuba's rule).
@@ -219,6 +239,18 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
         var cos_o = dot(wo, surface.normal);
         path.travelled += hit.t;
 
+#ifdef GLOSSY
+        if surface.light != NO_LIGHT && cos_o > 0.0 {
+            // Reached through specular lobes only from a photon-mapped vertex, the `mapped` share
+            // is the photons'; the rest keeps its MIS weight (a glossy lobe's pdf, not delta's).
+            let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - path.mapped, path.after_specular);
+            var weight = 1.0;
+            if !path.after_delta {
+                weight = power_heuristic(path.bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
+            }
+            result += path.throughput * kept * material.emission * weight;
+        }
+#else
         if surface.light != NO_LIGHT && cos_o > 0.0 && !(path.after_delta && path.after_merge) {
             var weight = 1.0;
             if !path.after_delta {
@@ -226,6 +258,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             }
             result += path.throughput * material.emission * weight;
         }
+#endif
         // A twosided material's back is its own BSDF, seen with the normal flipped.
         if cos_o < 0.0 && material.back != NO_BACK {
             material = materials[material.back];
@@ -258,6 +291,10 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             // Past the hit points the photon grid adds the caustic, which the path then drops.
             let looked_up = params.lookups != 0u && !at_hit_point;
             path.after_merge = at_hit_point || looked_up;
+#ifdef GLOSSY
+            path.mapped = select(vec3<f32>(0.0), vec3<f32>(1.0), path.after_merge);
+            path.after_specular = false;
+#endif
             if looked_up {
                 result += path.throughput * material.albedo * INV_PI * caustic_irradiance(surface, depth);
             }
@@ -286,6 +323,9 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             }
             path.dir = reflect_about(wo, surface.shading_normal);
             path.after_delta = true;
+#ifdef GLOSSY
+            path.after_specular = true;
+#endif
             if !shading_agrees(surface, path.dir) {
                 break;
             }
@@ -301,6 +341,9 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             path.throughput *= s.weight;
             path.dir = s.dir;
             path.after_delta = true;
+#ifdef GLOSSY
+            path.after_specular = true;
+#endif
 #else
             break;
 #endif
@@ -313,7 +356,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             let frame = basis_from_normal(surface.shading_normal);
             let wi = wo * frame;
             if material_has_continuous_lobe(material.kind) {
-                result += path.throughput * direct_light_bsdf(surface, material, frame, wi, rng, rays);
+                result += path.throughput * direct_light_bsdf(surface, material, frame, wi, path.mapped, rng, rays);
             }
             let u1 = rng_next_f32(rng);
             let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
@@ -327,10 +370,18 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, rng: ptr<function, vec4<u32>
             path.throughput *= s.weight;
             path.after_delta = s.delta;
             if !s.delta {
-                // A path-traced vertex: what it reaches through specular vertices is ours.
                 path.bsdf_pdf = s.pdf;
+#ifndef GLOSSY
+                // A path-traced vertex: what it reaches through specular vertices is ours.
                 path.after_merge = false;
+#endif
             }
+#ifdef GLOSSY
+            // A specular lobe (delta or glossy) keeps the photons' share; any other lobe ends it.
+            path.mapped *= material_specular_share(material, wi, s, params.glossy_threshold);
+            path.after_merge = max_component(path.mapped) > 0.0;
+            path.after_specular = true;
+#endif
         }
         path.origin = spawn_origin(surface, path.dir);
         if max_component(path.throughput) <= 0.0 {

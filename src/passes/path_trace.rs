@@ -23,7 +23,7 @@ use crate::passes::hit_points::{
     DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, PHOTON_HITS, RadiusRule,
 };
 use crate::passes::photon_grid::PHOTON_GRID;
-use crate::passes::{depth_rule, resolve_depths};
+use crate::passes::{check_glossy_threshold, depth_rule, glossy_defs, resolve_depths};
 use crate::shader_file;
 
 const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/path_trace.wgsl");
@@ -43,7 +43,8 @@ static SLOTS: &[SlotDecl] = &[
 
 /// `GpuParams` against `PathTraceParams` in the shader.
 const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PathTraceParams" in SHADER, {
-    sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond, lookups
+    sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond, lookups,
+    glossy_threshold
 });
 
 pub const KIND: PassKind = PassKind {
@@ -70,6 +71,7 @@ fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
             "max_depth must be at least 1 (1: emitters seen directly)".into(),
         ));
     }
+    check_glossy_threshold(params.glossy_threshold)?;
     Ok(Box::new(PathTrace::new(params)))
 }
 
@@ -93,6 +95,11 @@ pub struct PathTraceParams {
     /// tracing adds only emission seen directly or through specular surfaces (photon mapping
     /// alone).
     pub trace_beyond: bool,
+    /// Microfacet lobes whose roughness (the larger of alpha_u and alpha_v, at the surface
+    /// point) is below this are specular vertices of the partition (design.md section 1): after
+    /// a photon-mapped vertex the light through them is left to photon mapping. Must equal the
+    /// photon pass's; 0 (the default): only delta lobes are specular.
+    pub glossy_threshold: f32,
 }
 
 impl Default for PathTraceParams {
@@ -103,6 +110,7 @@ impl Default for PathTraceParams {
             rr_depth: None,
             merge_depth: MergeDepth::Depth(1),
             trace_beyond: true,
+            glossy_threshold: 0.0,
         }
     }
 }
@@ -162,7 +170,8 @@ struct GpuParams {
     record: u32,
     trace_beyond: u32,
     lookups: u32,
-    _pad: [u32; 3],
+    glossy_threshold: f32,
+    _pad: [u32; 2],
 }
 
 struct Prepared {
@@ -308,9 +317,13 @@ impl Pass for PathTrace {
                 (Access::Read, photon_grid),
             ],
         );
-        let pipeline =
-            ctx.shaders
-                .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
+        let pipeline = ctx.shaders.compute_pipeline_with(
+            gpu,
+            &SHADER,
+            "main",
+            &[&scene.layout, &layout],
+            glossy_defs(self.params.glossy_threshold, scene),
+        )?;
         self.prepared = Some(Prepared {
             pipeline,
             scene: scene.bind_group.clone(),
@@ -344,7 +357,8 @@ impl Pass for PathTrace {
             record: record as u32,
             trace_beyond: self.params.trace_beyond as u32,
             lookups: p.lookups as u32,
-            _pad: [0; 3],
+            glossy_threshold: self.params.glossy_threshold,
+            _pad: [0; 2],
         };
         ctx.gpu
             .queue
@@ -377,10 +391,15 @@ impl Pass for PathTrace {
             (true, false) => UNMERGED,
         };
         let depth = depth_rule(self.params.max_depth);
+        // Which lobes are specular decides what the camera leaves to photons when it merges.
+        let source = |paths: u32| match merges && self.params.trace_beyond {
+            true => ctx.source_specular_below(paths, depth, self.params.glossy_threshold),
+            false => ctx.source(paths, depth),
+        };
         match ctx.inputs.get("photon_grid") {
             // The grid's photons add the deeper caustics the camera then drops.
-            Some(grid) => Some(ctx.source(paths & !DEEP_CAUSTIC, depth).and(grid)),
-            None => Some(ctx.source(paths, depth)),
+            Some(grid) => Some(source(paths & !DEEP_CAUSTIC).and(grid)),
+            None => Some(source(paths)),
         }
     }
 
