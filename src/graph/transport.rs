@@ -244,7 +244,9 @@ impl Walk<'_, '_> {
     fn specular_error(&mut self, node: usize, a: SpecularRule, b: SpecularRule) {
         let name = |rule: SpecularRule| &self.graph.nodes[rule.node].name;
         let message = format!(
-            "its inputs split paths at different glossy_threshold values (\"{}\": {}, \"{}\":              {}): a lobe with a roughness between them would be counted by both or by neither;              give both nodes the same glossy_threshold",
+            "its inputs split paths at different glossy_threshold values (\"{}\": {}, \"{}\": \
+             {}): a lobe with a roughness between them would be counted by both or by neither; \
+             give both nodes the same glossy_threshold",
             name(a),
             a.threshold,
             name(b),
