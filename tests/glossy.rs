@@ -391,3 +391,31 @@ fn caustic_photons_continue_through_a_glossy_mirror_with_its_albedo() {
         }
     }
 }
+
+/// The roughness an anisotropic lobe is judged by is the larger of its two alphas: a rough
+/// mirror with alpha_u 0.05 and alpha_v 0.3 (the same scene) is no specular vertex at
+/// `glossy_threshold` 0.2, whatever the photon's direction, and is one at 0.35.
+#[test]
+fn an_anisotropic_lobe_is_as_specular_as_its_larger_alpha() {
+    let gpu = gpu();
+    let defines = [("alpha_u", "0.05"), ("alpha_v", "0.3")].map(|(k, v)| (k.into(), v.into()));
+    let path = repo_path("tests/data/scenes/rough_mirror_over_floor.xml");
+    let scene = hppm::scene::load_with(&path, &defines).unwrap_or_else(|e| panic!("{e}"));
+    let params = |glossy_threshold: f32| PhotonTraceParams {
+        mode: PhotonMode::Caustic,
+        photons_per_iteration: Some(1 << 16),
+        glossy_threshold,
+        ..Default::default()
+    };
+    let (_, below) = caustic_flux(&gpu, &scene, params(0.2), 1);
+    let (flux, above) = caustic_flux(&gpu, &scene, params(0.35), 1);
+    eprintln!("threshold 0.2: {below} caustic photon hits; 0.35: {above} (flux {flux:?})");
+    assert_eq!(
+        below, 0,
+        "a lobe with alpha_v 0.3 counted as specular below 0.3"
+    );
+    assert!(
+        above > 1000,
+        "only {above} caustic photons above both alphas"
+    );
+}
