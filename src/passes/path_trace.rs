@@ -5,10 +5,10 @@
 //! each pixel's first sample become hit points for photon mapping, and the emission that photon
 //! mapping will add there (reached through specular vertices: delta lobes, and microfacet lobes
 //! smoother than `glossy_threshold`, of which rough plastic's coating only) is left out of
-//! `radiance`. Each
-//! hit point's radius comes from the estimator's `radii` (last iteration's), or from its radius
-//! rule while the estimator has none for that slot. When a consumer keeps the hit points (`ppm`),
-//! they are recorded in the first iteration only; later iterations only refresh their radii.
+//! `radiance`. Each hit point's radius comes from the estimator's `radii` (last iteration's), or
+//! from its radius rule while the estimator has none for that slot. When a consumer keeps the
+//! hit points (`ppm`), they are recorded in the first iteration only; later iterations only
+//! refresh their radii.
 
 use serde::Deserialize;
 
