@@ -12,7 +12,7 @@ import time
 import mitsuba as mi
 import numpy as np
 
-SPP_HALF = int(sys.argv[1]) if len(sys.argv) > 1 else 65536
+SPP_HALF = int(sys.argv[1]) if len(sys.argv) > 1 else 262144
 # Dr.Jit's wavefront holds every sample of a render at once: render in chunks.
 CHUNK = 8192
 
