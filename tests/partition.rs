@@ -57,6 +57,12 @@ fn the_bundled_graphs_count_every_path_once() {
         "graphs/hybrid_grid.ron",
         "graphs/hybrid_first_vertex.ron",
         "graphs/ppm_only.ron",
+        "graphs/hybrid_glossy.ron",
+        "graphs/glossy/hybrid_t0.02.ron",
+        "graphs/glossy/hybrid_t0.05.ron",
+        "graphs/glossy/hybrid_t0.1.ron",
+        "graphs/glossy/hybrid_t0.2.ron",
+        "graphs/glossy/hybrid_t0.3.ron",
     ] {
         check(graph, &[]).unwrap_or_else(|e| panic!("{graph}: {e}"));
     }
@@ -207,6 +213,104 @@ fn camera_and_photon_depths_must_agree() {
         ],
     )
     .unwrap_or_else(|e| panic!("equal depths must pass: {e}"));
+}
+
+/// Camera and photon passes that call different microfacet lobes specular (`glossy_threshold`):
+/// the light through a lobe whose roughness lies between the two thresholds would be path
+/// traced by the camera and deposited by the photons (counted twice), or left to photons by the
+/// camera and stopped by them (counted by neither). Refused where the two meet, naming both
+/// nodes and their values: at the camera when the photon grid brings it the photons' rule, at
+/// the resolve node without a grid.
+#[test]
+fn camera_and_photon_glossy_thresholds_must_agree() {
+    refused(
+        "graphs/hybrid.ron",
+        &[(
+            "params: (merge_depth: 1)",
+            "params: (merge_depth: 1, glossy_threshold: 0.1)",
+        )],
+        9,
+        &[
+            "different glossy_threshold",
+            "\"camera\": 0.1",
+            "\"photons\": 0",
+            "same glossy_threshold",
+        ],
+    );
+    refused(
+        "graphs/hybrid_first_vertex.ron",
+        &[(
+            "params: (mode: Caustic)",
+            "params: (mode: Caustic, glossy_threshold: 0.2)",
+        )],
+        11,
+        &[
+            "different glossy_threshold",
+            "\"camera\": 0",
+            "\"photons\": 0.2",
+        ],
+    );
+    refused(
+        "graphs/hybrid_glossy.ron",
+        &[(
+            "params: (mode: Caustic, glossy_threshold: 0.1)",
+            "params: (mode: Caustic, glossy_threshold: 0.05)",
+        )],
+        8,
+        &[
+            "different glossy_threshold",
+            "\"camera\": 0.1",
+            "\"photons\": 0.05",
+        ],
+    );
+    check(
+        "graphs/hybrid_first_vertex.ron",
+        &[
+            (
+                "params: (mode: Caustic)",
+                "params: (mode: Caustic, glossy_threshold: 0.2)",
+            ),
+            (
+                "params: (merge_depth: 1)",
+                "params: (merge_depth: 1, glossy_threshold: 0.2)",
+            ),
+        ],
+    )
+    .unwrap_or_else(|e| panic!("equal thresholds must pass: {e}"));
+    // Photon mapping alone splits nothing at glossy lobes (its photons deposit at every diffuse
+    // vertex, its camera stops at the first): a threshold there is no conflict.
+    check(
+        "graphs/ppm_only.ron",
+        &[("mode: All", "mode: All, glossy_threshold: 0.3")],
+    )
+    .unwrap_or_else(|e| panic!("ppm_only with a photon threshold must pass: {e}"));
+}
+
+/// A `glossy_threshold` that is no roughness is refused where it is written.
+#[test]
+fn a_glossy_threshold_must_be_a_roughness() {
+    for (from, to) in [
+        (
+            "params: (merge_depth: 1)",
+            "params: (merge_depth: 1, glossy_threshold: -0.1)",
+        ),
+        (
+            "params: (mode: Caustic)",
+            "params: (mode: Caustic, glossy_threshold: inf)",
+        ),
+        (
+            "params: (mode: Caustic)",
+            "params: (mode: Caustic, glossy_threshold: NaN)",
+        ),
+    ] {
+        let errors = check("graphs/hybrid.ron", &[(from, to)]).err();
+        let text = errors.map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            text.contains("glossy_threshold is a roughness"),
+            "{to}: {text}"
+        );
+        assert!(text.contains("hybrid.ron:"), "{text}");
+    }
 }
 
 /// Params that would render nothing or never end are refused where they are written.

@@ -119,6 +119,34 @@ fn every_pass_shader_composes_and_validates() {
     }
 }
 
+/// The passes' own defs (`GLOSSY`) on top of no scene def, every scene def, and each one alone:
+/// the glossy-caustic code composes with whatever the scene compiles in or out.
+#[test]
+fn every_pass_shader_composes_with_its_own_defs() {
+    let names = hppm::passes::SCENE_DEFS;
+    let mut sets: Vec<Vec<&str>> = vec![Vec::new(), names.to_vec()];
+    sets.extend(names.iter().map(|n| vec![*n]));
+    for float_atomics in [true, false] {
+        for set in &sets {
+            let lib = library_with(
+                float_atomics,
+                hppm::gpu::shaders::defs_of(set.iter().copied()),
+            );
+            for file in pass_shaders() {
+                let module = lib
+                    .compose_with(&file, hppm::passes::PASS_DEFS)
+                    .unwrap_or_else(|e| panic!("{} with {set:?} + GLOSSY: {e}", file.path));
+                naga::valid::Validator::new(
+                    naga::valid::ValidationFlags::all(),
+                    naga::valid::Capabilities::all(),
+                )
+                .validate(&module)
+                .unwrap_or_else(|e| panic!("{}: {e:?}", file.path));
+            }
+        }
+    }
+}
+
 /// naga_oil decorates imported names (`Triangle` becomes `TriangleX_naga_oil_mod_...`).
 fn struct_size(module: &naga::Module, name: &str) -> Option<u32> {
     let mut layouter = naga::proc::Layouter::default();

@@ -12,7 +12,7 @@
 #import common::conductor::{conductor_sample, rough_conductor_eval, rough_conductor_sample}
 #endif
 #ifdef PLASTIC
-#import common::plastic::{plastic_eval, plastic_sample, rough_plastic_eval, rough_plastic_sample}
+#import common::plastic::{plastic_eval, plastic_sample, rough_plastic_eval, rough_plastic_eval_parts, rough_plastic_sample}
 #endif
 #ifdef ROUGH_DIELECTRIC
 #import common::rough_dielectric::{rough_dielectric_eval, rough_dielectric_sample}
@@ -75,3 +75,46 @@ fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance:
 #endif
     return no_sample();
 }
+
+#ifdef GLOSSY
+// The light-transport partition's specular lobes (design.md section 1): every delta lobe, and a
+// microfacet lobe whose roughness at the surface point (the larger of alpha_u and alpha_v,
+// after textures) is below the graph's `glossy_threshold`. Rough plastic's base never is.
+fn microfacet_is_specular(m: Material, threshold: f32) -> bool {
+    return max(m.alpha_u, m.alpha_v) < threshold;
+}
+
+// Of `full` (material_eval towards wo), the f |cos wo| of the specular lobes.
+fn material_specular_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, full: BsdfEval, threshold: f32) -> vec3<f32> {
+    if (m.kind == MATERIAL_ROUGH_CONDUCTOR || m.kind == MATERIAL_ROUGH_DIELECTRIC) && microfacet_is_specular(m, threshold) {
+        return full.value;
+    }
+#ifdef PLASTIC
+    if m.kind == MATERIAL_ROUGH_PLASTIC && microfacet_is_specular(m, threshold) {
+        return rough_plastic_eval_parts(m, wi, wo).coating;
+    }
+#endif
+    return vec3<f32>(0.0);
+}
+
+// Per channel, the share of a sample's weight that went through specular lobes: 1 for a delta
+// lobe or a specular microfacet kind, the coating's share of f for rough plastic (its weight is
+// f / pdf with both lobes in f and pdf, so weight x share is the coating's f over the same pdf),
+// 0 otherwise.
+fn material_specular_share(m: Material, wi: vec3<f32>, s: BsdfSample, threshold: f32) -> vec3<f32> {
+    if s.delta {
+        return vec3<f32>(1.0);
+    }
+    if (m.kind == MATERIAL_ROUGH_CONDUCTOR || m.kind == MATERIAL_ROUGH_DIELECTRIC) && microfacet_is_specular(m, threshold) {
+        return vec3<f32>(1.0);
+    }
+#ifdef PLASTIC
+    if m.kind == MATERIAL_ROUGH_PLASTIC && microfacet_is_specular(m, threshold) {
+        let parts = rough_plastic_eval_parts(m, wi, s.wo);
+        let total = parts.coating + parts.base;
+        return select(vec3<f32>(0.0), parts.coating / total, total > vec3<f32>(0.0));
+    }
+#endif
+    return vec3<f32>(0.0);
+}
+#endif

@@ -69,9 +69,22 @@ fn plastic_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>) -> BsdfSam
     return BsdfSample(wo, e.value / e.pdf, e.pdf, false, true);
 }
 
+// Rough plastic's f |cos wo| split by lobe (the glossy-caustic partition drops the coating's
+// part alone), and the pdf of sampling wo with both.
+struct RoughPlasticParts {
+    coating: vec3<f32>,
+    base: vec3<f32>,
+    pdf: f32,
+}
+
 fn rough_plastic_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
+    let parts = rough_plastic_eval_parts(m, wi, wo);
+    return BsdfEval(parts.coating + parts.base, parts.pdf);
+}
+
+fn rough_plastic_eval_parts(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> RoughPlasticParts {
     if wi.z <= 0.0 || wo.z <= 0.0 {
-        return BsdfEval(vec3<f32>(0.0), 0.0);
+        return RoughPlasticParts(vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
     }
     let mf = plastic_microfacet(m);
     let eta = m.int_ior / m.ext_ior;
@@ -82,10 +95,11 @@ fn rough_plastic_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
     let f = fresnel_full(dot(wi, h), eta).f;
     let ti = transmittance_at(m, wi.z);
     let to = transmittance_at(m, wo.z);
-    let value = m.specular * (f * d * g / (4.0 * wi.z)) + diffuse_under_coating(m) * (INV_PI / (eta * eta) * wo.z * ti * to);
+    let coating = m.specular * (f * d * g / (4.0 * wi.z));
+    let base = diffuse_under_coating(m) * (INV_PI / (eta * eta) * wo.z * ti * to);
     let prob_diffuse = plastic_diffuse_prob(1.0 - ti, m.specular_weight);
     let pdf = (1.0 - prob_diffuse) * d * g1_i / (4.0 * wi.z) + prob_diffuse * wo.z * INV_PI;
-    return BsdfEval(value, pdf);
+    return RoughPlasticParts(coating, base, pdf);
 }
 
 fn rough_plastic_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>) -> BsdfSample {

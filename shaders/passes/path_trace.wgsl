@@ -8,7 +8,10 @@
 // Only Lambertian vertices are photon-mapped (a hit point's weight is albedo / pi): glossy and
 // plastic-base vertices are path traced (NEE with MIS), and emission reached from them through
 // specular vertices is kept; photons stop there (photon_trace.wgsl). Delta lobes (mirror,
-// dielectrics, smooth conductor, plastic's coating) are the specular vertices.
+// dielectrics, smooth conductor, plastic's coating) are the specular vertices, and with GLOSSY
+// (a `glossy_threshold` above 0) so are microfacet lobes smoother than the threshold: after a
+// photon-mapped vertex, their next-event estimation and the emission reached through them (and
+// further specular vertices) are left to photons, in the share `PathState.mapped`.
 // With `trace_beyond` 0 (photon mapping only) a path stops at its first photon-mapped vertex.
 //
 // With `splat` (a tent or Gaussian pixel filter, samples kept on the film) the pass filters as
@@ -23,6 +26,9 @@
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
 #import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin, shading_agrees}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
+#ifdef GLOSSY
+#import common::material::{material_specular_eval, material_specular_share}
+#endif
 #import common::camera::{camera_direction, camera_direction_through}
 #import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
@@ -58,7 +64,8 @@ struct PathTraceParams {
     splat: u32,
     // What a filter-distributed sample counts when splatting (1 otherwise).
     fis_weight: f32,
-    pad_c: u32,
+    // Microfacet lobes smoother than this are specular vertices (read with GLOSSY only).
+    glossy_threshold: f32,
 }
 
 struct PhotonGridIn {
@@ -114,6 +121,13 @@ struct PathState {
     diffuse_vertices: u32,
     // Distance travelled from the camera, for the pixel footprint at a hit point.
     travelled: f32,
+    // GLOSSY only. Per channel, the share of the throughput whose light photon mapping carries
+    // if the path now meets it through specular lobes only: 1 from a photon-mapped vertex on,
+    // kept through specular lobes, cut to the coating's share at a rough plastic whose coating
+    // is specular, 0 after any other lobe.
+    mapped: vec3<f32>,
+    // GLOSSY only: the last vertex was not diffuse, so `mapped` applies to what is reached now.
+    after_specular: bool,
 }
 
 // Where the camera pass hands a sample over to photon mapping.
@@ -198,7 +212,8 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
 
 // Next-event estimation at a vertex with a non-Lambertian, non-delta lobe: the BSDF evaluated
 // towards one light sample, MIS-weighted against sampling the BSDF. `wi` is local, in `frame`.
-fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, wi: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+// With GLOSSY the `mapped` share of the specular lobes' part is left out (photons carry it).
+fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, wi: vec3<f32>, mapped: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
     let ls = sample_light(surface.position, u_pick, u);
@@ -209,7 +224,12 @@ fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, w
         return vec3<f32>(0.0);
     }
     let e = material_eval(material, wi, ls.dir * frame, true);
-    if max_component(e.value) <= 0.0 {
+#ifdef GLOSSY
+    let value = e.value - mapped * material_specular_eval(material, wi, ls.dir * frame, e, params.glossy_threshold);
+#else
+    let value = e.value;
+#endif
+    if max_component(value) <= 0.0 {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
@@ -220,23 +240,32 @@ fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, w
     if !ls.is_delta {
         weight = power_heuristic(ls.pdf, e.pdf);
     }
-    return e.value * ls.radiance * weight / ls.pdf;
+    return value * ls.radiance * weight / ls.pdf;
 }
 
 #ifdef ENVIRONMENT
 // The environment seen by a path that escapes, under the same rules as an area light's
 // emission: dropped when photon mapping counts it (reached from a photon-mapped vertex through
-// specular ones), MIS-weighted against light sampling after a non-delta vertex.
+// specular ones; with GLOSSY, the share photons carry), MIS-weighted against light sampling
+// after a non-delta vertex.
 fn environment_emission(path: PathState) -> vec3<f32> {
-    if scene_info.environment == NO_LIGHT || (path.after_delta && path.after_merge) {
+    if scene_info.environment == NO_LIGHT {
         return vec3<f32>(0.0);
     }
+#ifdef GLOSSY
+    let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - path.mapped, path.after_specular);
+#else
+    if path.after_delta && path.after_merge {
+        return vec3<f32>(0.0);
+    }
+    let kept = vec3<f32>(1.0);
+#endif
     let seen = escaped(path.dir);
     var weight = 1.0;
     if !path.after_delta {
         weight = power_heuristic(path.bsdf_pdf, seen.pdf);
     }
-    return seen.radiance * weight;
+    return kept * seen.radiance * weight;
 }
 #endif
 
@@ -252,7 +281,7 @@ fn primary_direction(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u
 }
 
 fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
-    var path = PathState(scene_info.camera_origin, primary_direction(pixel, splatted, rng), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0);
+    var path = PathState(scene_info.camera_origin, primary_direction(pixel, splatted, rng), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false);
     var result = vec3<f32>(0.0);
     let max_depth = min(params.max_depth, SAFETY_MAX_DEPTH);
     // `depth` counts segments traced so far (Mitsuba's rule).
@@ -271,6 +300,18 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<fun
         var cos_o = dot(wo, surface.normal);
         path.travelled += hit.t;
 
+#ifdef GLOSSY
+        if surface.light != NO_LIGHT && cos_o > 0.0 {
+            // Reached through specular lobes only from a photon-mapped vertex, the `mapped` share
+            // is the photons'; the rest keeps its MIS weight (a glossy lobe's pdf, not delta's).
+            let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - path.mapped, path.after_specular);
+            var weight = 1.0;
+            if !path.after_delta {
+                weight = power_heuristic(path.bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
+            }
+            result += path.throughput * kept * material.emission * weight;
+        }
+#else
         if surface.light != NO_LIGHT && cos_o > 0.0 && !(path.after_delta && path.after_merge) {
             var weight = 1.0;
             if !path.after_delta {
@@ -278,6 +319,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<fun
             }
             result += path.throughput * material.emission * weight;
         }
+#endif
         // A twosided material's back is its own BSDF, seen with the normal flipped.
         if cos_o < 0.0 && material.back != NO_BACK {
             material = materials[material.back];
@@ -310,6 +352,10 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<fun
             // Past the hit points the photon grid adds the caustic, which the path then drops.
             let looked_up = params.lookups != 0u && !at_hit_point;
             path.after_merge = at_hit_point || looked_up;
+#ifdef GLOSSY
+            path.mapped = select(vec3<f32>(0.0), vec3<f32>(1.0), path.after_merge);
+            path.after_specular = false;
+#endif
             if looked_up {
                 result += path.throughput * material.albedo * INV_PI * caustic_irradiance(surface, depth);
             }
@@ -338,6 +384,9 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<fun
             }
             path.dir = reflect_about(wo, surface.shading_normal);
             path.after_delta = true;
+#ifdef GLOSSY
+            path.after_specular = true;
+#endif
             if !shading_agrees(surface, path.dir) {
                 break;
             }
@@ -353,6 +402,9 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<fun
             path.throughput *= s.weight;
             path.dir = s.dir;
             path.after_delta = true;
+#ifdef GLOSSY
+            path.after_specular = true;
+#endif
 #else
             break;
 #endif
@@ -365,7 +417,7 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<fun
             let frame = basis_from_normal(surface.shading_normal);
             let wi = wo * frame;
             if material_has_continuous_lobe(material.kind) {
-                result += path.throughput * direct_light_bsdf(surface, material, frame, wi, rng, rays);
+                result += path.throughput * direct_light_bsdf(surface, material, frame, wi, path.mapped, rng, rays);
             }
             let u1 = rng_next_f32(rng);
             let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
@@ -379,10 +431,18 @@ fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<fun
             path.throughput *= s.weight;
             path.after_delta = s.delta;
             if !s.delta {
-                // A path-traced vertex: what it reaches through specular vertices is ours.
                 path.bsdf_pdf = s.pdf;
+#ifndef GLOSSY
+                // A path-traced vertex: what it reaches through specular vertices is ours.
                 path.after_merge = false;
+#endif
             }
+#ifdef GLOSSY
+            // A specular lobe (delta or glossy) keeps the photons' share; any other lobe ends it.
+            path.mapped *= material_specular_share(material, wi, s, params.glossy_threshold);
+            path.after_merge = max_component(path.mapped) > 0.0;
+            path.after_specular = true;
+#endif
         }
         path.origin = spawn_origin(surface, path.dir);
         if max_component(path.throughput) <= 0.0 {

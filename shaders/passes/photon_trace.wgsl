@@ -8,7 +8,11 @@
 // diffuse vertex and continues (photon mapping alone). Only Lambertian vertices take deposits
 // (the camera's hit points are Lambertian); at a vertex whose sampled lobe is glossy (or
 // plastic's base) a caustic photon stops, because the camera path traces that vertex, and a
-// photon in mode ALL scatters on without depositing. Delta lobes are specular vertices.
+// photon in mode ALL scatters on without depositing. Delta lobes are specular vertices, and
+// with GLOSSY (a `glossy_threshold` above 0) microfacet lobes smoother than the threshold: a
+// caustic photon continues through them carrying the specular lobes' share of its flux (all of
+// it for rough conductors and dielectrics, the coating's for rough plastic), as the camera pass
+// leaves exactly that share to it.
 //
 // With `aim` (caustic mode only) photons leave only in directions that meet the sphere around
 // every specular surface (Jensen's projection maps, reduced to one sphere): a photon sent
@@ -19,6 +23,9 @@
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
 #import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, shading_agrees, photon_shading_correction}
 #import common::material::material_sample
+#ifdef GLOSSY
+#import common::material::material_specular_share
+#endif
 #import common::lights::{pick_emitting_light, sample_area_light_point}
 #ifdef SPOT_LIGHTS
 #import common::lights::spot_falloff
@@ -48,9 +55,13 @@ struct PhotonParams {
     groups_per_row: u32,
     // 1: aim caustic photons at the specular surfaces' bounding sphere.
     aim: u32,
-    pad_a: u32,
+    // Microfacet lobes smoother than this are specular vertices (read with GLOSSY only).
+    glossy_threshold: f32,
     pad_b: u32,
     pad_c: u32,
+    // The sphere `aim` aims at: around the specular surfaces (and the glossy ones with GLOSSY).
+    aim_center: vec3<f32>,
+    aim_radius: f32,
 }
 
 @group(1) @binding(0) var<uniform> params: PhotonParams;
@@ -114,11 +125,11 @@ struct Aim {
 fn aim_at_specular(origin: vec3<f32>, u: vec2<f32>) -> Aim {
     var aim: Aim;
     aim.valid = false;
-    let radius = scene_info.specular_radius;
+    let radius = params.aim_radius;
     if params.aim == 0u || params.mode != MODE_CAUSTIC || radius <= 0.0 {
         return aim;
     }
-    let to_center = scene_info.specular_center - origin;
+    let to_center = params.aim_center - origin;
     let d2 = dot(to_center, to_center);
     let r2 = radius * radius;
     if d2 <= r2 {
@@ -194,9 +205,9 @@ fn emit_distant_photon(light: Light, towards_light: vec3<f32>, radiance: vec3<f3
     let scene_center = 0.5 * (scene_info.bounds_min + scene_info.bounds_max);
     var center = scene_center;
     var radius = scene_info.scene_radius;
-    if params.aim != 0u && params.mode == MODE_CAUSTIC && scene_info.specular_radius > 0.0 {
-        center = scene_info.specular_center;
-        radius = scene_info.specular_radius;
+    if params.aim != 0u && params.mode == MODE_CAUSTIC && params.aim_radius > 0.0 {
+        center = params.aim_center;
+        radius = params.aim_radius;
     }
     if !(radius > 0.0) || !(pdf > 0.0) {
         photon.flux = vec3<f32>(0.0);
@@ -358,15 +369,30 @@ fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
             if !s.valid {
                 break;
             }
+#ifdef GLOSSY
+            var share = vec3<f32>(1.0);
+            if params.mode == MODE_CAUSTIC {
+                share = material_specular_share(material, wi * frame, s, params.glossy_threshold);
+                if max_component(share) <= 0.0 {
+                    break;
+                }
+            }
+#else
             if !s.delta && params.mode == MODE_CAUSTIC {
                 break;
             }
+#endif
             photon.dir = normalize(frame * s.wo);
             if !shading_agrees(surface, photon.dir) {
                 break;
             }
             photon.flux *= s.weight * photon_shading_correction(surface, wi, photon.dir);
+#ifdef GLOSSY
+            photon.flux *= share;
+            after_specular = s.delta || params.mode == MODE_CAUSTIC;
+#else
             after_specular = s.delta;
+#endif
         }
         photon.origin = spawn_origin(surface, photon.dir);
         if segments >= params.rr_depth {

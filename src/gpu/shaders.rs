@@ -111,8 +111,29 @@ impl ShaderLibrary {
         self.compose_source(file.path, &file.text()?)
     }
 
+    /// Composes `file` with `extra` defs set on top of the library's (a pass's own, from its
+    /// params); the modules it imports see them too.
+    pub fn compose_with(
+        &self,
+        file: &ShaderFile,
+        extra: &[&str],
+    ) -> Result<naga::Module, GpuError> {
+        self.compose_source_with(file.path, &file.text()?, extra)
+    }
+
     /// Composes an entry file given as text; `path` names it in error messages.
     pub fn compose_source(&self, path: &str, source: &str) -> Result<naga::Module, GpuError> {
+        self.compose_source_with(path, source, &[])
+    }
+
+    fn compose_source_with(
+        &self,
+        path: &str,
+        source: &str,
+        extra: &[&str],
+    ) -> Result<naga::Module, GpuError> {
+        let mut defs = self.defs.clone();
+        defs.extend(defs_of(extra.iter().copied()));
         let mut composer = self
             .composer
             .lock()
@@ -121,7 +142,7 @@ impl ShaderLibrary {
             .make_naga_module(NagaModuleDescriptor {
                 source,
                 file_path: path,
-                shader_defs: self.defs.clone(),
+                shader_defs: defs,
                 ..Default::default()
             })
             .map_err(|e| GpuError::Shader(e.emit_to_string(&composer)))
@@ -135,7 +156,20 @@ impl ShaderLibrary {
         entry: &str,
         layouts: &[&wgpu::BindGroupLayout],
     ) -> Result<wgpu::ComputePipeline, GpuError> {
-        let module = self.compose(file)?;
+        self.compute_pipeline_with(gpu, file, entry, layouts, &[])
+    }
+
+    /// As [`ShaderLibrary::compute_pipeline`], composed with `extra` defs (see
+    /// [`ShaderLibrary::compose_with`]).
+    pub fn compute_pipeline_with(
+        &self,
+        gpu: &GpuContext,
+        file: &ShaderFile,
+        entry: &str,
+        layouts: &[&wgpu::BindGroupLayout],
+        extra: &[&str],
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        let module = self.compose_with(file, extra)?;
         let shader = gpu
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {

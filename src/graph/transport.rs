@@ -4,7 +4,8 @@
 //! their inputs carry; a node that says nothing carries the union of its inputs. The graph
 //! then follows the classes from the sources to its output and refuses a node where two inputs
 //! carry the same class (that light would be counted twice), an output that lacks a class
-//! (counted by nobody), and sources that count paths to different depths.
+//! (counted by nobody), and sources that count paths to different depths or draw the line
+//! between specular and diffuse lobes at different roughnesses.
 
 use std::collections::{HashMap, HashSet};
 
@@ -31,15 +32,45 @@ impl std::fmt::Display for Depth {
     }
 }
 
+/// The roughness below which a source counts a microfacet lobe as specular (`glossy_threshold`,
+/// design.md section 1), and the node that says so. Sources that split paths into classes at
+/// specular vertices must agree on it: a lobe one of them calls specular and the other not is
+/// counted by both or by neither.
+#[derive(Debug, Clone, Copy)]
+pub struct SpecularRule {
+    pub threshold: f32,
+    node: usize,
+}
+
+impl PartialEq for SpecularRule {
+    fn eq(&self, other: &Self) -> bool {
+        self.threshold.to_bits() == other.threshold.to_bits() && self.node == other.node
+    }
+}
+
+impl Eq for SpecularRule {}
+
+impl SpecularRule {
+    fn agrees(&self, other: &SpecularRule) -> bool {
+        self.threshold.to_bits() == other.threshold.to_bits()
+    }
+}
+
 /// Which path classes a slot carries, to what depth, and which node counts each class.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Transport {
     pub paths: u32,
     pub depth: Depth,
+    /// Where the sources draw the line between specular and glossy lobes; `None` when no source
+    /// draws one (a pass-through, or a source whose classes do not depend on it).
+    pub specular: Option<SpecularRule>,
     /// (classes, node) for every source that contributes.
     sources: Vec<(u32, usize)>,
     /// Classes that [`Transport::and`] found on both sides: counted twice.
     twice: u32,
+    /// Two specular rules that [`Transport::and`] found on its two sides, disagreeing (reported
+    /// at the node that declared it, not passed on).
+    specular_conflict: Option<(SpecularRule, SpecularRule)>,
 }
 
 impl Transport {
@@ -48,8 +79,10 @@ impl Transport {
         Self {
             paths: 0,
             depth: Depth::Any,
+            specular: None,
             sources: Vec::new(),
             twice: 0,
+            specular_conflict: None,
         }
     }
 
@@ -66,8 +99,10 @@ impl Transport {
         Self {
             paths: rename(self.paths),
             depth: self.depth,
+            specular: self.specular,
             sources: self.sources.iter().map(|&(p, n)| (rename(p), n)).collect(),
             twice: self.twice,
+            specular_conflict: self.specular_conflict,
         }
     }
 
@@ -79,6 +114,13 @@ impl Transport {
         self.sources.extend(other.sources.iter().copied());
         if self.depth == Depth::Any {
             self.depth = other.depth;
+        }
+        match (self.specular, other.specular) {
+            (None, theirs) => self.specular = theirs,
+            (Some(ours), Some(theirs)) if !ours.agrees(&theirs) => {
+                self.specular_conflict = Some((ours, theirs));
+            }
+            _ => {}
         }
         self
     }
@@ -100,9 +142,22 @@ impl TransportCtx<'_> {
         Transport {
             paths,
             depth,
+            specular: None,
             sources: vec![(paths, self.node)],
             twice: 0,
+            specular_conflict: None,
         }
+    }
+
+    /// As [`TransportCtx::source`], for a source whose classes count microfacet lobes below
+    /// `threshold` as specular.
+    pub fn source_specular_below(&self, paths: u32, depth: Depth, threshold: f32) -> Transport {
+        let mut t = self.source(paths, depth);
+        t.specular = Some(SpecularRule {
+            threshold,
+            node: self.node,
+        });
+        t
     }
 }
 
@@ -173,10 +228,31 @@ impl Walk<'_, '_> {
                     a
                 }
             };
+            match (total.specular, t.specular) {
+                (None, theirs) => total.specular = theirs,
+                (Some(ours), Some(theirs)) if !ours.agrees(&theirs) => {
+                    self.specular_error(node, ours, theirs);
+                }
+                _ => {}
+            }
             total.paths |= t.paths;
             total.sources.extend(t.sources);
         }
         total
+    }
+
+    fn specular_error(&mut self, node: usize, a: SpecularRule, b: SpecularRule) {
+        let name = |rule: SpecularRule| &self.graph.nodes[rule.node].name;
+        let message = format!(
+            "its inputs split paths at different glossy_threshold values (\"{}\": {}, \"{}\": \
+             {}): a lobe with a roughness between them would be counted by both or by neither; \
+             give both nodes the same glossy_threshold",
+            name(a),
+            a.threshold,
+            name(b),
+            b.threshold
+        );
+        self.error(node, message);
     }
 
     fn error(&mut self, node: usize, message: String) {
@@ -216,6 +292,9 @@ impl Walk<'_, '_> {
             Some(t) => t,
             None => self.union(node, inputs),
         };
+        if let Some((a, b)) = t.specular_conflict {
+            self.specular_error(node, a, b);
+        }
         if t.twice != 0 {
             let by = self.node_names(&t.sources, t.twice);
             self.error(

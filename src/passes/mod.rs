@@ -104,6 +104,11 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
     defs_of(present.iter().filter(|(_, on)| *on).map(|(name, _)| *name))
 }
 
+/// Shader defs a pass sets for itself from its params (on top of the scene's): `GLOSSY` compiles
+/// in the glossy-caustic partition of `path_trace` and `photon_trace` (a `glossy_threshold`
+/// above 0 on a scene with microfacet lobes).
+pub const PASS_DEFS: &[&str] = &["GLOSSY"];
+
 /// Every scene def set: kernels composed this way contain all the code there is.
 pub fn all_scene_defs() -> HashMap<String, ShaderDefValue> {
     defs_of(SCENE_DEFS.iter().copied())
@@ -150,6 +155,27 @@ pub mod paths {
     };
 }
 
+/// Checks a `glossy_threshold` param: a roughness (alpha), finite and not negative.
+pub(crate) fn check_glossy_threshold(threshold: f32) -> Result<(), ron::error::SpannedError> {
+    if threshold.is_finite() && threshold >= 0.0 {
+        return Ok(());
+    }
+    Err(crate::graph::pass::params_error(format!(
+        "glossy_threshold is a roughness (alpha) of 0 or more, got {threshold} (0: only delta \
+         lobes are specular)"
+    )))
+}
+
+/// Whether a pass with `glossy_threshold` needs the glossy code (`GLOSSY`) on this scene: only
+/// where some lobe could fall below the threshold.
+pub(crate) fn glossy_defs(threshold: f32, scene: &SceneResources) -> &'static [&'static str] {
+    if threshold > 0.0 && scene.microfacet_lobes {
+        PASS_DEFS
+    } else {
+        &[]
+    }
+}
+
 /// A path-length rule as the partition check compares them.
 pub(crate) fn depth_rule(max_depth: Option<u32>) -> crate::graph::transport::Depth {
     use crate::graph::transport::Depth;
@@ -163,10 +189,19 @@ pub const SPECULAR_SURFACE: SceneNeed = SceneNeed {
     description: "specular (delta: mirror, smooth dielectric or conductor, plastic) surface",
 };
 
+/// A surface with a delta or a microfacet lobe: with a `glossy_threshold`, a glossy lobe can make
+/// a caustic too.
+pub const SPECULAR_OR_GLOSSY_SURFACE: SceneNeed = SceneNeed {
+    name: "specular_or_glossy_surface",
+    description: "specular (delta) or glossy (microfacet: rough conductor, dielectric, plastic) \
+                  surface",
+};
+
 /// Whether a scene with `features` meets `need` (pruning asks).
 pub fn scene_meets(features: &SceneFeatures, need: &SceneNeed) -> bool {
     match need.name {
         "specular_surface" => features.has_specular_surface(),
+        "specular_or_glossy_surface" => features.has_specular_or_glossy_surface(),
         // A need no pass declares here is one no scene can be said to meet.
         _ => false,
     }

@@ -3,10 +3,12 @@
 //!
 //! When its `hit_points` output feeds another node, the first `merge_depth` diffuse vertices of
 //! each pixel's first sample become hit points for photon mapping, and the emission that photon
-//! mapping will add there (reached through specular vertices) is left out of `radiance`. Each
-//! hit point's radius comes from the estimator's `radii` (last iteration's), or from its radius
-//! rule while the estimator has none for that slot. When a consumer keeps the hit points (`ppm`),
-//! they are recorded in the first iteration only; later iterations only refresh their radii.
+//! mapping will add there (reached through specular vertices: delta lobes, and microfacet lobes
+//! smoother than `glossy_threshold`, of which rough plastic's coating only) is left out of
+//! `radiance`. Each hit point's radius comes from the estimator's `radii` (last iteration's), or
+//! from its radius rule while the estimator has none for that slot. When a consumer keeps the
+//! hit points (`ppm`), they are recorded in the first iteration only; later iterations only
+//! refresh their radii.
 
 use serde::Deserialize;
 
@@ -23,7 +25,7 @@ use crate::passes::hit_points::{
     DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, PHOTON_HITS, RadiusRule,
 };
 use crate::passes::photon_grid::PHOTON_GRID;
-use crate::passes::{depth_rule, resolve_depths};
+use crate::passes::{check_glossy_threshold, depth_rule, glossy_defs, resolve_depths};
 use crate::scene::filter::{FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, PixelFilter};
 use crate::scene::gpu_layout::GpuSceneUniform;
 use crate::shader_file;
@@ -45,7 +47,8 @@ static SLOTS: &[SlotDecl] = &[
 
 /// `GpuParams` against `PathTraceParams` in the shader.
 const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PathTraceParams" in SHADER, {
-    sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond, lookups
+    sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond, lookups,
+    glossy_threshold
 });
 
 pub const KIND: PassKind = PassKind {
@@ -72,6 +75,7 @@ fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
             "max_depth must be at least 1 (1: emitters seen directly)".into(),
         ));
     }
+    check_glossy_threshold(params.glossy_threshold)?;
     Ok(Box::new(PathTrace::new(params)))
 }
 
@@ -95,6 +99,11 @@ pub struct PathTraceParams {
     /// tracing adds only emission seen directly or through specular surfaces (photon mapping
     /// alone).
     pub trace_beyond: bool,
+    /// Microfacet lobes whose roughness (the larger of alpha_u and alpha_v, at the surface
+    /// point) is below this are specular vertices of the partition (design.md section 1): after
+    /// a photon-mapped vertex the light through them is left to photon mapping. Must equal the
+    /// photon pass's; 0 (the default): only delta lobes are specular.
+    pub glossy_threshold: f32,
 }
 
 impl Default for PathTraceParams {
@@ -105,6 +114,7 @@ impl Default for PathTraceParams {
             rr_depth: None,
             merge_depth: MergeDepth::Depth(1),
             trace_beyond: true,
+            glossy_threshold: 0.0,
         }
     }
 }
@@ -166,7 +176,7 @@ struct GpuParams {
     lookups: u32,
     splat: u32,
     fis_weight: f32,
-    _pad: u32,
+    glossy_threshold: f32,
 }
 
 struct Prepared {
@@ -351,13 +361,23 @@ impl Pass for PathTrace {
                 (Access::Read, photon_grid),
             ],
         );
-        let pipeline =
-            ctx.shaders
-                .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
+        let defs = glossy_defs(self.params.glossy_threshold, scene);
+        let pipeline = ctx.shaders.compute_pipeline_with(
+            gpu,
+            &SHADER,
+            "main",
+            &[&scene.layout, &layout],
+            defs,
+        )?;
         let splat_pipeline = splat
             .then(|| {
-                ctx.shaders
-                    .compute_pipeline(gpu, &SHADER, "splat", &[&scene.layout, &layout])
+                ctx.shaders.compute_pipeline_with(
+                    gpu,
+                    &SHADER,
+                    "splat",
+                    &[&scene.layout, &layout],
+                    defs,
+                )
             })
             .transpose()?;
         self.prepared = Some(Prepared {
@@ -401,7 +421,7 @@ impl Pass for PathTrace {
             lookups: p.lookups as u32,
             splat: p.splat.is_some() as u32,
             fis_weight: p.fis_weight,
-            _pad: 0,
+            glossy_threshold: self.params.glossy_threshold,
         };
         ctx.gpu
             .queue
@@ -442,10 +462,15 @@ impl Pass for PathTrace {
             (true, false) => UNMERGED,
         };
         let depth = depth_rule(self.params.max_depth);
+        // Which lobes are specular decides what the camera leaves to photons when it merges.
+        let source = |paths: u32| match merges && self.params.trace_beyond {
+            true => ctx.source_specular_below(paths, depth, self.params.glossy_threshold),
+            false => ctx.source(paths, depth),
+        };
         match ctx.inputs.get("photon_grid") {
             // The grid's photons add the deeper caustics the camera then drops.
-            Some(grid) => Some(ctx.source(paths & !DEEP_CAUSTIC, depth).and(grid)),
-            None => Some(ctx.source(paths, depth)),
+            Some(grid) => Some(source(paths & !DEEP_CAUSTIC).and(grid)),
+            None => Some(source(paths)),
         }
     }
 

@@ -14,7 +14,10 @@ use crate::graph::pass::{
 };
 use crate::graph::transport::{Transport, TransportCtx};
 use crate::passes::hit_points::PHOTON_HITS;
-use crate::passes::{SPECULAR_SURFACE, SceneResources, depth_rule, resolve_depths};
+use crate::passes::{
+    SPECULAR_OR_GLOSSY_SURFACE, SPECULAR_SURFACE, SceneResources, check_glossy_threshold,
+    depth_rule, glossy_defs, resolve_depths,
+};
 use crate::shader_file;
 
 const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/photon_trace.wgsl");
@@ -35,7 +38,8 @@ static SLOTS: &[SlotDecl] = &[SlotDecl::output("photon_hits", PHOTON_HITS, Size:
 
 /// `GpuParams` against `PhotonParams` in the shader.
 const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PhotonParams" in SHADER, {
-    photons, seed, iteration, mode, max_depth, rr_depth, flux_scale, groups_per_row, aim
+    photons, seed, iteration, mode, max_depth, rr_depth, flux_scale, groups_per_row, aim,
+    glossy_threshold, aim_center, aim_radius
 });
 
 pub const KIND: PassKind = PassKind {
@@ -57,6 +61,7 @@ fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
     if params.max_depth == Some(0) {
         return Err(params_error("max_depth must be at least 1".into()));
     }
+    check_glossy_threshold(params.glossy_threshold)?;
     Ok(Box::new(PhotonTrace::new(params)))
 }
 
@@ -82,6 +87,11 @@ pub struct PhotonTraceParams {
     /// Caustic mode: emit only towards the sphere around the specular surfaces (unbiased: other
     /// photons could not become caustic photons). `false` emits over the whole emission lobe.
     pub aim: bool,
+    /// Caustic mode: microfacet lobes whose roughness (the larger of alpha_u and alpha_v, at
+    /// the surface point) is below this are specular vertices, through which caustic photons
+    /// continue (design.md section 1). Must equal the camera pass's; 0 (the default): only
+    /// delta lobes.
+    pub glossy_threshold: f32,
 }
 
 impl Default for PhotonTraceParams {
@@ -92,6 +102,7 @@ impl Default for PhotonTraceParams {
             max_depth: None,
             rr_depth: None,
             aim: true,
+            glossy_threshold: 0.0,
         }
     }
 }
@@ -108,7 +119,10 @@ struct GpuParams {
     flux_scale: f32,
     groups_per_row: u32,
     aim: u32,
-    _pad: [u32; 3],
+    glossy_threshold: f32,
+    _pad: [u32; 2],
+    aim_center: [f32; 3],
+    aim_radius: f32,
 }
 
 struct Prepared {
@@ -121,6 +135,9 @@ struct Prepared {
     photons: u32,
     max_depth: u32,
     rr_depth: u32,
+    /// The sphere photons aim at (centre, radius): around the specular surfaces, and the glossy
+    /// ones too when they can be specular vertices.
+    aim_sphere: [f32; 4],
 }
 
 pub struct PhotonTrace {
@@ -203,9 +220,21 @@ impl Pass for PhotonTrace {
                 (Access::ReadWrite, &emitted),
             ],
         );
-        let pipeline =
-            ctx.shaders
-                .compute_pipeline(gpu, &SHADER, "main", &[&scene.layout, &layout])?;
+        let glossy = glossy_defs(self.params.glossy_threshold, scene);
+        let pipeline = ctx.shaders.compute_pipeline_with(
+            gpu,
+            &SHADER,
+            "main",
+            &[&scene.layout, &layout],
+            glossy,
+        )?;
+        let aim_sphere = if glossy.is_empty() {
+            let [x, y, z] = scene.uniform.specular_center;
+            [x, y, z, scene.uniform.specular_radius]
+        } else {
+            // Conservative: every microfacet surface, whatever its roughness.
+            scene.glossy_sphere
+        };
         let (max_depth, rr_depth) =
             resolve_depths(self.params.max_depth, self.params.rr_depth, &scene.uniform);
         self.prepared = Some(Prepared {
@@ -218,6 +247,7 @@ impl Pass for PhotonTrace {
             photons,
             max_depth,
             rr_depth,
+            aim_sphere,
         });
         Ok(())
     }
@@ -241,7 +271,10 @@ impl Pass for PhotonTrace {
             flux_scale: (1.0 / p.photons.max(1) as f64) as f32,
             groups_per_row,
             aim: self.params.aim as u32,
-            _pad: [0; 3],
+            glossy_threshold: self.params.glossy_threshold,
+            _pad: [0; 2],
+            aim_center: [p.aim_sphere[0], p.aim_sphere[1], p.aim_sphere[2]],
+            aim_radius: p.aim_sphere[3],
         };
         ctx.gpu
             .queue
@@ -260,6 +293,9 @@ impl Pass for PhotonTrace {
     fn needs(&self) -> &'static [SceneNeed] {
         match self.params.mode {
             // Without a specular surface no photon is ever deposited.
+            PhotonMode::Caustic if self.params.glossy_threshold > 0.0 => {
+                &[SPECULAR_OR_GLOSSY_SURFACE]
+            }
             PhotonMode::Caustic => &[SPECULAR_SURFACE],
             PhotonMode::All => &[],
         }
@@ -272,7 +308,14 @@ impl Pass for PhotonTrace {
             // Everything that reaches a hit point, deeper caustics included.
             PhotonMode::All => DIRECT | CAUSTIC | INDIRECT | DEEP_CAUSTIC,
         };
-        Some(ctx.source(paths, depth_rule(self.params.max_depth)))
+        let depth = depth_rule(self.params.max_depth);
+        Some(match self.params.mode {
+            // Which lobes are specular decides which photons are caustic photons.
+            PhotonMode::Caustic => {
+                ctx.source_specular_below(paths, depth, self.params.glossy_threshold)
+            }
+            PhotonMode::All => ctx.source(paths, depth),
+        })
     }
 
     fn photons_per_iteration(&self) -> u64 {

@@ -49,6 +49,10 @@ pub struct SceneResources {
     pub layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
     pub uniform: GpuSceneUniform,
+    /// [`GpuScene::glossy_sphere`]: what caustic photons aim at when glossy lobes are specular.
+    pub glossy_sphere: [f32; 4],
+    /// Some shape's BSDF has a microfacet lobe.
+    pub microfacet_lobes: bool,
     _buffers: Vec<wgpu::Buffer>,
 }
 
@@ -105,6 +109,8 @@ impl SceneResources {
             layout,
             bind_group,
             uniform: scene.uniform,
+            glossy_sphere: scene.glossy_sphere,
+            microfacet_lobes: scene.microfacet_lobes,
             _buffers: buffers,
         })
     }

@@ -209,6 +209,12 @@ pub struct GpuScene {
     /// Every texture, in `texture::gpu_words`' layout; empty (and then not bound at all) when
     /// no material has one.
     pub textures: Vec<u32>,
+    /// Not uploaded: a sphere (centre, padded radius; radius 0 when there is none) around every
+    /// surface with a delta or a microfacet lobe, which caustic photons aim at when a
+    /// `glossy_threshold` makes glossy lobes specular vertices (`photon_trace`).
+    pub glossy_sphere: [f32; 4],
+    /// Not uploaded: some shape's BSDF has a microfacet lobe.
+    pub microfacet_lobes: bool,
 }
 
 fn mean(v: Vec3) -> f32 {
@@ -610,14 +616,13 @@ impl GpuScene {
             .map_or(NO_LIGHT, |i| i as u32);
         uniform.max_depth = scene.integrator.max_depth.unwrap_or(UNBOUNDED);
         uniform.rr_depth = scene.integrator.rr_depth.unwrap_or(UNBOUNDED);
-        if let Some((center, radius)) = specular_bounds(scene) {
-            uniform.specular_center = center.to_array();
-            // Padded so that rounding never lets a specular surface poke out of the sphere: the
-            // GPU's points on those surfaces are within a few roundoffs of their magnitude, at
-            // most |center| + radius (shaders/common/scene.wgsl, triangle_point and
-            // sphere_point), far inside 1e-4 of it.
-            uniform.specular_radius = radius + 1e-4 * (radius + center.abs().max_element());
-        }
+        let [x, y, z, radius] = padded_sphere(bounding_sphere(scene, Bsdf::is_delta));
+        uniform.specular_center = [x, y, z];
+        uniform.specular_radius = radius;
+        let glossy_sphere = padded_sphere(bounding_sphere(scene, |b: &Bsdf| {
+            b.is_delta() || b.has_microfacet_lobe()
+        }));
+        let microfacet_lobes = scene.features().microfacet;
 
         Self {
             uniform,
@@ -632,19 +637,36 @@ impl GpuScene {
             light_cdf: non_empty(light_cdf),
             bsdf_tables: non_empty(bsdf_tables),
             textures,
+            glossy_sphere,
+            microfacet_lobes,
         }
     }
 }
 
-/// A sphere containing every specular (delta) primitive: centred on their bounding box, with
-/// the radius that just reaches the farthest vertex or sphere surface, so that one specular
-/// sphere gets exactly its own bounds. `None` when the scene has no specular surface.
-fn specular_bounds(scene: &Scene) -> Option<(Vec3, f32)> {
+/// (centre, radius) padded so that rounding never lets a surface poke out of the sphere: the
+/// GPU's points on those surfaces are within a few roundoffs of their magnitude, at most
+/// |center| + radius (shaders/common/scene.wgsl, triangle_point and sphere_point), far inside
+/// 1e-4 of it. All zero for `None`.
+fn padded_sphere(sphere: Option<(Vec3, f32)>) -> [f32; 4] {
+    match sphere {
+        Some((center, radius)) => {
+            let padded = radius + 1e-4 * (radius + center.abs().max_element());
+            [center.x, center.y, center.z, padded]
+        }
+        None => [0.0; 4],
+    }
+}
+
+/// A sphere containing every primitive one of whose BSDFs is `kept` (the specular ones, for
+/// aiming photons): centred on their bounding box, with the radius that just reaches the
+/// farthest vertex or sphere surface, so that one such sphere gets exactly its own bounds.
+/// `None` when the scene has no such surface.
+fn bounding_sphere(scene: &Scene, kept: impl Fn(&Bsdf) -> bool) -> Option<(Vec3, f32)> {
     let is_specular = |material: u32| {
         scene
             .materials
             .get(material as usize)
-            .is_some_and(|m| m.bsdfs().any(Bsdf::is_delta))
+            .is_some_and(|m| m.bsdfs().any(&kept))
     };
     let triangles = || scene.triangles.iter().filter(|t| is_specular(t.material));
     let spheres = || scene.spheres.iter().filter(|s| is_specular(s.material));

@@ -113,6 +113,15 @@ impl Bsdf {
         )
     }
 
+    /// A BSDF with a microfacet lobe (rough conductor, dielectric or plastic's coating): an S
+    /// vertex of the partition when its roughness is below a graph's `glossy_threshold`.
+    pub fn has_microfacet_lobe(&self) -> bool {
+        matches!(
+            self,
+            Bsdf::RoughConductor { .. } | Bsdf::RoughPlastic { .. } | Bsdf::RoughDielectric { .. }
+        )
+    }
+
     /// Transmits light to the other side (such a BSDF has no back face to be given).
     pub fn transmits(&self) -> bool {
         matches!(
@@ -290,6 +299,8 @@ pub struct SceneFeatures {
     pub rough_dielectric: bool,
     /// Some BSDF has a delta lobe (S vertices exist).
     pub delta: bool,
+    /// Some BSDF has a microfacet lobe (S vertices below a `glossy_threshold`).
+    pub microfacet: bool,
     /// Some shape emits (an area light).
     pub area_lights: bool,
     /// Point or spot lights (delta positions).
@@ -308,6 +319,11 @@ impl SceneFeatures {
     /// Delta surfaces are the S vertices of caustic paths: without one there are no caustics.
     pub fn has_specular_surface(&self) -> bool {
         self.delta
+    }
+
+    /// Surfaces that are S vertices for some `glossy_threshold` (delta or microfacet lobes).
+    pub fn has_specular_or_glossy_surface(&self) -> bool {
+        self.delta || self.microfacet
     }
 
     pub fn has_lights(&self) -> bool {
@@ -530,6 +546,7 @@ impl Scene {
                     Bsdf::RoughDielectric { .. } => f.rough_dielectric = true,
                 }
                 f.delta |= bsdf.is_delta();
+                f.microfacet |= bsdf.has_microfacet_lobe();
             }
             f.area_lights |= m.emission.max_element() > 0.0;
             f.textures |= m.textures.front.any() || m.textures.back.any();
