@@ -53,17 +53,18 @@ const SPP: u64 = 64;
 /// Photons per iteration: 8 per pixel, so that the caustic's own noise stays small at 32x32.
 const PHOTONS: u32 = 8192;
 
-/// `graphs/hybrid.ron` with `glossy_threshold` on both its camera and photon nodes.
+/// `graphs/hybrid.ron` with `glossy_threshold` (its default 0.2) set to `threshold` on both its
+/// camera and photon nodes.
 fn hybrid_with_threshold(threshold: f32) -> ValidGraph {
     let path = repo_path("graphs/hybrid.ron");
     let text = std::fs::read_to_string(&path).expect("graphs/hybrid.ron");
     let edits = [
         (
-            "params: (merge_depth: 1)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2)",
             format!("params: (merge_depth: 1, glossy_threshold: {threshold:?})"),
         ),
         (
-            "params: (mode: Caustic)",
+            "params: (mode: Caustic, glossy_threshold: 0.2)",
             format!(
                 "params: (mode: Caustic, glossy_threshold: {threshold:?}, \
                  photons_per_iteration: {PHOTONS})"

@@ -193,8 +193,8 @@ fn camera_and_photon_depths_must_agree() {
     refused(
         "graphs/hybrid.ron",
         &[(
-            "params: (mode: Caustic)",
-            "params: (mode: Caustic, max_depth: 5)",
+            "params: (mode: Caustic, glossy_threshold: 0.2)",
+            "params: (mode: Caustic, glossy_threshold: 0.2, max_depth: 5)",
         )],
         13,
         &["different depths", "max_depth 5", "the scene's max_depth"],
@@ -203,12 +203,12 @@ fn camera_and_photon_depths_must_agree() {
         "graphs/hybrid.ron",
         &[
             (
-                "params: (mode: Caustic)",
-                "params: (mode: Caustic, max_depth: 5)",
+                "params: (mode: Caustic, glossy_threshold: 0.2)",
+                "params: (mode: Caustic, glossy_threshold: 0.2, max_depth: 5)",
             ),
             (
-                "params: (merge_depth: 1)",
-                "params: (merge_depth: 1, max_depth: 5)",
+                "params: (merge_depth: 1, glossy_threshold: 0.2)",
+                "params: (merge_depth: 1, glossy_threshold: 0.2, max_depth: 5)",
             ),
         ],
     )
@@ -226,14 +226,14 @@ fn camera_and_photon_glossy_thresholds_must_agree() {
     refused(
         "graphs/hybrid.ron",
         &[(
-            "params: (merge_depth: 1)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2)",
             "params: (merge_depth: 1, glossy_threshold: 0.1)",
         )],
         9,
         &[
             "different glossy_threshold",
             "\"camera\": 0.1",
-            "\"photons\": 0",
+            "\"photons\": 0.2",
             "same glossy_threshold",
         ],
     );
@@ -291,15 +291,15 @@ fn camera_and_photon_glossy_thresholds_must_agree() {
 fn a_glossy_threshold_must_be_a_roughness() {
     for (from, to) in [
         (
-            "params: (merge_depth: 1)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2)",
             "params: (merge_depth: 1, glossy_threshold: -0.1)",
         ),
         (
-            "params: (mode: Caustic)",
+            "params: (mode: Caustic, glossy_threshold: 0.2)",
             "params: (mode: Caustic, glossy_threshold: inf)",
         ),
         (
-            "params: (mode: Caustic)",
+            "params: (mode: Caustic, glossy_threshold: 0.2)",
             "params: (mode: Caustic, glossy_threshold: NaN)",
         ),
     ] {
@@ -318,23 +318,23 @@ fn a_glossy_threshold_must_be_a_roughness() {
 fn params_that_render_nothing_are_refused() {
     let cases: &[(&str, &str, &str)] = &[
         (
-            "params: (mode: Caustic)",
-            "params: (mode: Caustic, photons_per_iteration: 0)",
+            "params: (mode: Caustic, glossy_threshold: 0.2)",
+            "params: (mode: Caustic, glossy_threshold: 0.2, photons_per_iteration: 0)",
             "photons_per_iteration must be at least 1",
         ),
         (
-            "params: (merge_depth: 1)",
-            "params: (merge_depth: 1, samples_per_iteration: 0)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2, samples_per_iteration: 0)",
             "samples_per_iteration must lie in",
         ),
         (
-            "params: (merge_depth: 1)",
-            "params: (merge_depth: 1, samples_per_iteration: 100000)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2, samples_per_iteration: 100000)",
             "samples_per_iteration must lie in",
         ),
         (
-            "params: (merge_depth: 1)",
-            "params: (merge_depth: 1, max_depth: 0)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2)",
+            "params: (merge_depth: 1, glossy_threshold: 0.2, max_depth: 0)",
             "max_depth must be at least 1",
         ),
         (

@@ -469,8 +469,8 @@ pub trait Pass {
 
     /// What the scene must have for this node to do anything; after validation the graph drops
     /// nodes whose needs the scene lacks (src/graph/prune.rs).
-    fn needs(&self) -> &'static [SceneNeed] {
-        &[]
+    fn needs(&self) -> Vec<SceneNeed> {
+        Vec::new()
     }
 
     /// Why renders of disjoint iterations through this pass cannot be summed into one image
@@ -513,11 +513,13 @@ pub trait Pass {
 
 /// A scene feature a pass may need, named by the passes; the render answers whether the scene
 /// has it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SceneNeed {
     pub name: &'static str,
     /// For messages: "the scene has no {description}".
     pub description: &'static str,
+    /// For a need of glossy surfaces: microfacet lobes count below this roughness.
+    pub glossy_below: f32,
 }
 
 /// A pass kind as the registry knows it: its name, slots, shaders and constructor.

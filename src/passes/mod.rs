@@ -169,7 +169,7 @@ pub(crate) fn check_glossy_threshold(threshold: f32) -> Result<(), ron::error::S
 /// Whether a pass with `glossy_threshold` needs the glossy code (`GLOSSY`) on this scene: only
 /// where some lobe could fall below the threshold.
 pub(crate) fn glossy_defs(threshold: f32, scene: &SceneResources) -> &'static [&'static str] {
-    if threshold > 0.0 && scene.microfacet_lobes {
+    if scene.smoothest_microfacet < threshold {
         PASS_DEFS
     } else {
         &[]
@@ -187,21 +187,23 @@ pub(crate) fn depth_rule(max_depth: Option<u32>) -> crate::graph::transport::Dep
 pub const SPECULAR_SURFACE: SceneNeed = SceneNeed {
     name: "specular_surface",
     description: "specular (delta: mirror, smooth dielectric or conductor, plastic) surface",
+    glossy_below: 0.0,
 };
 
-/// A surface with a delta or a microfacet lobe: with a `glossy_threshold`, a glossy lobe can make
-/// a caustic too.
+/// A surface with a delta lobe or a microfacet lobe smoother than `glossy_below` (the pass's
+/// `glossy_threshold`): such a glossy lobe can make a caustic too.
 pub const SPECULAR_OR_GLOSSY_SURFACE: SceneNeed = SceneNeed {
     name: "specular_or_glossy_surface",
-    description: "specular (delta) or glossy (microfacet: rough conductor, dielectric, plastic) \
-                  surface",
+    description: "specular (delta) surface or glossy one (microfacet: rough conductor, \
+                  dielectric, plastic) smoother than the glossy_threshold",
+    glossy_below: 0.0,
 };
 
 /// Whether a scene with `features` meets `need` (pruning asks).
 pub fn scene_meets(features: &SceneFeatures, need: &SceneNeed) -> bool {
     match need.name {
         "specular_surface" => features.has_specular_surface(),
-        "specular_or_glossy_surface" => features.has_specular_or_glossy_surface(),
+        "specular_or_glossy_surface" => features.has_specular_or_glossy_surface(need.glossy_below),
         // A need no pass declares here is one no scene can be said to meet.
         _ => false,
     }

@@ -290,14 +290,15 @@ impl Pass for PhotonTrace {
         Ok(())
     }
 
-    fn needs(&self) -> &'static [SceneNeed] {
+    fn needs(&self) -> Vec<SceneNeed> {
         match self.params.mode {
             // Without a specular surface no photon is ever deposited.
-            PhotonMode::Caustic if self.params.glossy_threshold > 0.0 => {
-                &[SPECULAR_OR_GLOSSY_SURFACE]
-            }
-            PhotonMode::Caustic => &[SPECULAR_SURFACE],
-            PhotonMode::All => &[],
+            PhotonMode::Caustic if self.params.glossy_threshold > 0.0 => vec![SceneNeed {
+                glossy_below: self.params.glossy_threshold,
+                ..SPECULAR_OR_GLOSSY_SURFACE
+            }],
+            PhotonMode::Caustic => vec![SPECULAR_SURFACE],
+            PhotonMode::All => Vec::new(),
         }
     }
 

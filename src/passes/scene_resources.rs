@@ -52,7 +52,8 @@ pub struct SceneResources {
     /// [`GpuScene::glossy_sphere`]: what caustic photons aim at when glossy lobes are specular.
     pub glossy_sphere: [f32; 4],
     /// Some shape's BSDF has a microfacet lobe.
-    pub microfacet_lobes: bool,
+    /// The smallest roughness of any microfacet lobe (`GpuScene::smoothest_microfacet`).
+    pub smoothest_microfacet: f32,
     _buffers: Vec<wgpu::Buffer>,
 }
 
@@ -110,7 +111,7 @@ impl SceneResources {
             bind_group,
             uniform: scene.uniform,
             glossy_sphere: scene.glossy_sphere,
-            microfacet_lobes: scene.microfacet_lobes,
+            smoothest_microfacet: scene.smoothest_microfacet,
             _buffers: buffers,
         })
     }

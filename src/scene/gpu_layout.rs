@@ -213,8 +213,9 @@ pub struct GpuScene {
     /// surface with a delta or a microfacet lobe, which caustic photons aim at when a
     /// `glossy_threshold` makes glossy lobes specular vertices (`photon_trace`).
     pub glossy_sphere: [f32; 4],
-    /// Not uploaded: some shape's BSDF has a microfacet lobe.
-    pub microfacet_lobes: bool,
+    /// Not uploaded: the smallest roughness of any microfacet lobe (0 when textured; infinite
+    /// without one), which a `glossy_threshold` must exceed to matter.
+    pub smoothest_microfacet: f32,
 }
 
 fn mean(v: Vec3) -> f32 {
@@ -622,7 +623,10 @@ impl GpuScene {
         let glossy_sphere = padded_sphere(bounding_sphere(scene, |b: &Bsdf| {
             b.is_delta() || b.has_microfacet_lobe()
         }));
-        let microfacet_lobes = scene.features().microfacet;
+        let smoothest_microfacet = scene
+            .features()
+            .smoothest_microfacet
+            .unwrap_or(f32::INFINITY);
 
         Self {
             uniform,
@@ -638,7 +642,7 @@ impl GpuScene {
             bsdf_tables: non_empty(bsdf_tables),
             textures,
             glossy_sphere,
-            microfacet_lobes,
+            smoothest_microfacet,
         }
     }
 }

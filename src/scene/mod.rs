@@ -113,6 +113,19 @@ impl Bsdf {
         )
     }
 
+    /// The roughness `glossy_threshold` is compared with: the larger of the lobe's alpha_u and
+    /// alpha_v (untextured), or `None` without a microfacet lobe.
+    pub fn microfacet_roughness(&self) -> Option<f32> {
+        match self {
+            Bsdf::RoughConductor { microfacet, .. }
+            | Bsdf::RoughPlastic { microfacet, .. }
+            | Bsdf::RoughDielectric { microfacet, .. } => {
+                Some(microfacet.alpha_u.max(microfacet.alpha_v))
+            }
+            _ => None,
+        }
+    }
+
     /// A BSDF with a microfacet lobe (rough conductor, dielectric or plastic's coating): an S
     /// vertex of the partition when its roughness is below a graph's `glossy_threshold`.
     pub fn has_microfacet_lobe(&self) -> bool {
@@ -286,7 +299,7 @@ impl Default for Integrator {
 }
 
 /// Which material, light and shape kinds a scene uses (only those some shape references).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SceneFeatures {
     pub diffuse: bool,
     /// Smooth or thin dielectric.
@@ -301,6 +314,9 @@ pub struct SceneFeatures {
     pub delta: bool,
     /// Some BSDF has a microfacet lobe (S vertices below a `glossy_threshold`).
     pub microfacet: bool,
+    /// The smallest roughness (the larger of alpha_u and alpha_v) of any microfacet lobe, 0 for
+    /// a textured one (it may be anything); `None` without microfacet lobes.
+    pub smoothest_microfacet: Option<f32>,
     /// Some shape emits (an area light).
     pub area_lights: bool,
     /// Point or spot lights (delta positions).
@@ -321,9 +337,16 @@ impl SceneFeatures {
         self.delta
     }
 
-    /// Surfaces that are S vertices for some `glossy_threshold` (delta or microfacet lobes).
-    pub fn has_specular_or_glossy_surface(&self) -> bool {
-        self.delta || self.microfacet
+    /// Surfaces that are S vertices at `glossy_threshold` (delta lobes, or microfacet lobes
+    /// smoother than it).
+    pub fn has_specular_or_glossy_surface(&self, glossy_threshold: f32) -> bool {
+        self.delta || self.has_glossy_lobe_below(glossy_threshold)
+    }
+
+    /// Some microfacet lobe may be smoother than `glossy_threshold`.
+    pub fn has_glossy_lobe_below(&self, glossy_threshold: f32) -> bool {
+        self.smoothest_microfacet
+            .is_some_and(|alpha| alpha < glossy_threshold)
     }
 
     pub fn has_lights(&self) -> bool {
@@ -547,6 +570,15 @@ impl Scene {
                 }
                 f.delta |= bsdf.is_delta();
                 f.microfacet |= bsdf.has_microfacet_lobe();
+                if let Some(alpha) = bsdf.microfacet_roughness() {
+                    let sides = [m.textures.front, m.textures.back];
+                    let textured = sides
+                        .iter()
+                        .any(|t| t.alpha_u.is_some() || t.alpha_v.is_some());
+                    let alpha = if textured { 0.0 } else { alpha };
+                    let smoothest = f.smoothest_microfacet.get_or_insert(alpha);
+                    *smoothest = smoothest.min(alpha);
+                }
             }
             f.area_lights |= m.emission.max_element() > 0.0;
             f.textures |= m.textures.front.any() || m.textures.back.any();
