@@ -15,80 +15,21 @@
 mod common;
 
 use common::*;
-use hppm::image::Image;
 
 const SCENE: &str = "tests/refs/scenes/materials_cornell/scene.xml";
-const MITSUBA_256: f64 = 0.00139;
-const MITSUBA_256_BLOCKS: f64 = 2.1e-5;
-const REFERENCE_NOISE: f64 = 1.1e-5;
 
-/// (pixel, block) relMSE bounds at `spp`.
-fn bounds(spp: u64) -> (f64, f64) {
-    let scale = 256.0 / spp as f64;
-    (
-        1.5 * MITSUBA_256 * scale + 2.0 * REFERENCE_NOISE,
-        1.5 * MITSUBA_256_BLOCKS * scale + 2.0 * REFERENCE_NOISE,
-    )
-}
-
-/// The image averaged over `side` x `side` blocks.
-fn block_means(image: &Image, side: u32) -> Image {
-    let (w, h) = (image.width / side, image.height / side);
-    let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
-    for y in 0..h * side {
-        for x in 0..w * side {
-            let p = image.pixels[(y * image.width + x) as usize];
-            let b = &mut pixels[((y / side) * w + x / side) as usize];
-            for c in 0..3 {
-                b[c] += p[c] / (side * side) as f32;
-            }
-        }
-    }
-    Image {
-        width: w,
-        height: h,
-        pixels,
-    }
-}
-
-fn scaled(image: &Image, s: f32) -> Image {
-    Image {
-        pixels: image.pixels.iter().map(|p| p.map(|c| c * s)).collect(),
-        ..image.clone()
-    }
-}
+/// Mitsuba's own errors on `materials_cornell` and the reference's noise (tests/refs/README.md).
+const MATERIALS: common::convergence::MitsubaFigures = common::convergence::MitsubaFigures {
+    scene: SCENE,
+    reference: "materials_cornell",
+    pixels_256: 0.00139,
+    blocks_256: 2.1e-5,
+    noise: 1.1e-5,
+};
 
 /// Renders `graph` at `spp` and checks both metrics against the bounds; returns them.
 fn check(graph: &str, spp: u64, seed: u64) -> (f64, f64) {
-    let gpu = gpu();
-    let scene = load_scene(SCENE);
-    let reference = reference("materials_cornell");
-    let mut r = renderer(&gpu, &scene, load_graph(graph), seed);
-    let image = render_to(&mut r, spp);
-    let (pixel_bound, block_bound) = bounds(spp);
-    let e = relmse(&image, &reference);
-    let blocks = relmse(&block_means(&image, 8), &block_means(&reference, 8));
-    eprintln!(
-        "{graph}, {spp} spp, seed {seed}: relMSE {e:.3e} (bound {pixel_bound:.3e}), 8x8 blocks \
-         {blocks:.3e} (bound {block_bound:.3e}), mean {:?} vs {:?}",
-        image.mean(),
-        reference.mean()
-    );
-    // The bound must see a 10% energy loss on the block metric.
-    let lossy = relmse(
-        &block_means(&scaled(&image, 0.9), 8),
-        &block_means(&reference, 8),
-    );
-    assert!(lossy > block_bound, "a 10% loss ({lossy:.2e}) would pass");
-    assert!(
-        e <= pixel_bound,
-        "{graph}: relMSE {e:.3e} > {pixel_bound:.3e}"
-    );
-    assert!(
-        blocks <= block_bound,
-        "{graph}: block relMSE {blocks:.3e} > {block_bound:.3e}"
-    );
-    (e, blocks)
+    MATERIALS.check(graph, spp, seed)
 }
 
 /// `pt` at 16 spp within the bound scaled to 16 spp. Catches a BSDF rendering unlike
