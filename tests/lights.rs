@@ -529,12 +529,7 @@ fn spheres_under_a_constant_sky_are_a_furnace_through_every_graph() {
     ] {
         let mut r = renderer(&gpu, &scene, load_graph(graph), 6);
         let image = render_to(&mut r, 128);
-        let caustic = r
-            .aovs()
-            .expect("aovs")
-            .iter()
-            .find(|(s, _)| *s == "caustic")
-            .map_or(0.0, |(_, c)| c.mean()[0]);
+        let caustic = common::convergence::caustic_mean(&r);
         let mean = image.mean();
         eprintln!("{graph}: mean {mean:?}, caustic {caustic:.4}");
         for c in mean {

@@ -72,32 +72,6 @@ fn materials_cornell_converges_to_mitsuba_at_256_spp() {
     }
 }
 
-/// Per seed, the image means of `pt` and of the hybrid `graph` with the same seed (their camera
-/// paths are the same: they differ only by the caustic the hybrid takes from photons), and the
-/// hybrid's caustic AOV mean.
-fn paired_means(
-    graph: &str,
-    scene: &hppm::scene::Scene,
-    spp: u64,
-    seeds: u64,
-) -> Vec<([f64; 3], [f64; 3], f64)> {
-    let gpu = gpu();
-    (0..seeds)
-        .map(|seed| {
-            let mut pt = renderer(&gpu, scene, load_graph("graphs/pt.ron"), 100 + seed);
-            let pt_mean = render_to(&mut pt, spp).mean();
-            let mut hy = renderer(&gpu, scene, load_graph(graph), 100 + seed);
-            let hy_mean = render_to(&mut hy, spp).mean();
-            let aovs = hy.aovs().expect("aovs");
-            let caustic = aovs
-                .iter()
-                .find(|(s, _)| *s == "caustic")
-                .map_or(0.0, |(_, c)| c.mean()[0]);
-            (pt_mean, hy_mean, caustic)
-        })
-        .collect()
-}
-
 /// On a box holding every BSDF kind (tests/data/scenes/bsdf_box.xml), `hybrid` and
 /// `hybrid_all_depths` (every Lambertian vertex photon-mapped) render the image `pt` renders: with the same seed their camera paths are the same, so the difference
 /// of their image means is the photon caustic minus the path-traced caustic it replaces, and
@@ -111,34 +85,6 @@ fn paired_means(
 fn hybrid_equals_pt_with_every_bsdf() {
     let scene = load_scene("tests/data/scenes/bsdf_box.xml");
     for graph in ["graphs/hybrid.ron", "graphs/hybrid_all_depths.ron"] {
-        hybrid_equals_pt(graph, &scene);
-    }
-}
-
-fn hybrid_equals_pt(graph: &str, scene: &hppm::scene::Scene) {
-    let runs = paired_means(graph, scene, 16, 4);
-    let n = runs.len() as f64;
-    let caustic = runs.iter().map(|r| r.2).sum::<f64>() / n;
-    for c in 0..3 {
-        let diffs: Vec<f64> = runs.iter().map(|r| r.1[c] - r.0[c]).collect();
-        let mean = diffs.iter().sum::<f64>() / n;
-        let se = (diffs.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
-        let pt = runs.iter().map(|r| r.0[c]).sum::<f64>() / n;
-        let tolerance = 4.0 * se + 0.003 * pt;
-        eprintln!(
-            "bsdf_box, {graph}, channel {c}: pt {pt:.5}, hybrid - pt {mean:+.5} +- {se:.5} (tolerance \
-             {tolerance:.5}), caustic {caustic:.5} ({:.1}% of the image)",
-            100.0 * caustic / pt
-        );
-        if c == 0 {
-            assert!(
-                caustic > 2.0 * tolerance,
-                "the caustic ({caustic}) is too small for the test to see it dropped or doubled"
-            );
-        }
-        assert!(
-            mean.abs() <= tolerance,
-            "{graph}, channel {c}: hybrid - pt = {mean} (tolerance {tolerance})"
-        );
+        common::convergence::hybrid_equals_pt(&format!("bsdf_box, {graph}"), graph, &scene);
     }
 }

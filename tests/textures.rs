@@ -589,45 +589,7 @@ fn textured_plane_renders_the_analytic_image() {
 fn hybrid_equals_pt_on_textured_surfaces() {
     let scene = load_scene("tests/data/scenes/textured_box.xml");
     assert!(scene.features().textures);
-    let gpu = gpu();
-    let runs: Vec<([f64; 3], [f64; 3], f64)> = (0..4)
-        .map(|seed| {
-            let mut pt = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 100 + seed);
-            let pt_mean = render_to(&mut pt, 16).mean();
-            let mut hy = renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), 100 + seed);
-            let hy_mean = render_to(&mut hy, 16).mean();
-            let aovs = hy.aovs().expect("aovs");
-            let caustic = aovs
-                .iter()
-                .find(|(s, _)| *s == "caustic")
-                .map_or(0.0, |(_, c)| c.mean()[0]);
-            (pt_mean, hy_mean, caustic)
-        })
-        .collect();
-    let n = runs.len() as f64;
-    let caustic = runs.iter().map(|r| r.2).sum::<f64>() / n;
-    for c in 0..3 {
-        let diffs: Vec<f64> = runs.iter().map(|r| r.1[c] - r.0[c]).collect();
-        let mean = diffs.iter().sum::<f64>() / n;
-        let se = (diffs.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
-        let pt = runs.iter().map(|r| r.0[c]).sum::<f64>() / n;
-        let tolerance = 4.0 * se + 0.003 * pt;
-        eprintln!(
-            "textured_box, channel {c}: pt {pt:.5}, hybrid - pt {mean:+.5} +- {se:.5} (tolerance \
-             {tolerance:.5}), caustic {caustic:.5} ({:.1}% of the image)",
-            100.0 * caustic / pt
-        );
-        if c == 0 {
-            assert!(
-                caustic > 2.0 * tolerance,
-                "the caustic ({caustic}) is too small for the test to see it dropped or doubled"
-            );
-        }
-        assert!(
-            mean.abs() <= tolerance,
-            "channel {c}: hybrid - pt = {mean} (tolerance {tolerance})"
-        );
-    }
+    common::convergence::hybrid_equals_pt("textured_box", "graphs/hybrid.ron", &scene);
 }
 
 /// The hit points weigh photons with the textured albedo: a checkerboard (or nearest bitmap)

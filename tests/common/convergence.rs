@@ -1,7 +1,7 @@
 //! Convergence to a Mitsuba 3 reference, under the bound tests/refs/README.md gives for its
 //! scenes: within 1.5x Mitsuba's own 256-spp error plus twice the reference's noise floor, on
 //! pixels and on 8x8 block means (noise averages out there, a bias does not), both scaled as
-//! 1/spp for other sample counts.
+//! 1/spp for other sample counts. And the paired check that a hybrid graph renders `pt`'s image.
 
 use hppm::image::Image;
 
@@ -85,5 +85,68 @@ pub fn scaled(image: &Image, s: f32) -> Image {
     Image {
         pixels: image.pixels.iter().map(|p| p.map(|c| c * s)).collect(),
         ..image.clone()
+    }
+}
+
+/// The mean of the red channel of a renderer's `caustic` AOV (0 when its graph has none).
+pub fn caustic_mean(renderer: &hppm::app::render::Renderer<'_>) -> f64 {
+    renderer
+        .aovs()
+        .expect("aovs")
+        .iter()
+        .find(|(s, _)| *s == "caustic")
+        .map_or(0.0, |(_, c)| c.mean()[0])
+}
+
+/// Per seed, the image means of `pt` and of the hybrid `graph` with the same seed (their camera
+/// paths are the same: they differ only by the caustic the hybrid takes from photons), and the
+/// hybrid's caustic AOV mean.
+pub fn paired_means(
+    graph: &str,
+    scene: &hppm::scene::Scene,
+    spp: u64,
+    seeds: u64,
+) -> Vec<([f64; 3], [f64; 3], f64)> {
+    let gpu = gpu();
+    (0..seeds)
+        .map(|seed| {
+            let mut pt = renderer(&gpu, scene, load_graph("graphs/pt.ron"), 100 + seed);
+            let pt_mean = render_to(&mut pt, spp).mean();
+            let mut hy = renderer(&gpu, scene, load_graph(graph), 100 + seed);
+            let hy_mean = render_to(&mut hy, spp).mean();
+            (pt_mean, hy_mean, caustic_mean(&hy))
+        })
+        .collect()
+}
+
+/// The hybrid `graph` renders `pt`'s image of `scene` (named `label` in messages): over 4 seeds
+/// at 16 spp the mean of hybrid - pt must be within 4 standard errors plus 0.3% (the photon
+/// kernel's blur) of zero, per channel, and the hybrid's caustic large enough (twice the
+/// tolerance) that dropping it or counting it twice would fail.
+pub fn hybrid_equals_pt(label: &str, graph: &str, scene: &hppm::scene::Scene) {
+    let runs = paired_means(graph, scene, 16, 4);
+    let n = runs.len() as f64;
+    let caustic = runs.iter().map(|r| r.2).sum::<f64>() / n;
+    for c in 0..3 {
+        let diffs: Vec<f64> = runs.iter().map(|r| r.1[c] - r.0[c]).collect();
+        let mean = diffs.iter().sum::<f64>() / n;
+        let se = (diffs.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
+        let pt = runs.iter().map(|r| r.0[c]).sum::<f64>() / n;
+        let tolerance = 4.0 * se + 0.003 * pt;
+        eprintln!(
+            "{label}, channel {c}: pt {pt:.5}, hybrid - pt {mean:+.5} +- {se:.5} (tolerance \
+             {tolerance:.5}), caustic {caustic:.5} ({:.1}% of the image)",
+            100.0 * caustic / pt
+        );
+        if c == 0 {
+            assert!(
+                caustic > 2.0 * tolerance,
+                "the caustic ({caustic}) is too small for the test to see it dropped or doubled"
+            );
+        }
+        assert!(
+            mean.abs() <= tolerance,
+            "{label}, channel {c}: hybrid - pt = {mean} (tolerance {tolerance})"
+        );
     }
 }
