@@ -131,19 +131,33 @@ fn edge_scene(width: u32, height: u32, edge_px: f64, rfilter: &str) -> String {
     )
 }
 
-/// Renders `xml` with `spp` samples (64 per iteration) and returns each column's mean.
-fn render_columns(xml: &str, spp: u64) -> (Vec<f64>, PixelFilter, bool) {
+/// The edge scene `xml` rendered by a lone camera pass taking `per_iteration` samples an
+/// iteration, to `spp` samples with `seed`; the scene and the image.
+fn render_edge(
+    xml: &str,
+    per_iteration: u32,
+    spp: u64,
+    seed: u64,
+) -> (hppm::scene::Scene, hppm::image::Image) {
     let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), xml).expect("edge scene");
     let graph = hppm::graph::parse_graph(
         Path::new("edge_pt.ron"),
-        r#"(version: 1, nodes: [(name: "camera", pass: "path_trace",
-            params: (samples_per_iteration: 64))], edges: [], output: "camera.radiance")"#,
+        &format!(
+            r#"(version: 1, nodes: [(name: "camera", pass: "path_trace",
+            params: (samples_per_iteration: {per_iteration}))], edges: [], output: "camera.radiance")"#
+        ),
         hppm::passes::registry(),
     )
     .expect("graph");
     let gpu = gpu();
-    let mut r = renderer(&gpu, &scene, graph, 3);
+    let mut r = renderer(&gpu, &scene, graph, seed);
     let image = render_to(&mut r, spp);
+    (scene, image)
+}
+
+/// Renders `xml` with `spp` samples (64 per iteration) and returns each column's mean.
+fn render_columns(xml: &str, spp: u64) -> (Vec<f64>, PixelFilter, bool) {
+    let (scene, image) = render_edge(xml, 64, spp, 3);
     let (w, h) = (image.width as usize, image.height as usize);
     let columns = (0..w)
         .map(|x| {
@@ -281,18 +295,9 @@ fn filtered_edges_match_mitsubas_renders() {
 fn one_splatting_iteration_matches_a_cpu_splat_of_the_same_samples() {
     let (width, height, edge, spp) = (16u32, 8u32, 7.37f64, 4u32);
     let xml = edge_scene(width, height, edge, r#"<rfilter type="gaussian"/>"#);
-    let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
-    let graph = hppm::graph::parse_graph(
-        Path::new("splat_pt.ron"),
-        r#"(version: 1, nodes: [(name: "camera", pass: "path_trace",
-            params: (samples_per_iteration: 4))], edges: [], output: "camera.radiance")"#,
-        hppm::passes::registry(),
-    )
-    .expect("graph");
-    let gpu = gpu();
     let seed = 5;
-    let mut r = renderer(&gpu, &scene, graph, seed);
-    let image = render_to(&mut r, spp as u64);
+    // One iteration of `spp` samples.
+    let (scene, image) = render_edge(&xml, spp, spp as u64, seed);
     let filter = scene.camera.filter;
     let word = hppm::passes::rng::camera_seed(seed);
     // Every sample's film position and radiance.
