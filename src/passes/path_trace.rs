@@ -26,7 +26,7 @@ use crate::passes::hit_points::{
 };
 use crate::passes::photon_grid::PHOTON_GRID;
 use crate::passes::{check_glossy_threshold, depth_rule, glossy_defs, resolve_depths};
-use crate::scene::filter::{FILTER_BOX, FILTER_GAUSSIAN, FILTER_TENT, PixelFilter};
+use crate::scene::filter::{FILTER_BOX, PixelFilter};
 use crate::scene::gpu_layout::GpuSceneUniform;
 use crate::shader_file;
 
@@ -241,18 +241,7 @@ fn splats(scene: &GpuSceneUniform) -> bool {
 /// The weight a splatted sample brings an interior pixel on average: the filter's integral over
 /// the plane (in pixels, separable), what a filter-distributed sample then counts.
 fn filter_weight_per_sample(scene: &GpuSceneUniform) -> f32 {
-    let filter = match scene.filter_kind {
-        FILTER_TENT => PixelFilter::Tent {
-            radius: scene.filter_param,
-        },
-        FILTER_GAUSSIAN => PixelFilter::Gaussian {
-            stddev: scene.filter_param,
-        },
-        _ => PixelFilter::Box,
-    };
-    let r = filter.radius() as f64;
-    let line = filter.integral(r) - filter.integral(-r);
-    (line * line) as f32
+    PixelFilter::from_gpu_code(scene.filter_kind, scene.filter_param).plane_integral() as f32
 }
 
 impl Pass for PathTrace {

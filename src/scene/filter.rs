@@ -58,6 +58,23 @@ impl PixelFilter {
         }
     }
 
+    /// The filter [`gpu_code`](Self::gpu_code) describes.
+    pub fn from_gpu_code(kind: u32, param: f32) -> Self {
+        match kind {
+            FILTER_TENT => PixelFilter::Tent { radius: param },
+            FILTER_GAUSSIAN => PixelFilter::Gaussian { stddev: param },
+            _ => PixelFilter::Box,
+        }
+    }
+
+    /// The integral of the separable 2D filter over the plane, in pixels: the weight a sample
+    /// splatted uniformly within a pixel brings an interior pixel on average.
+    pub fn plane_integral(&self) -> f64 {
+        let r = self.radius() as f64;
+        let line = self.integral(r) - self.integral(-r);
+        line * line
+    }
+
     /// The 1D filter at `x` pixels from the centre (unnormalised, as Mitsuba defines it).
     pub fn eval(&self, x: f64) -> f64 {
         match *self {
@@ -296,5 +313,26 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The GPU's code names its filter again (a wrong inverse would splat with another filter
+    /// than the film's), and the plane integral is the closed form's square: 1 for the box, r^2
+    /// for the tent, (s sqrt(2 pi) erf(r / (s sqrt 2)) - 2 r bias)^2 for the Gaussian.
+    #[test]
+    fn gpu_codes_name_their_filter_and_plane_integrals_are_exact() {
+        for f in FILTERS {
+            let (kind, param) = f.gpu_code();
+            assert_eq!(PixelFilter::from_gpu_code(kind, param), f);
+        }
+        assert!((PixelFilter::Box.plane_integral() - 1.0).abs() < 1e-12);
+        let tent = PixelFilter::Tent { radius: 1.5 };
+        assert!((tent.plane_integral() - 2.25).abs() < 1e-9);
+        let (s, r) = (0.5f64, 2.0f64);
+        let bias = (-r * r / (2.0 * s * s)).exp();
+        let line =
+            s * (2.0 * std::f64::consts::PI).sqrt() * erf(r / (s * std::f64::consts::SQRT_2))
+                - 2.0 * r * bias;
+        let gaussian = PixelFilter::Gaussian { stddev: 0.5 };
+        assert!((gaussian.plane_integral() - line * line).abs() < 1e-9);
     }
 }
