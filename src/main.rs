@@ -352,6 +352,13 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         stride: shards,
     };
     let mut renderer = Renderer::with_schedule(&gpu, &scene, graph, width, height, seed, schedule)?;
+    let uniform_tables = renderer.placement().uniform_defs();
+    if !uniform_tables.is_empty() {
+        eprintln!(
+            "scene tables in uniform buffers: {}",
+            uniform_tables.join(" ")
+        );
+    }
     for pruned in renderer.pruned() {
         eprintln!("{pruned}");
     }
@@ -553,8 +560,9 @@ fn info() -> Result<(), Error> {
             has(wgpu::Features::SUBGROUP)
         );
         println!(
-            "   max storage binding: {} MiB   max buffer: {} MiB",
+            "   max storage binding: {} MiB   max uniform binding: {} KiB   max buffer: {} MiB",
             limits.max_storage_buffer_binding_size >> 20,
+            limits.max_uniform_buffer_binding_size >> 10,
             limits.max_buffer_size >> 20
         );
     }

@@ -628,8 +628,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let xmls: Vec<&str> = MATERIALS.iter().map(|(_, x)| *x).collect();
         let scene = scene_with(&xmls);
         let gpu_scene = GpuScene::new(&scene, 4, 4);
-        let resources = SceneResources::upload(&gpu, &gpu_scene).expect("upload");
-        let shaders = hppm::passes::shader_library(gpu.has_float_atomics(), &scene).expect("lib");
+        let resources = SceneResources::for_adapter(&gpu, &gpu_scene).expect("upload");
+        let shaders =
+            hppm::passes::shader_library(gpu.has_float_atomics(), &scene, &resources.placement)
+                .expect("lib");
         let module = shaders
             .compose_source("tests/bsdf.rs (kernel)", KERNEL)
             .unwrap_or_else(|e| panic!("{e}"));

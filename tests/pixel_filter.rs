@@ -10,6 +10,7 @@ use common::*;
 use hppm::gpu::GpuContext;
 use hppm::gpu::binding::{Access, bind_buffers};
 use hppm::gpu::shaders::ShaderFile;
+use hppm::passes::TablePlacement;
 use hppm::passes::rng::Stream;
 use hppm::scene::filter::PixelFilter;
 
@@ -34,7 +35,8 @@ fn gpu_offsets(gpu: &GpuContext, filter: PixelFilter, lo: f32, hi: f32, n: usize
         source: Box::leak(source.into_boxed_str()),
     };
     let scene = load_scene("scenes/cornell_box.ron");
-    let library = hppm::passes::shader_library(false, &scene).expect("shader library");
+    let library = hppm::passes::shader_library(false, &scene, &TablePlacement::storage())
+        .expect("shader library");
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let out = gpu
         .create_buffer("offsets", (n * 4) as u64, usage)

@@ -385,3 +385,40 @@ fn a_layout_that_differs_is_reported() {
         "{err}"
     );
 }
+
+/// Every pass shader composes and validates with the scene's tables declared as uniform
+/// buffers (what CPU adapters get), all at once and each alone on top of every scene def. Would
+/// catch a uniform declaration whose array stride is not a multiple of 16, an access that only
+/// storage arrays allow, or a kernel that reads a table without going through its accessor.
+#[test]
+fn every_pass_shader_composes_with_uniform_scene_tables() {
+    use hppm::passes::{PlacementRule, TablePlacement};
+    let scene = hppm::scene::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
+    )))
+    .expect("scene");
+    let gpu_scene = hppm::scene::gpu_layout::GpuScene::new(&scene, 8, 8);
+    let limits = wgpu::Limits::default();
+    let uniform = TablePlacement::choose(PlacementRule::UniformWhereFits, &gpu_scene, &limits);
+    let all = uniform.defs();
+    assert_eq!(all.len(), 7, "every table of a small scene fits: {all:?}");
+    let mut sets: Vec<HashMap<_, _>> = vec![all.clone()];
+    sets.extend(all.iter().map(|(k, v)| HashMap::from([(k.clone(), *v)])));
+    for tables in sets {
+        let mut defs = hppm::passes::all_scene_defs();
+        defs.extend(tables.clone());
+        let lib = library_with(true, defs);
+        for file in pass_shaders() {
+            let module = lib
+                .compose(&file)
+                .unwrap_or_else(|e| panic!("{} with {tables:?}: {e}", file.path));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::all(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{} with {tables:?}: {e:?}", file.path));
+        }
+    }
+}

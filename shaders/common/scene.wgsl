@@ -173,16 +173,49 @@ const T_INFINITE: f32 = 3.0e38;
 const BVH_STACK_SIZE: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> scene_info: SceneUniform;
+// A table that fits a uniform binding may be bound as one on a CPU adapter (the def, set by
+// src/passes/scene_resources.rs's TablePlacement, holds its length): lavapipe loads a divergent
+// index from a uniform buffer with a plain gather, and from a storage buffer with a masked,
+// bounds-checked load per lane, several times the instructions (BENCHMARKS.md).
+#ifdef BVH_NODES_UNIFORM
+@group(0) @binding(1) var<uniform> bvh_nodes: array<BvhNode, #{BVH_NODES_UNIFORM}>;
+#else
 @group(0) @binding(1) var<storage, read> bvh_nodes: array<BvhNode>;
+#endif
+#ifdef PRIM_INDICES_UNIFORM
+// Four indices a vec4: a uniform array's stride is a multiple of 16 bytes.
+@group(0) @binding(2) var<uniform> prim_indices: array<vec4<u32>, #{PRIM_INDICES_UNIFORM}>;
+#else
 @group(0) @binding(2) var<storage, read> prim_indices: array<u32>;
+#endif
+#ifdef TRIANGLES_UNIFORM
+@group(0) @binding(3) var<uniform> triangles: array<Triangle, #{TRIANGLES_UNIFORM}>;
+#else
 @group(0) @binding(3) var<storage, read> triangles: array<Triangle>;
+#endif
+#ifdef SPHERES_UNIFORM
+@group(0) @binding(4) var<uniform> spheres: array<Sphere, #{SPHERES_UNIFORM}>;
+#else
 @group(0) @binding(4) var<storage, read> spheres: array<Sphere>;
+#endif
+#ifdef MATERIALS_UNIFORM
+@group(0) @binding(5) var<uniform> materials: array<Material, #{MATERIALS_UNIFORM}>;
+#else
 @group(0) @binding(5) var<storage, read> materials: array<Material>;
+#endif
+#ifdef LIGHTS_UNIFORM
+@group(0) @binding(6) var<uniform> lights: array<Light, #{LIGHTS_UNIFORM}>;
+#else
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
+#endif
 @group(0) @binding(7) var<storage, read> light_cdf: array<f32>;
 // Tables BSDFs look up (rough plastic's transmittance per cos theta).
 @group(0) @binding(8) var<storage, read> bsdf_tables: array<f32>;
+#ifdef TRIANGLE_NORMALS_UNIFORM
+@group(0) @binding(9) var<uniform> triangle_normals: array<TriangleNormals, #{TRIANGLE_NORMALS_UNIFORM}>;
+#else
 @group(0) @binding(9) var<storage, read> triangle_normals: array<TriangleNormals>;
+#endif
 // One per triangle (Mitsuba's default, the barycentrics, where the mesh has none).
 @group(0) @binding(10) var<storage, read> triangle_uvs: array<TriangleUvs>;
 #ifdef TEXTURES
@@ -190,6 +223,15 @@ const BVH_STACK_SIZE: u32 = 64u;
 // only for scenes with textures.
 @group(0) @binding(11) var<storage, read> textures: array<u32>;
 #endif
+
+// Entry `i` of prim_indices, whichever way it is bound.
+fn prim_index(i: u32) -> u32 {
+#ifdef PRIM_INDICES_UNIFORM
+    return prim_indices[i >> 2u][i & 3u];
+#else
+    return prim_indices[i];
+#endif
+}
 
 struct Hit {
     t: f32,
@@ -354,7 +396,7 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_
         let node = bvh_nodes[node_index];
         if node.count > 0u {
             for (var i = 0u; i < node.count; i++) {
-                let prim = prim_indices[node.left_or_first + i];
+                let prim = prim_index(node.left_or_first + i);
                 let t = intersect_prim(prim, origin, dir);
                 if front_wins_ties && t < T_INFINITE && abs(t - hit.t) <= tie_span(origin, hit.t) {
                     if hit.prim == NO_HIT || (faces_ray(prim, origin, dir, t) && !faces_ray(hit.prim, origin, dir, hit.t)) {

@@ -219,14 +219,13 @@ pub fn run(adapter: Option<&str>, locate: fn(&str) -> PathBuf) -> Result<String,
     let gpu = GpuContext::new(adapter)?;
     let scene = scene::load(&locate(GLASS))?;
     let mut shared = Shared::default();
-    shared.insert(SceneResources::upload(
-        &gpu,
-        &GpuScene::new(&scene, 128, 128),
-    )?);
+    let resources = SceneResources::for_adapter(&gpu, &GpuScene::new(&scene, 128, 128))?;
+    let shaders = passes::shader_library(gpu.has_float_atomics(), &scene, &resources.placement)?;
+    shared.insert(resources);
     let bench = Bench {
         gpu: &gpu,
         shared,
-        shaders: passes::shader_library(gpu.has_float_atomics(), &scene)?,
+        shaders,
     };
     let photon_hits = photon_hits(&bench)?;
     let hits: Vec<u32> = gpu.read_pod(&photon_hits.buffer, 1)?;

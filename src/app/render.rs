@@ -11,7 +11,7 @@ use crate::graph::ValidGraph;
 use crate::graph::exec::PreparedGraph;
 use crate::graph::pass::{Counters, IMAGE, Resource, Schedule, Shared};
 use crate::image::Image;
-use crate::passes::{SceneResources, paths, scene_meets, shader_library};
+use crate::passes::{SceneResources, TablePlacement, paths, scene_meets, shader_library};
 use crate::scene::Scene;
 use crate::scene::gpu_layout::GpuScene;
 
@@ -70,6 +70,8 @@ pub struct Renderer<'a> {
     pruned: Vec<crate::graph::Pruned>,
     /// Fingerprint of the scene as uploaded (geometry, materials, lights, camera at this size).
     scene_hash: u64,
+    /// Which scene tables are bound as uniform buffers.
+    placement: TablePlacement,
 }
 
 impl<'a> Renderer<'a> {
@@ -106,11 +108,13 @@ impl<'a> Renderer<'a> {
         let features = scene.features();
         let pruned = graph.prune(|need| scene_meets(&features, need))?;
         graph.check_transport(&paths::CLASSES)?;
-        let shaders = shader_library(gpu.has_float_atomics(), scene)?;
-        let mut shared = Shared::default();
         let gpu_scene = GpuScene::new(scene, width, height);
+        let resources = SceneResources::for_adapter(gpu, &gpu_scene)?;
+        let placement = resources.placement.clone();
+        let shaders = shader_library(gpu.has_float_atomics(), scene, &placement)?;
+        let mut shared = Shared::default();
         let scene_hash = scene_fingerprint(&gpu_scene);
-        shared.insert(SceneResources::upload(gpu, &gpu_scene)?);
+        shared.insert(resources);
         let graph =
             PreparedGraph::new(gpu, &shaders, &shared, graph, width, height, schedule.first)?;
         let out_node = graph.graph().output.0;
@@ -143,6 +147,7 @@ impl<'a> Renderer<'a> {
             spp_per_iteration,
             photons_per_iteration,
             pruned,
+            placement,
             scene_hash,
         })
     }
@@ -219,6 +224,11 @@ impl<'a> Renderer<'a> {
     }
 
     /// Nodes removed because the scene had no use for them, with the reason.
+    /// Which scene tables are bound as uniform buffers on this adapter.
+    pub fn placement(&self) -> &TablePlacement {
+        &self.placement
+    }
+
     pub fn pruned(&self) -> &[crate::graph::Pruned] {
         &self.pruned
     }

@@ -25,7 +25,7 @@ use crate::graph::pass::{PassKind, SceneNeed};
 use crate::scene::{Scene, SceneFeatures};
 use crate::shader_file;
 
-pub use scene_resources::SceneResources;
+pub use scene_resources::{PlacementRule, SceneResources, TablePlacement};
 
 /// All pass kinds, in the order `hppm info` lists them.
 pub fn registry() -> &'static [PassKind] {
@@ -115,9 +115,14 @@ pub fn all_scene_defs() -> HashMap<String, ShaderDefValue> {
 }
 
 /// The shader library the passes compose against for `scene` on a device with or without
-/// float atomics.
-pub fn shader_library(float_atomics: bool, scene: &Scene) -> Result<ShaderLibrary, crate::Error> {
-    let defs = scene_defs(&scene.features());
+/// float atomics, with its tables bound as `placement` says.
+pub fn shader_library(
+    float_atomics: bool,
+    scene: &Scene,
+    placement: &TablePlacement,
+) -> Result<ShaderLibrary, crate::Error> {
+    let mut defs = scene_defs(&scene.features());
+    defs.extend(placement.defs());
     Ok(ShaderLibrary::new(float_atomics, defs, COMMON_MODULES)?)
 }
 

@@ -1,6 +1,10 @@
 //! The scene on the GPU: bind group 0 of every pass kernel. The render uploads it once and
 //! shares it with the passes (`Shared`), which keep a handle to its bind group.
 
+use std::collections::HashMap;
+
+use naga_oil::compose::ShaderDefValue;
+
 use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
@@ -45,6 +49,184 @@ pub const LAYOUTS: &[StructLayout] = &[
     }),
 ];
 
+/// Where the scene's tables are bound: every table in a storage buffer, or on a CPU adapter
+/// those that fit a uniform binding in uniform buffers. lavapipe turns a divergent storage load
+/// into a masked, bounds-checked scalar load per lane and a uniform load into a plain gather;
+/// the traversal's node and triangle reads are most of a camera path's time there
+/// (BENCHMARKS.md). GPUs serialise divergent uniform reads, so they keep storage buffers.
+/// `HPPM_SCENE_TABLES=storage` or `=uniform` overrides the choice (to measure both).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct TablePlacement {
+    /// (binding, length in array elements of its uniform declaration) of each uniform table.
+    uniform: Vec<(u32, u32)>,
+}
+
+/// A table that may be bound as a uniform buffer: its binding in group 0, the shader def that
+/// declares it so (shaders/common/scene.wgsl, set to the array length), and its element size
+/// there (the Rust twin's size: tests/shaders.rs checks the WGSL layouts match, and all are
+/// multiples of 16 as a uniform array's stride must be). `prim_indices` is declared as vec4s.
+/// A table is uniform whole or not at all: splitting the nodes and triangles over two bindings
+/// each (an accessor choosing by index) was slower than storage buffers (BENCHMARKS.md).
+struct UniformCapable {
+    binding: u32,
+    def: &'static str,
+    stride: u64,
+}
+
+/// In the order they are worth a uniform binding: traversal reads nodes, triangles and indices
+/// on every step, shading the rest once a vertex.
+const UNIFORM_CAPABLE: [UniformCapable; 7] = [
+    UniformCapable {
+        binding: 1,
+        def: "BVH_NODES_UNIFORM",
+        stride: size_of::<BvhNode>() as u64,
+    },
+    UniformCapable {
+        binding: 3,
+        def: "TRIANGLES_UNIFORM",
+        stride: size_of::<GpuTriangle>() as u64,
+    },
+    UniformCapable {
+        binding: 2,
+        def: "PRIM_INDICES_UNIFORM",
+        stride: 16,
+    },
+    UniformCapable {
+        binding: 5,
+        def: "MATERIALS_UNIFORM",
+        stride: size_of::<GpuMaterial>() as u64,
+    },
+    UniformCapable {
+        binding: 4,
+        def: "SPHERES_UNIFORM",
+        stride: size_of::<GpuSphere>() as u64,
+    },
+    UniformCapable {
+        binding: 6,
+        def: "LIGHTS_UNIFORM",
+        stride: size_of::<GpuLight>() as u64,
+    },
+    UniformCapable {
+        binding: 9,
+        def: "TRIANGLE_NORMALS_UNIFORM",
+        stride: size_of::<GpuTriangleNormals>() as u64,
+    },
+];
+
+/// Uniform bindings a stage keeps for itself beyond the scene's own uniform: the passes' params
+/// (one each today; one spare).
+const PASS_UNIFORMS: u32 = 2;
+
+/// How tables are placed, from `HPPM_SCENE_TABLES` or the adapter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlacementRule {
+    Storage,
+    UniformWhereFits,
+}
+
+impl PlacementRule {
+    /// `HPPM_SCENE_TABLES` when set (`storage` or `uniform`), else uniform where tables fit on
+    /// CPU adapters and storage elsewhere.
+    pub fn for_adapter(gpu: &GpuContext) -> Result<Self, Error> {
+        match std::env::var("HPPM_SCENE_TABLES").as_deref() {
+            Ok("storage") => Ok(Self::Storage),
+            Ok("uniform") => Ok(Self::UniformWhereFits),
+            Ok(other) => Err(Error::Other(format!(
+                "HPPM_SCENE_TABLES={other}: expected `storage` or `uniform`"
+            ))),
+            Err(_) if gpu.info.device_type == wgpu::DeviceType::Cpu => Ok(Self::UniformWhereFits),
+            Err(_) => Ok(Self::Storage),
+        }
+    }
+}
+
+impl TablePlacement {
+    /// Every table in a storage buffer.
+    pub fn storage() -> Self {
+        Self::default()
+    }
+
+    /// Under `rule`, the tables of `scene` that fit `limits`' uniform bindings (by size, and
+    /// by count after the scene uniform and the passes' own).
+    pub fn choose(rule: PlacementRule, scene: &GpuScene, limits: &wgpu::Limits) -> Self {
+        if rule == PlacementRule::Storage {
+            return Self::storage();
+        }
+        let mut free = limits
+            .max_uniform_buffers_per_shader_stage
+            .saturating_sub(1 + PASS_UNIFORMS);
+        let mut uniform = Vec::new();
+        for table in &UNIFORM_CAPABLE {
+            let bytes = table_bytes(scene, table.binding).len() as u64;
+            let len = bytes.div_ceil(table.stride).max(1);
+            if free > 0 && len * table.stride <= limits.max_uniform_buffer_binding_size {
+                uniform.push((table.binding, len as u32));
+                free -= 1;
+            }
+        }
+        Self { uniform }
+    }
+
+    /// The shader defs that declare the uniform tables (each set to its array length).
+    pub fn defs(&self) -> HashMap<String, ShaderDefValue> {
+        UNIFORM_CAPABLE
+            .iter()
+            .filter_map(|t| {
+                self.uniform_len(t.binding)
+                    .map(|len| (t.def.to_string(), ShaderDefValue::UInt(len)))
+            })
+            .collect()
+    }
+
+    /// The array length of binding `binding`'s uniform declaration, if it is uniform.
+    fn uniform_len(&self, binding: u32) -> Option<u32> {
+        self.uniform
+            .iter()
+            .find(|(b, _)| *b == binding)
+            .map(|(_, len)| *len)
+    }
+
+    /// The defs of the tables bound as uniform buffers, in binding priority, for reports.
+    pub fn uniform_defs(&self) -> Vec<&'static str> {
+        UNIFORM_CAPABLE
+            .iter()
+            .filter(|t| self.uniform_len(t.binding).is_some())
+            .map(|t| t.def)
+            .collect()
+    }
+}
+
+/// The bytes of the table at `binding` (1-10) of group 0.
+fn table_bytes(scene: &GpuScene, binding: u32) -> &[u8] {
+    use bytemuck::cast_slice;
+    match binding {
+        1 => cast_slice(&scene.bvh_nodes),
+        2 => cast_slice(&scene.prim_indices),
+        3 => cast_slice(&scene.triangles),
+        4 => cast_slice(&scene.spheres),
+        5 => cast_slice(&scene.materials),
+        6 => cast_slice(&scene.lights),
+        7 => cast_slice(&scene.light_cdf),
+        8 => cast_slice(&scene.bsdf_tables),
+        9 => cast_slice(&scene.triangle_normals),
+        _ => cast_slice(&scene.triangle_uvs),
+    }
+}
+
+/// Labels of bindings 1-10, in binding order.
+const TABLE_LABELS: [&str; 10] = [
+    "scene bvh nodes",
+    "scene prim indices",
+    "scene triangles",
+    "scene spheres",
+    "scene materials",
+    "scene lights",
+    "scene light cdf",
+    "scene bsdf tables",
+    "scene triangle normals",
+    "scene triangle uvs",
+];
+
 pub struct SceneResources {
     pub layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
@@ -54,11 +236,30 @@ pub struct SceneResources {
     /// Some shape's BSDF has a microfacet lobe.
     /// The smallest roughness of any microfacet lobe (`GpuScene::smoothest_microfacet`).
     pub smoothest_microfacet: f32,
+    /// Which tables are uniform buffers (the shader library must be composed with its defs).
+    pub placement: TablePlacement,
     _buffers: Vec<wgpu::Buffer>,
 }
 
 impl SceneResources {
-    pub fn upload(gpu: &GpuContext, scene: &GpuScene) -> Result<Self, Error> {
+    /// Uploads `scene` with its tables placed as the adapter prefers ([`PlacementRule`]); compose
+    /// the shader library with `placement`'s defs.
+    pub fn for_adapter(gpu: &GpuContext, scene: &GpuScene) -> Result<Self, Error> {
+        let rule = PlacementRule::for_adapter(gpu)?;
+        Self::upload(
+            gpu,
+            scene,
+            &TablePlacement::choose(rule, scene, &gpu.limits),
+        )
+    }
+
+    /// Uploads `scene` with its tables where `placement` puts them (the shader library must
+    /// have been composed with `placement.defs()`).
+    pub fn upload(
+        gpu: &GpuContext,
+        scene: &GpuScene,
+        placement: &TablePlacement,
+    ) -> Result<Self, Error> {
         use bytemuck::{bytes_of, cast_slice};
         let storage = wgpu::BufferUsages::STORAGE;
         let uniform = gpu.create_buffer_init(
@@ -66,24 +267,22 @@ impl SceneResources {
             bytes_of(&scene.uniform),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let tables: [(&str, &[u8]); 10] = [
-            ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
-            ("scene prim indices", cast_slice(&scene.prim_indices)),
-            ("scene triangles", cast_slice(&scene.triangles)),
-            ("scene spheres", cast_slice(&scene.spheres)),
-            ("scene materials", cast_slice(&scene.materials)),
-            ("scene lights", cast_slice(&scene.lights)),
-            ("scene light cdf", cast_slice(&scene.light_cdf)),
-            ("scene bsdf tables", cast_slice(&scene.bsdf_tables)),
-            (
-                "scene triangle normals",
-                cast_slice(&scene.triangle_normals),
-            ),
-            ("scene triangle uvs", cast_slice(&scene.triangle_uvs)),
-        ];
         let mut buffers = vec![uniform];
-        for (label, bytes) in tables {
-            buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
+        let mut access = vec![Access::Uniform];
+        for ((binding, label), capable) in (1u32..).zip(TABLE_LABELS).zip(table_capability()) {
+            let bytes = table_bytes(scene, binding);
+            match (placement.uniform_len(binding), capable) {
+                (Some(len), Some(capable)) => {
+                    // Padded to the declared length: a binding must cover its declaration.
+                    let size = len as usize * capable.stride as usize;
+                    buffers.push(uniform_buffer(gpu, label, bytes, size)?);
+                    access.push(Access::Uniform);
+                }
+                _ => {
+                    buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
+                    access.push(Access::Read);
+                }
+            }
         }
         // Binding 11, only for a scene with textures (whose shaders are composed with
         // `TEXTURES`): untextured scenes keep their 10 storage buffers (GL allows 16 a stage).
@@ -91,20 +290,8 @@ impl SceneResources {
             let words = cast_slice(&scene.textures);
             buffers.push(gpu.create_buffer_init("scene textures", words, storage)?);
         }
-        let entries: Vec<_> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                (
-                    if i == 0 {
-                        Access::Uniform
-                    } else {
-                        Access::Read
-                    },
-                    b,
-                )
-            })
-            .collect();
+        access.resize(buffers.len(), Access::Read);
+        let entries: Vec<_> = access.iter().copied().zip(&buffers).collect();
         let (layout, bind_group) = bind_buffers(&gpu.device, "scene", &entries);
         Ok(Self {
             layout,
@@ -112,7 +299,101 @@ impl SceneResources {
             uniform: scene.uniform,
             glossy_sphere: scene.glossy_sphere,
             smoothest_microfacet: scene.smoothest_microfacet,
+            placement: placement.clone(),
             _buffers: buffers,
         })
+    }
+}
+
+/// Each of bindings 1-10's uniform capability, if it has one.
+fn table_capability() -> impl Iterator<Item = Option<&'static UniformCapable>> {
+    (1u32..=10).map(|binding| UNIFORM_CAPABLE.iter().find(|t| t.binding == binding))
+}
+
+/// A uniform buffer holding `bytes` zero-padded to `size`.
+fn uniform_buffer(
+    gpu: &GpuContext,
+    label: &str,
+    bytes: &[u8],
+    size: usize,
+) -> Result<wgpu::Buffer, Error> {
+    let mut padded = bytes.to_vec();
+    padded.resize(size.max(bytes.len()), 0);
+    Ok(gpu.create_buffer_init(label, &padded, wgpu::BufferUsages::UNIFORM)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{self, gpu_layout::GpuScene};
+
+    fn glass_sphere() -> GpuScene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/refs/scenes/cornell_glass_sphere/scene.xml");
+        let scene = scene::load(&path).expect("scene");
+        GpuScene::new(&scene, 16, 16)
+    }
+
+    fn limits(uniform_binding: u64, uniform_buffers: u32) -> wgpu::Limits {
+        wgpu::Limits {
+            max_uniform_buffer_binding_size: uniform_binding,
+            max_uniform_buffers_per_shader_stage: uniform_buffers,
+            ..wgpu::Limits::default()
+        }
+    }
+
+    /// Catches a table declared longer or shorter than its data (the binding would not cover
+    /// the declaration, or the tail would be lost) and the storage rule binding anything uniform.
+    #[test]
+    fn every_table_that_fits_is_uniform_with_its_length() {
+        let scene = glass_sphere();
+        assert!(
+            TablePlacement::choose(PlacementRule::Storage, &scene, &limits(65536, 12))
+                .defs()
+                .is_empty()
+        );
+        let placement =
+            TablePlacement::choose(PlacementRule::UniformWhereFits, &scene, &limits(65536, 12));
+        let defs = placement.defs();
+        assert_eq!(defs.len(), UNIFORM_CAPABLE.len(), "{defs:?}");
+        let expect = |def: &str, len: usize| {
+            assert_eq!(
+                defs.get(def),
+                Some(&ShaderDefValue::UInt(len as u32)),
+                "{def}"
+            );
+        };
+        expect("BVH_NODES_UNIFORM", scene.bvh_nodes.len());
+        expect("TRIANGLES_UNIFORM", scene.triangles.len());
+        expect("PRIM_INDICES_UNIFORM", scene.prim_indices.len().div_ceil(4));
+        expect("MATERIALS_UNIFORM", scene.materials.len());
+        expect("LIGHTS_UNIFORM", scene.lights.len());
+    }
+
+    /// Catches a table bound uniform past the adapter's binding size or past its count of
+    /// uniform bindings (wgpu would refuse the pipeline layout).
+    #[test]
+    fn tables_stay_in_storage_past_the_adapters_uniform_limits() {
+        let scene = glass_sphere();
+        let triangles = (scene.triangles.len() * size_of::<GpuTriangle>()) as u64;
+        let nodes = (scene.bvh_nodes.len() * size_of::<BvhNode>()) as u64;
+        assert!(
+            triangles > nodes,
+            "the test needs the triangles to be the larger table"
+        );
+        let small =
+            TablePlacement::choose(PlacementRule::UniformWhereFits, &scene, &limits(nodes, 12));
+        let names = small.uniform_defs();
+        assert!(names.contains(&"BVH_NODES_UNIFORM") && !names.contains(&"TRIANGLES_UNIFORM"));
+        // The scene uniform, the passes' own and two tables: the two first in priority.
+        let few = TablePlacement::choose(
+            PlacementRule::UniformWhereFits,
+            &scene,
+            &limits(65536, 1 + PASS_UNIFORMS + 2),
+        );
+        assert_eq!(
+            few.uniform_defs(),
+            ["BVH_NODES_UNIFORM", "TRIANGLES_UNIFORM"]
+        );
     }
 }

@@ -39,11 +39,14 @@ impl<'a> PassHarness<'a> {
     pub fn new(gpu: &'a GpuContext, scene: &Scene, size: (u32, u32), float_atomics: bool) -> Self {
         let gpu_scene = GpuScene::new(scene, size.0, size.1);
         let mut shared = Shared::default();
-        shared.insert(SceneResources::upload(gpu, &gpu_scene).expect("scene upload"));
+        let resources = SceneResources::for_adapter(gpu, &gpu_scene).expect("scene upload");
+        let shaders = hppm::passes::shader_library(float_atomics, scene, &resources.placement)
+            .expect("shaders");
+        shared.insert(resources);
         Self {
             gpu,
             shared,
-            shaders: hppm::passes::shader_library(float_atomics, scene).expect("shaders"),
+            shaders,
             width: size.0,
             height: size.1,
             prepared: RefCell::new(Vec::new()),

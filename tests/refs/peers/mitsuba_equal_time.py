@@ -7,7 +7,10 @@ included) and the relMSE of the running mean against the reference, until SECOND
 
     pip install mitsuba==3.9.1 numpy && apt-get install -y libllvm19
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
-        python3 tests/refs/peers/mitsuba_equal_time.py SCENE.xml REFERENCE.exr SECONDS OUT.csv [SPP]
+        python3 tests/refs/peers/mitsuba_equal_time.py SCENE.xml REFERENCE.exr SECONDS OUT.csv [SPP [SEED]]
+
+SEED (default 700000) is the first call's seed; each later call takes the next one, so runs with
+seeds further apart than their call count are independent.
 
 relMSE is the metric of tests/refs/README.md: the mean over pixels and channels of
 (x - ref)^2 / (ref^2 + 0.01).
@@ -27,6 +30,7 @@ def relmse(image, reference):
 def main():
     scene_path, reference_path, seconds, out = sys.argv[1:5]
     spp = int(sys.argv[5]) if len(sys.argv) > 5 else 256
+    first_seed = int(sys.argv[6]) if len(sys.argv) > 6 else 700000
     mi.set_variant("llvm_ad_rgb")
     reference = np.array(mi.Bitmap(reference_path), dtype=np.float64)[..., :3]
     start = time.time()
@@ -35,7 +39,7 @@ def main():
     rows = []
     calls = 0
     while time.time() - start < float(seconds):
-        image = np.array(mi.render(scene, spp=spp, seed=700000 + calls), dtype=np.float64)
+        image = np.array(mi.render(scene, spp=spp, seed=first_seed + calls), dtype=np.float64)
         calls += 1
         total += image[..., :3]
         rows.append((time.time() - start, relmse(total / calls, reference)))

@@ -1,0 +1,125 @@
+//! The scene's tables bound as uniform buffers (what a CPU adapter gets, see
+//! `src/passes/scene_resources.rs`'s `TablePlacement`) must render exactly what storage buffers
+//! render: same kernels, same arithmetic, only the address space of the loads differs. Each
+//! render runs in its own `hppm` process with `HPPM_SCENE_TABLES` set, as a user would measure
+//! the two.
+//!
+//! What it would catch: a uniform table padded short or declared with a wrong length (wgpu
+//! refuses the binding, or the tail reads zeros), `prim_indices` unpacked from its vec4s with the
+//! wrong lane, a table bound at the wrong binding, or a uniform declaration that does not compose
+//! (the render fails). Any of these changes the image or stops the render.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use hppm::image::Image;
+
+/// Scenes that put different tables in uniform buffers on lavapipe: everything (spheres,
+/// plastics, conductors), everything with textures and an environment map, and a ring mesh whose
+/// nodes fit while its triangles and normals do not.
+const SCENES: [(&str, &[&str]); 3] = [
+    (
+        "tests/refs/scenes/materials_cornell/scene.xml",
+        &[
+            "BVH_NODES_UNIFORM",
+            "TRIANGLES_UNIFORM",
+            "PRIM_INDICES_UNIFORM",
+            "MATERIALS_UNIFORM",
+        ],
+    ),
+    (
+        "tests/refs/scenes/sun_sky_textured/scene.xml",
+        &["BVH_NODES_UNIFORM", "TRIANGLES_UNIFORM", "LIGHTS_UNIFORM"],
+    ),
+    (
+        "scenes/glossy_ring/scene.xml",
+        &["BVH_NODES_UNIFORM", "PRIM_INDICES_UNIFORM"],
+    ),
+];
+
+const GRAPHS: [&str; 2] = ["graphs/pt.ron", "graphs/hybrid.ron"];
+
+/// `pt` is deterministic, so its images must be identical. The hybrid's photon deposits are
+/// float atomic adds whose order follows the threads' timing: two runs of one placement differ
+/// in the last bits of a few pixels (13 of 768 on the glossy ring, on a busy machine). Its
+/// bound is that of tests/shards.rs; any of the faults above is 1e-3 or more.
+const HYBRID_EQUAL: f64 = 1e-9;
+
+fn render(scene: &str, graph: &str, tables: &str, out: &PathBuf) -> Output {
+    let output = Command::new(env!("CARGO_BIN_EXE_hppm"))
+        .args([
+            "render", scene, "--graph", graph, "--spp", "4", "--size", "32x24",
+        ])
+        .arg("--out")
+        .arg(out)
+        .env("HPPM_SCENE_TABLES", tables)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run hppm");
+    assert!(
+        output.status.success(),
+        "{scene} through {graph} with {tables} tables: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    output
+}
+
+/// The tables the render reported as uniform.
+fn uniform_tables(output: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&output.stderr)
+        .lines()
+        .find_map(|l| l.strip_prefix("scene tables in uniform buffers: "))
+        .map(|l| l.split_whitespace().map(str::to_string).collect())
+        .unwrap_or_default()
+}
+
+#[test]
+fn uniform_scene_tables_render_the_same_image_as_storage_tables() {
+    let dir = std::env::temp_dir().join(format!("hppm-tables-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    for (scene, expected) in SCENES {
+        for graph in GRAPHS {
+            let name = format!("{}-{}", scene.replace('/', "_"), graph.replace('/', "_"));
+            let storage_out = dir.join(format!("{name}-storage.exr"));
+            let uniform_out = dir.join(format!("{name}-uniform.exr"));
+            let storage = render(scene, graph, "storage", &storage_out);
+            let uniform = render(scene, graph, "uniform", &uniform_out);
+            assert!(
+                uniform_tables(&storage).is_empty(),
+                "{scene}: storage run bound uniforms"
+            );
+            let bound = uniform_tables(&uniform);
+            for table in expected {
+                assert!(
+                    bound.iter().any(|b| b == table),
+                    "{scene}: {table} not uniform (bound: {bound:?})"
+                );
+            }
+            let a = Image::read_exr(&storage_out).unwrap_or_else(|e| panic!("{e}"));
+            let b = Image::read_exr(&uniform_out).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!((a.width, a.height), (b.width, b.height));
+            let mean: f64 =
+                a.pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / a.pixels.len() as f64;
+            assert!(mean > 0.0, "{scene} through {graph}: black image");
+            if graph == "graphs/pt.ron" {
+                let differing = a
+                    .pixels
+                    .iter()
+                    .zip(&b.pixels)
+                    .filter(|(p, q)| p != q)
+                    .count();
+                assert_eq!(
+                    differing, 0,
+                    "{scene} through pt: {differing} pixels differ"
+                );
+            } else {
+                let error = b.relmse(&a).unwrap_or_else(|e| panic!("{e}"));
+                assert!(
+                    error <= HYBRID_EQUAL,
+                    "{scene} through {graph}: relMSE {error}"
+                );
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
