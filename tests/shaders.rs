@@ -23,6 +23,16 @@ fn library(float_atomics: bool) -> ShaderLibrary {
     library_with(float_atomics, hppm::passes::all_scene_defs())
 }
 
+/// Validates a composed module with every check and capability naga has; `what` names it.
+fn validate(module: &naga::Module, what: &str) {
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(module)
+    .unwrap_or_else(|e| panic!("{what}: {e:?}"));
+}
+
 /// Every entry file some pass kind names, once each.
 fn pass_shaders() -> Vec<ShaderFile> {
     let mut files: Vec<ShaderFile> = Vec::new();
@@ -103,12 +113,7 @@ fn every_pass_shader_composes_and_validates() {
             let module = lib
                 .compose(&file)
                 .unwrap_or_else(|e| panic!("{path} (float atomics {float_atomics}): {e}"));
-            naga::valid::Validator::new(
-                naga::valid::ValidationFlags::all(),
-                naga::valid::Capabilities::all(),
-            )
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{path}: {e:?}"));
+            validate(&module, path);
             // One kernel per pass is `main`; multi-kernel builders (radix sort, LBVH) name theirs.
             let multi_kernel = module.entry_points.len() > 1;
             assert!(
@@ -136,12 +141,7 @@ fn every_pass_shader_composes_with_its_own_defs() {
                 let module = lib
                     .compose_with(&file, hppm::passes::PASS_DEFS)
                     .unwrap_or_else(|e| panic!("{} with {set:?} + GLOSSY: {e}", file.path));
-                naga::valid::Validator::new(
-                    naga::valid::ValidationFlags::all(),
-                    naga::valid::Capabilities::all(),
-                )
-                .validate(&module)
-                .unwrap_or_else(|e| panic!("{}: {e:?}", file.path));
+                validate(&module, file.path);
             }
         }
     }
@@ -413,12 +413,7 @@ fn every_pass_shader_composes_with_uniform_scene_tables() {
             let module = lib
                 .compose(&file)
                 .unwrap_or_else(|e| panic!("{} with {tables:?}: {e}", file.path));
-            naga::valid::Validator::new(
-                naga::valid::ValidationFlags::all(),
-                naga::valid::Capabilities::all(),
-            )
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{} with {tables:?}: {e:?}", file.path));
+            validate(&module, &format!("{} with {tables:?}", file.path));
         }
     }
 }
