@@ -157,7 +157,7 @@ impl TablePlacement {
             .saturating_sub(1 + PASS_UNIFORMS);
         let mut uniform = Vec::new();
         for table in &UNIFORM_CAPABLE {
-            let bytes = table_bytes(scene, table.binding).len() as u64;
+            let bytes = tables(scene)[table.binding as usize - 1].1.len() as u64;
             let len = bytes.div_ceil(table.stride).max(1);
             if free > 0 && len * table.stride <= limits.max_uniform_buffer_binding_size {
                 uniform.push((table.binding, len as u32));
@@ -186,6 +186,17 @@ impl TablePlacement {
             .map(|(_, len)| *len)
     }
 
+    /// The size of binding `binding`'s uniform buffer, if it is uniform: its declared length
+    /// times its stride, which the buffer must cover.
+    fn uniform_size(&self, binding: u32) -> Option<usize> {
+        let stride = UNIFORM_CAPABLE
+            .iter()
+            .find(|t| t.binding == binding)?
+            .stride;
+        self.uniform_len(binding)
+            .map(|len| (u64::from(len) * stride) as usize)
+    }
+
     /// The defs of the tables bound as uniform buffers, in binding priority, for reports.
     pub fn uniform_defs(&self) -> Vec<&'static str> {
         UNIFORM_CAPABLE
@@ -196,36 +207,25 @@ impl TablePlacement {
     }
 }
 
-/// The bytes of the table at `binding` (1-10) of group 0.
-fn table_bytes(scene: &GpuScene, binding: u32) -> &[u8] {
+/// Bindings 1-10 of group 0 in binding order: each table's label and bytes.
+fn tables(scene: &GpuScene) -> [(&'static str, &[u8]); 10] {
     use bytemuck::cast_slice;
-    match binding {
-        1 => cast_slice(&scene.bvh_nodes),
-        2 => cast_slice(&scene.prim_indices),
-        3 => cast_slice(&scene.triangles),
-        4 => cast_slice(&scene.spheres),
-        5 => cast_slice(&scene.materials),
-        6 => cast_slice(&scene.lights),
-        7 => cast_slice(&scene.light_cdf),
-        8 => cast_slice(&scene.bsdf_tables),
-        9 => cast_slice(&scene.triangle_normals),
-        _ => cast_slice(&scene.triangle_uvs),
-    }
+    [
+        ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
+        ("scene prim indices", cast_slice(&scene.prim_indices)),
+        ("scene triangles", cast_slice(&scene.triangles)),
+        ("scene spheres", cast_slice(&scene.spheres)),
+        ("scene materials", cast_slice(&scene.materials)),
+        ("scene lights", cast_slice(&scene.lights)),
+        ("scene light cdf", cast_slice(&scene.light_cdf)),
+        ("scene bsdf tables", cast_slice(&scene.bsdf_tables)),
+        (
+            "scene triangle normals",
+            cast_slice(&scene.triangle_normals),
+        ),
+        ("scene triangle uvs", cast_slice(&scene.triangle_uvs)),
+    ]
 }
-
-/// Labels of bindings 1-10, in binding order.
-const TABLE_LABELS: [&str; 10] = [
-    "scene bvh nodes",
-    "scene prim indices",
-    "scene triangles",
-    "scene spheres",
-    "scene materials",
-    "scene lights",
-    "scene light cdf",
-    "scene bsdf tables",
-    "scene triangle normals",
-    "scene triangle uvs",
-];
 
 pub struct SceneResources {
     pub layout: wgpu::BindGroupLayout,
@@ -269,16 +269,13 @@ impl SceneResources {
         )?;
         let mut buffers = vec![uniform];
         let mut access = vec![Access::Uniform];
-        for ((binding, label), capable) in (1u32..).zip(TABLE_LABELS).zip(table_capability()) {
-            let bytes = table_bytes(scene, binding);
-            match (placement.uniform_len(binding), capable) {
-                (Some(len), Some(capable)) => {
-                    // Padded to the declared length: a binding must cover its declaration.
-                    let size = len as usize * capable.stride as usize;
+        for (binding, (label, bytes)) in (1u32..).zip(tables(scene)) {
+            match placement.uniform_size(binding) {
+                Some(size) => {
                     buffers.push(uniform_buffer(gpu, label, bytes, size)?);
                     access.push(Access::Uniform);
                 }
-                _ => {
+                None => {
                     buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
                     access.push(Access::Read);
                 }
@@ -303,11 +300,6 @@ impl SceneResources {
             _buffers: buffers,
         })
     }
-}
-
-/// Each of bindings 1-10's uniform capability, if it has one.
-fn table_capability() -> impl Iterator<Item = Option<&'static UniformCapable>> {
-    (1u32..=10).map(|binding| UNIFORM_CAPABLE.iter().find(|t| t.binding == binding))
 }
 
 /// A uniform buffer holding `bytes` zero-padded to `size`.
