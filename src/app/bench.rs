@@ -16,6 +16,8 @@ pub struct BenchRow {
     pub spp: u64,
     pub seconds: f64,
     pub rays: u64,
+    /// CPU time the hypervisor gave to other guests during the timed run ([`stolen_cpu_seconds`]).
+    pub stolen: Option<f64>,
 }
 
 impl BenchRow {
@@ -48,6 +50,7 @@ fn measure(
     )?;
     let rays_before = renderer.counters()?.get("rays");
     let spp_before = renderer.samples_per_pixel();
+    let stolen_before = stolen_cpu_seconds();
     let summary = renderer.run(
         Budget {
             spp: Some(spp_before + spp),
@@ -62,7 +65,33 @@ fn measure(
         spp: renderer.samples_per_pixel() - spp_before,
         seconds: summary.seconds,
         rays: renderer.counters()?.get("rays") - rays_before,
+        stolen: stolen_cpu_seconds()
+            .zip(stolen_before)
+            .map(|(after, before)| after - before),
     })
+}
+
+/// Clock ticks per second of /proc/stat's counters (Linux's USER_HZ, 100 on every architecture
+/// it exports to user space).
+const PROC_STAT_TICKS_PER_SECOND: f64 = 100.0;
+
+/// CPU seconds the hypervisor has so far given to other guests while this machine's CPUs
+/// wanted to run ("steal", the eighth counter of /proc/stat's `cpu` line); `None` off Linux or
+/// on a kernel without the counter. On a shared virtual machine it moves timings by tens of
+/// percent, so each benchmark row reports what was stolen during it.
+pub fn stolen_cpu_seconds() -> Option<f64> {
+    steal_from_proc_stat(&std::fs::read_to_string("/proc/stat").ok()?)
+}
+
+fn steal_from_proc_stat(stat: &str) -> Option<f64> {
+    let line = stat.lines().find(|l| l.starts_with("cpu "))?;
+    let ticks: u64 = line.split_whitespace().nth(8)?.parse().ok()?;
+    Some(ticks as f64 / PROC_STAT_TICKS_PER_SECOND)
+}
+
+/// A table cell for stolen CPU seconds: two decimals, or `–` where unknown.
+pub fn stolen_cell(stolen: Option<f64>) -> String {
+    stolen.map_or_else(|| "–".to_string(), |s| format!("{s:.2}"))
 }
 
 /// Runs the benchmark, prints a Markdown table and optionally appends it to `write`.
@@ -76,18 +105,20 @@ pub fn run(
     let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
     let mut table = format!(
         "\n### path_trace, {SIZE}x{SIZE}, {spp} spp, adapter: {} (host: {cores} CPU cores)\n\n\
-         | scene | spp | seconds | Mrays/s | Msamples/s |\n|---|---|---|---|---|\n",
+         | scene | spp | seconds | Mrays/s | Msamples/s | CPU s stolen |\n\
+         |---|---|---|---|---|---|\n",
         gpu.adapter_label()
     );
     for scene_path in SCENES {
         let row = measure(&gpu, &locate(scene_path), &locate("graphs/pt.ron"), spp)?;
         table.push_str(&format!(
-            "| {} | {} | {:.2} | {:.2} | {:.3} |\n",
+            "| {} | {} | {:.2} | {:.2} | {:.3} | {} |\n",
             scene_path,
             row.spp,
             row.seconds,
             row.mrays_per_second(),
-            row.msamples_per_second()
+            row.msamples_per_second(),
+            stolen_cell(row.stolen)
         ));
     }
     print!("{table}");
@@ -111,4 +142,22 @@ pub fn append_markdown(path: &Path, text: &str) -> Result<(), Error> {
         }
     };
     crate::image::write_file_atomically(path, (old + text).as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Would catch reading the wrong counter (iowait, guest) or the wrong unit.
+    #[test]
+    fn steal_is_the_eighth_counter_of_the_cpu_line_in_ticks() {
+        let stat = "cpu  142374 12 9263 118036 716 0 177 13345 0 0\n\
+                    cpu0 71000 6 4600 59000 350 0 90 6700 0 0\n\
+                    intr 1 2 3\n";
+        assert_eq!(steal_from_proc_stat(stat), Some(133.45));
+        assert_eq!(steal_from_proc_stat("cpu  1 2 3 4\n"), None);
+        assert_eq!(steal_from_proc_stat("intr 1 2 3\n"), None);
+        assert_eq!(stolen_cell(None), "–");
+        assert_eq!(stolen_cell(Some(0.256)), "0.26");
+    }
 }

@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use crate::app::bench::{stolen_cell, stolen_cpu_seconds};
 use crate::app::render::{Budget, Renderer};
 use crate::gpu::GpuContext;
 use crate::graph::{ValidGraph, parse_graph};
@@ -191,7 +192,8 @@ fn equal_time_table(
     budgets: &[f64],
 ) -> Result<String, Error> {
     let mut out = String::from(
-        "| scene (reference) | graph | seconds | iterations | photons | relMSE |\n|---|---|---|---|---|---|\n",
+        "| scene (reference) | graph | seconds | iterations | photons | relMSE | CPU s stolen |\n\
+         |---|---|---|---|---|---|---|\n",
     );
     let mask = plane_mask(locate)?;
     let cases = [
@@ -209,7 +211,7 @@ fn equal_time_table(
             // Mitsuba's converged path tracer misses the caustic: no budget gets it below this.
             let path_only = Image::read_exr(&locate("tests/refs/images/point_light_caustic.exr"))?;
             out.push_str(&format!(
-                "| {} (composite, plane pixels) | Mitsuba 3 `path`, converged reference | any | | | {:.5} |\n",
+                "| {} (composite, plane pixels) | Mitsuba 3 `path`, converged reference | any | | | {:.5} | |\n",
                 short(scene_path),
                 path_only.relmse_where(&reference, |i| mask[i])?
             ));
@@ -230,7 +232,11 @@ fn equal_time_table(
                     seconds: Some(seconds),
                     ..Default::default()
                 };
+                let stolen_before = stolen_cpu_seconds();
                 let summary = r.run(budget, &never, |_, _| {})?;
+                let stolen = stolen_cpu_seconds()
+                    .zip(stolen_before)
+                    .map(|(after, before)| after - before);
                 let image = r.image()?;
                 let error = if masked {
                     image.relmse_where(&reference, |i| mask[i])?
@@ -238,7 +244,7 @@ fn equal_time_table(
                     image.relmse(&reference)?
                 };
                 out.push_str(&format!(
-                    "| {}{} | {graph_path} | {:.1} | {} | {} | {error:.5} |\n",
+                    "| {}{} | {graph_path} | {:.1} | {} | {} | {error:.5} | {} |\n",
                     short(scene_path),
                     if masked {
                         " (composite, plane pixels)"
@@ -248,6 +254,7 @@ fn equal_time_table(
                     summary.seconds,
                     summary.iterations,
                     summary.photons,
+                    stolen_cell(stolen),
                 ));
             }
         }
