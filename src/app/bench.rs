@@ -50,25 +50,36 @@ fn measure(
     )?;
     let rays_before = renderer.counters()?.get("rays");
     let spp_before = renderer.samples_per_pixel();
-    let stolen_before = stolen_cpu_seconds();
-    let summary = renderer.run(
-        Budget {
-            spp: Some(spp_before + spp),
-            seconds: None,
-            photons: None,
-        },
-        &never,
-        |_, _| {},
-    )?;
+    let (summary, stolen) = while_counting_steal(|| {
+        renderer.run(
+            Budget {
+                spp: Some(spp_before + spp),
+                seconds: None,
+                photons: None,
+            },
+            &never,
+            |_, _| {},
+        )
+    });
+    let summary = summary?;
     Ok(BenchRow {
         scene: scene_path.display().to_string(),
         spp: renderer.samples_per_pixel() - spp_before,
         seconds: summary.seconds,
         rays: renderer.counters()?.get("rays") - rays_before,
-        stolen: stolen_cpu_seconds()
-            .zip(stolen_before)
-            .map(|(after, before)| after - before),
+        stolen,
     })
+}
+
+/// Runs `work` and returns what it returned with the CPU seconds stolen meanwhile (`None` where
+/// [`stolen_cpu_seconds`] is unknown).
+pub fn while_counting_steal<T>(work: impl FnOnce() -> T) -> (T, Option<f64>) {
+    let before = stolen_cpu_seconds();
+    let result = work();
+    let stolen = stolen_cpu_seconds()
+        .zip(before)
+        .map(|(after, before)| after - before);
+    (result, stolen)
 }
 
 /// Clock ticks per second of /proc/stat's counters (Linux's USER_HZ, 100 on every architecture

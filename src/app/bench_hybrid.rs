@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use crate::app::bench::{stolen_cell, stolen_cpu_seconds};
+use crate::app::bench::{stolen_cell, while_counting_steal};
 use crate::app::render::{Budget, Renderer};
 use crate::gpu::GpuContext;
 use crate::graph::{ValidGraph, parse_graph};
@@ -232,11 +232,8 @@ fn equal_time_table(
                     seconds: Some(seconds),
                     ..Default::default()
                 };
-                let stolen_before = stolen_cpu_seconds();
-                let summary = r.run(budget, &never, |_, _| {})?;
-                let stolen = stolen_cpu_seconds()
-                    .zip(stolen_before)
-                    .map(|(after, before)| after - before);
+                let (summary, stolen) = while_counting_steal(|| r.run(budget, &never, |_, _| {}));
+                let summary = summary?;
                 let image = r.image()?;
                 let error = if masked {
                     image.relmse_where(&reference, |i| mask[i])?
