@@ -359,6 +359,11 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             uniform_tables.join(" ")
         );
     }
+    if let Some((triangles, spheres)) = renderer.placement().every_prim() {
+        eprintln!(
+            "rays test every primitive instead of the BVH ({triangles} triangles, {spheres} spheres)"
+        );
+    }
     for pruned in renderer.pruned() {
         eprintln!("{pruned}");
     }

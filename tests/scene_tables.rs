@@ -1,8 +1,9 @@
 //! The scene's tables bound as uniform buffers (what a CPU adapter gets, see
 //! `src/passes/scene_resources.rs`'s `TablePlacement`) must render exactly what storage buffers
-//! render: same kernels, same arithmetic, only the address space of the loads differs. Each
-//! render runs in its own `hppm` process with `HPPM_SCENE_TABLES` set, as a user would measure
-//! the two.
+//! render: same kernels, same arithmetic, only the address space of the loads differs. And a
+//! small scene whose rays test every primitive instead of walking the BVH must render what the
+//! BVH renders. Each render runs in its own `hppm` process with `HPPM_SCENE_TABLES` set, as a
+//! user would measure them.
 //!
 //! What it would catch: a uniform table padded short or declared with a wrong length (wgpu
 //! refuses the binding, or the tail reads zeros), `prim_indices` unpacked from its vec4s with the
@@ -83,7 +84,7 @@ fn uniform_scene_tables_render_the_same_image_as_storage_tables() {
             let storage_out = dir.join(format!("{name}-storage.exr"));
             let uniform_out = dir.join(format!("{name}-uniform.exr"));
             let storage = render(scene, graph, "storage", &storage_out);
-            let uniform = render(scene, graph, "uniform", &uniform_out);
+            let uniform = render(scene, graph, "uniform-bvh", &uniform_out);
             assert!(
                 uniform_tables(&storage).is_empty(),
                 "{scene}: storage run bound uniforms"
@@ -119,6 +120,70 @@ fn uniform_scene_tables_render_the_same_image_as_storage_tables() {
                     "{scene} through {graph}: relMSE {error}"
                 );
             }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Small scenes (every primitive tested on lavapipe) with each block size of the unrolled tests
+/// in shaders/common/scene.wgsl: 12 triangles and 2 spheres (blocks 8 + 4 and 2), 24 and 3
+/// (16 + 8 and 2 + 1), 2 and 1 (a point light's caustic: photons' coplanar tie rule).
+const SMALL_SCENES: [&str; 3] = [
+    "tests/refs/scenes/cornell_glass_sphere/scene.xml",
+    "tests/refs/scenes/materials_cornell/scene.xml",
+    "tests/refs/scenes/point_light_caustic/scene.xml",
+];
+
+/// Rays that meet two primitives at exactly one distance may keep the other one when the
+/// primitives are tested in index order instead of the BVH's; such a pixel's path then differs.
+/// At most this share of pixels may differ by more than the hybrid's ordering noise. A
+/// primitive no block tests (a wall or sphere missing), a sphere given a wrong index (its
+/// material or light swapped) or a block starting at the wrong index changes a tenth of the
+/// image or more.
+const TIE_PIXELS: f64 = 0.01;
+
+#[test]
+fn testing_every_primitive_renders_what_the_bvh_renders() {
+    let dir = std::env::temp_dir().join(format!("hppm-every-prim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    for scene in SMALL_SCENES {
+        for graph in GRAPHS {
+            let name = format!("{}-{}", scene.replace('/', "_"), graph.replace('/', "_"));
+            let bvh_out = dir.join(format!("{name}-bvh.exr"));
+            let every_out = dir.join(format!("{name}-every.exr"));
+            let bvh = render(scene, graph, "uniform-bvh", &bvh_out);
+            let every = render(scene, graph, "uniform", &every_out);
+            let tests_every = |output: &Output| {
+                String::from_utf8_lossy(&output.stderr)
+                    .contains("rays test every primitive instead of the BVH")
+            };
+            assert!(
+                !tests_every(&bvh),
+                "{scene}: uniform-bvh tested every primitive"
+            );
+            assert!(
+                tests_every(&every),
+                "{scene}: uniform did not test every primitive"
+            );
+            let a = Image::read_exr(&bvh_out).unwrap_or_else(|e| panic!("{e}"));
+            let b = Image::read_exr(&every_out).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!((a.width, a.height), (b.width, b.height));
+            let differing = a
+                .pixels
+                .iter()
+                .zip(&b.pixels)
+                .filter(|(p, q)| {
+                    p.iter().zip(q.iter()).any(|(x, y)| {
+                        f64::from((x - y).abs()) > 1e-4 * f64::from(x.abs().max(y.abs())).max(1e-6)
+                    })
+                })
+                .count();
+            let share = differing as f64 / a.pixels.len() as f64;
+            assert!(
+                share <= TIE_PIXELS,
+                "{scene} through {graph}: {differing} of {} pixels differ",
+                a.pixels.len()
+            );
         }
     }
     let _ = std::fs::remove_dir_all(&dir);

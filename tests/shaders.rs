@@ -400,7 +400,7 @@ fn every_pass_shader_composes_with_uniform_scene_tables() {
     .expect("scene");
     let gpu_scene = hppm::scene::gpu_layout::GpuScene::new(&scene, 8, 8);
     let limits = wgpu::Limits::default();
-    let uniform = TablePlacement::choose(PlacementRule::UniformWhereFits, &gpu_scene, &limits);
+    let uniform = TablePlacement::choose(PlacementRule::UniformWithBvh, &gpu_scene, &limits);
     let all = uniform.defs();
     assert_eq!(all.len(), 7, "every table of a small scene fits: {all:?}");
     let mut sets: Vec<HashMap<_, _>> = vec![all.clone()];
@@ -415,5 +415,52 @@ fn every_pass_shader_composes_with_uniform_scene_tables() {
                 .unwrap_or_else(|e| panic!("{} with {tables:?}: {e}", file.path));
             validate(&module, &format!("{} with {tables:?}", file.path));
         }
+    }
+}
+
+/// Every pass kernel composes and validates with the every-primitive test and every block of
+/// it present (127 triangles and 15 spheres), over uniform tables. Would catch a block whose
+/// function is missing or misnamed, or a def substituted where WGSL wants another type.
+#[test]
+fn every_pass_shader_composes_testing_every_primitive() {
+    use hppm::passes::{PlacementRule, TablePlacement};
+    use naga_oil::compose::ShaderDefValue;
+    let scene = hppm::scene::load(std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
+    )))
+    .expect("scene");
+    let gpu_scene = hppm::scene::gpu_layout::GpuScene::new(&scene, 8, 8);
+    let uniform = TablePlacement::choose(
+        PlacementRule::UniformWithBvh,
+        &gpu_scene,
+        &wgpu::Limits::default(),
+    );
+    let mut defs = hppm::passes::all_scene_defs();
+    defs.extend(uniform.defs());
+    defs.insert("EVERY_PRIM".into(), ShaderDefValue::Bool(true));
+    for (size, first) in [
+        (64, 0),
+        (32, 64),
+        (16, 96),
+        (8, 112),
+        (4, 120),
+        (2, 124),
+        (1, 126),
+    ] {
+        defs.insert(
+            format!("TRIANGLES_FROM_{size}"),
+            ShaderDefValue::UInt(first),
+        );
+    }
+    for (size, first) in [(8, 0), (4, 8), (2, 12), (1, 14)] {
+        defs.insert(format!("SPHERES_FROM_{size}"), ShaderDefValue::UInt(first));
+    }
+    let lib = library_with(true, defs);
+    for file in pass_shaders() {
+        let module = lib
+            .compose(&file)
+            .unwrap_or_else(|e| panic!("{} testing every primitive: {e}", file.path));
+        validate(&module, &format!("{} testing every primitive", file.path));
     }
 }

@@ -372,14 +372,39 @@ fn faces_ray(prim: u32, origin: vec3<f32>, dir: vec3<f32>, t: f32) -> bool {
     return dot(dir, cross(triangles[prim].edge_a, triangles[prim].edge_b)) < 0.0;
 }
 
-// Closest hit along the ray within (0, t_max). With `any_hit`, returns at the first hit found.
-// With `front_wins_ties`, of two coplanar hits the one whose front faces the ray wins: where a
+// Keeps `prim` at distance `t` in `hit` if it is closer; returns whether it was kept. With
+// `front_wins_ties`, of two coplanar hits the one whose front faces the ray wins: where a
 // dielectric's face lies on a diffuse surface (a glass standing on a table), a photon arriving
 // at the contact lands on the table, as the reverse of a camera path leaving the table (which
 // starts on the table's front side, past the contact) does. Otherwise the tie goes to whichever
 // triangle rounds closer, and photons lost through the contact would darken the caustic the
 // camera pass leaves to them.
+fn keep_closer(hit: ptr<function, Hit>, prim: u32, t: f32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) -> bool {
+    if front_wins_ties && t < T_INFINITE && abs(t - (*hit).t) <= tie_span(origin, (*hit).t) {
+        if (*hit).prim == NO_HIT || (faces_ray(prim, origin, dir, t) && !faces_ray((*hit).prim, origin, dir, (*hit).t)) {
+            *hit = Hit(t, prim);
+            return true;
+        }
+        return false;
+    }
+    if t < (*hit).t {
+        *hit = Hit(t, prim);
+        return true;
+    }
+    return false;
+}
+
+// Closest hit along the ray within (0, t_max). With `any_hit`, returns at the first hit found.
+// `front_wins_ties`: see keep_closer.
 fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_wins_ties: bool) -> Hit {
+#ifdef EVERY_PRIM
+    return test_every_prim(origin, dir, t_max, front_wins_ties);
+#else
+    return traverse_bvh(origin, dir, t_max, any_hit, front_wins_ties);
+#endif
+}
+
+fn traverse_bvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_wins_ties: bool) -> Hit {
     var hit = Hit(t_max, NO_HIT);
     let inv_dir = safe_inverse(dir);
     var stack: array<u32, BVH_STACK_SIZE>;
@@ -397,16 +422,9 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_
         if node.count > 0u {
             for (var i = 0u; i < node.count; i++) {
                 let prim = prim_index(node.left_or_first + i);
-                let t = intersect_prim(prim, origin, dir);
-                if front_wins_ties && t < T_INFINITE && abs(t - hit.t) <= tie_span(origin, hit.t) {
-                    if hit.prim == NO_HIT || (faces_ray(prim, origin, dir, t) && !faces_ray(hit.prim, origin, dir, hit.t)) {
-                        hit = Hit(t, prim);
-                    }
-                } else if t < hit.t {
-                    hit = Hit(t, prim);
-                    if any_hit {
-                        return hit;
-                    }
+                let kept = keep_closer(&hit, prim, intersect_prim(prim, origin, dir), origin, dir, front_wins_ties);
+                if kept && any_hit {
+                    return hit;
                 }
             }
         } else {
@@ -441,6 +459,113 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_
     }
     return hit;
 }
+
+#ifdef EVERY_PRIM
+// Small scenes on a CPU adapter test every primitive instead of walking the BVH
+// (src/passes/scene_resources.rs decides). Mesa 25.0's lavapipe loads a table entry once for
+// all SIMD lanes only when its index is a compile-time constant; any other index, a loop
+// counter included, costs a bounds-checked scalar load per lane (BENCHMARKS.md). So the tests
+// are unrolled: each `first` below is a constant at its call site once the functions are
+// inlined, and the defs TRIANGLES_FROM_<n> and SPHERES_FROM_<n> (n a power of two, the value
+// the first index of that block) split the scene's primitives into blocks of powers of two.
+// No test returns early: a masked-off lane runs every test anyway.
+fn test_triangles_1(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    keep_closer(hit, first, intersect_triangle(first, origin, dir), origin, dir, front_wins_ties);
+}
+
+fn test_triangles_2(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_triangles_1(hit, first, origin, dir, front_wins_ties);
+    test_triangles_1(hit, first + 1u, origin, dir, front_wins_ties);
+}
+
+fn test_triangles_4(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_triangles_2(hit, first, origin, dir, front_wins_ties);
+    test_triangles_2(hit, first + 2u, origin, dir, front_wins_ties);
+}
+
+fn test_triangles_8(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_triangles_4(hit, first, origin, dir, front_wins_ties);
+    test_triangles_4(hit, first + 4u, origin, dir, front_wins_ties);
+}
+
+fn test_triangles_16(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_triangles_8(hit, first, origin, dir, front_wins_ties);
+    test_triangles_8(hit, first + 8u, origin, dir, front_wins_ties);
+}
+
+fn test_triangles_32(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_triangles_16(hit, first, origin, dir, front_wins_ties);
+    test_triangles_16(hit, first + 16u, origin, dir, front_wins_ties);
+}
+
+fn test_triangles_64(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_triangles_32(hit, first, origin, dir, front_wins_ties);
+    test_triangles_32(hit, first + 32u, origin, dir, front_wins_ties);
+}
+
+#ifdef SPHERES
+fn test_spheres_1(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    let t = intersect_sphere(spheres[first], origin, dir);
+    keep_closer(hit, scene_info.num_triangles + first, t, origin, dir, front_wins_ties);
+}
+
+fn test_spheres_2(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_spheres_1(hit, first, origin, dir, front_wins_ties);
+    test_spheres_1(hit, first + 1u, origin, dir, front_wins_ties);
+}
+
+fn test_spheres_4(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_spheres_2(hit, first, origin, dir, front_wins_ties);
+    test_spheres_2(hit, first + 2u, origin, dir, front_wins_ties);
+}
+
+fn test_spheres_8(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    test_spheres_4(hit, first, origin, dir, front_wins_ties);
+    test_spheres_4(hit, first + 4u, origin, dir, front_wins_ties);
+}
+#endif
+
+fn test_every_prim(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, front_wins_ties: bool) -> Hit {
+    var hit = Hit(t_max, NO_HIT);
+#ifdef TRIANGLES_FROM_64
+    test_triangles_64(&hit, #{TRIANGLES_FROM_64}u, origin, dir, front_wins_ties);
+#endif
+#ifdef TRIANGLES_FROM_32
+    test_triangles_32(&hit, #{TRIANGLES_FROM_32}u, origin, dir, front_wins_ties);
+#endif
+#ifdef TRIANGLES_FROM_16
+    test_triangles_16(&hit, #{TRIANGLES_FROM_16}u, origin, dir, front_wins_ties);
+#endif
+#ifdef TRIANGLES_FROM_8
+    test_triangles_8(&hit, #{TRIANGLES_FROM_8}u, origin, dir, front_wins_ties);
+#endif
+#ifdef TRIANGLES_FROM_4
+    test_triangles_4(&hit, #{TRIANGLES_FROM_4}u, origin, dir, front_wins_ties);
+#endif
+#ifdef TRIANGLES_FROM_2
+    test_triangles_2(&hit, #{TRIANGLES_FROM_2}u, origin, dir, front_wins_ties);
+#endif
+#ifdef TRIANGLES_FROM_1
+    test_triangles_1(&hit, #{TRIANGLES_FROM_1}u, origin, dir, front_wins_ties);
+#endif
+#ifdef SPHERES_FROM_8
+    test_spheres_8(&hit, #{SPHERES_FROM_8}u, origin, dir, front_wins_ties);
+#endif
+#ifdef SPHERES_FROM_4
+    test_spheres_4(&hit, #{SPHERES_FROM_4}u, origin, dir, front_wins_ties);
+#endif
+#ifdef SPHERES_FROM_2
+    test_spheres_2(&hit, #{SPHERES_FROM_2}u, origin, dir, front_wins_ties);
+#endif
+#ifdef SPHERES_FROM_1
+    test_spheres_1(&hit, #{SPHERES_FROM_1}u, origin, dir, front_wins_ties);
+#endif
+    if hit.prim == NO_HIT {
+        hit.t = T_INFINITE;
+    }
+    return hit;
+}
+#endif
 
 fn intersect_scene(origin: vec3<f32>, dir: vec3<f32>) -> Hit {
     return traverse(origin, dir, T_INFINITE, false, false);

@@ -55,11 +55,27 @@ pub const LAYOUTS: &[StructLayout] = &[
 /// the traversal's node and triangle reads are most of a camera path's time there
 /// (BENCHMARKS.md). GPUs serialise divergent uniform reads, so they keep storage buffers.
 /// `HPPM_SCENE_TABLES=storage` or `=uniform` overrides the choice (to measure both).
+///
+/// A small scene whose triangles and spheres are uniform tables is also intersected without its
+/// BVH, by testing every primitive in unrolled code (`EVERY_PRIM` in shaders/common/scene.wgsl):
+/// lavapipe loads a uniform entry at a constant index once for all lanes, and that beats the
+/// BVH's divergent loads up to [`EVERY_PRIM_LIMIT`] primitives (BENCHMARKS.md).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct TablePlacement {
     /// (binding, length in array elements of its uniform declaration) of each uniform table.
     uniform: Vec<(u32, u32)>,
+    /// The scene's (triangles, spheres) when every primitive is tested instead of the BVH.
+    every_prim: Option<(u32, u32)>,
 }
+
+/// The most primitives a scene may have for its rays to test every one instead of walking the
+/// BVH (where its triangles and spheres are uniform tables). The unrolled blocks in
+/// shaders/common/scene.wgsl go up to 127 triangles and 15 spheres.
+pub const EVERY_PRIM_LIMIT: usize = 48;
+
+/// Block sizes of the unrolled tests, largest first (shaders/common/scene.wgsl).
+const TRIANGLE_BLOCKS: [u32; 7] = [64, 32, 16, 8, 4, 2, 1];
+const SPHERE_BLOCKS: [u32; 4] = [8, 4, 2, 1];
 
 /// A table that may be bound as a uniform buffer: its binding in group 0, the shader def that
 /// declares it so (shaders/common/scene.wgsl, set to the array length), and its element size
@@ -121,18 +137,22 @@ const PASS_UNIFORMS: u32 = 2;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PlacementRule {
     Storage,
+    /// Uniform where tables fit, and every primitive tested in scenes small enough.
     UniformWhereFits,
+    /// Uniform where tables fit, always through the BVH.
+    UniformWithBvh,
 }
 
 impl PlacementRule {
-    /// `HPPM_SCENE_TABLES` when set (`storage` or `uniform`), else uniform where tables fit on
-    /// CPU adapters and storage elsewhere.
+    /// `HPPM_SCENE_TABLES` when set (`storage`, `uniform` or `uniform-bvh`), else uniform where
+    /// tables fit on CPU adapters and storage elsewhere.
     pub fn for_adapter(gpu: &GpuContext) -> Result<Self, Error> {
         match std::env::var("HPPM_SCENE_TABLES").as_deref() {
             Ok("storage") => Ok(Self::Storage),
             Ok("uniform") => Ok(Self::UniformWhereFits),
+            Ok("uniform-bvh") => Ok(Self::UniformWithBvh),
             Ok(other) => Err(Error::Other(format!(
-                "HPPM_SCENE_TABLES={other}: expected `storage` or `uniform`"
+                "HPPM_SCENE_TABLES={other}: expected `storage`, `uniform` or `uniform-bvh`"
             ))),
             Err(_) if gpu.info.device_type == wgpu::DeviceType::Cpu => Ok(Self::UniformWhereFits),
             Err(_) => Ok(Self::Storage),
@@ -164,18 +184,49 @@ impl TablePlacement {
                 free -= 1;
             }
         }
-        Self { uniform }
+        let mut placement = Self {
+            uniform,
+            every_prim: None,
+        };
+        // The counts, not the tables' lengths: an empty table holds one zeroed entry.
+        let triangles = scene.uniform.num_triangles as usize;
+        let spheres = scene.uniform.num_spheres as usize;
+        let small = triangles + spheres <= EVERY_PRIM_LIMIT;
+        let tested_uniform =
+            |binding: u32, len: usize| len == 0 || placement.uniform_len(binding).is_some();
+        if rule == PlacementRule::UniformWhereFits
+            && small
+            && triangles < 128
+            && spheres < 16
+            && tested_uniform(3, triangles)
+            && tested_uniform(4, spheres)
+        {
+            placement.every_prim = Some((triangles as u32, spheres as u32));
+        }
+        placement
     }
 
     /// The shader defs that declare the uniform tables (each set to its array length).
+    /// With every primitive tested, also `EVERY_PRIM` and the unrolled blocks' first indices.
     pub fn defs(&self) -> HashMap<String, ShaderDefValue> {
-        UNIFORM_CAPABLE
+        let mut defs: HashMap<String, ShaderDefValue> = UNIFORM_CAPABLE
             .iter()
             .filter_map(|t| {
                 self.uniform_len(t.binding)
                     .map(|len| (t.def.to_string(), ShaderDefValue::UInt(len)))
             })
-            .collect()
+            .collect();
+        if let Some((triangles, spheres)) = self.every_prim {
+            defs.insert("EVERY_PRIM".into(), ShaderDefValue::Bool(true));
+            defs.extend(block_defs("TRIANGLES_FROM", &TRIANGLE_BLOCKS, triangles));
+            defs.extend(block_defs("SPHERES_FROM", &SPHERE_BLOCKS, spheres));
+        }
+        defs
+    }
+
+    /// The scene's (triangles, spheres) when rays test every primitive instead of the BVH.
+    pub fn every_prim(&self) -> Option<(u32, u32)> {
+        self.every_prim
     }
 
     /// The array length of binding `binding`'s uniform declaration, if it is uniform.
@@ -205,6 +256,20 @@ impl TablePlacement {
             .map(|t| t.def)
             .collect()
     }
+}
+
+/// `count` primitives split into blocks of the sizes in `blocks` (powers of two, largest first),
+/// as defs `PREFIX_<size>` = the block's first index: the binary digits of `count`.
+fn block_defs(prefix: &str, blocks: &[u32], count: u32) -> Vec<(String, ShaderDefValue)> {
+    let mut first = 0;
+    let mut defs = Vec::new();
+    for &size in blocks {
+        if count & size != 0 {
+            defs.push((format!("{prefix}_{size}"), ShaderDefValue::UInt(first)));
+            first += size;
+        }
+    }
+    defs
 }
 
 /// Bindings 1-10 of group 0 in binding order: each table's label and bytes.
@@ -345,7 +410,7 @@ mod tests {
                 .is_empty()
         );
         let placement =
-            TablePlacement::choose(PlacementRule::UniformWhereFits, &scene, &limits(65536, 12));
+            TablePlacement::choose(PlacementRule::UniformWithBvh, &scene, &limits(65536, 12));
         let defs = placement.defs();
         assert_eq!(defs.len(), UNIFORM_CAPABLE.len(), "{defs:?}");
         let expect = |def: &str, len: usize| {
@@ -386,6 +451,77 @@ mod tests {
         assert_eq!(
             few.uniform_defs(),
             ["BVH_NODES_UNIFORM", "TRIANGLES_UNIFORM"]
+        );
+    }
+
+    /// Catches a primitive no unrolled block tests (a wall missing from every image) or one
+    /// tested twice, for every count the blocks allow, and a block size the WGSL lacks.
+    #[test]
+    fn unrolled_blocks_cover_every_primitive_once() {
+        for (blocks, most) in [(&TRIANGLE_BLOCKS[..], 127), (&SPHERE_BLOCKS[..], 15)] {
+            for count in 0..=most {
+                let mut next = 0;
+                let mut defs = block_defs("B", blocks, count);
+                defs.sort_by_key(|(_, first)| match first {
+                    ShaderDefValue::UInt(first) => *first,
+                    _ => u32::MAX,
+                });
+                for (name, first) in defs {
+                    let size: u32 = name["B_".len()..].parse().expect("block size");
+                    assert!(blocks.contains(&size), "{name}");
+                    assert_eq!(first, ShaderDefValue::UInt(next), "count {count}: {name}");
+                    next += size;
+                }
+                assert_eq!(next, count, "blocks of {count} primitives");
+            }
+        }
+    }
+
+    /// Catches the every-primitive test chosen where it would read tables from storage (its
+    /// loads are only cheap from uniform buffers), under the rules that exclude it, or with its
+    /// block defs missing; and a large scene losing its BVH.
+    #[test]
+    fn only_small_scenes_with_uniform_geometry_test_every_primitive() {
+        let scene = glass_sphere();
+        let (triangles, spheres) = (scene.uniform.num_triangles, scene.uniform.num_spheres);
+        assert_eq!((triangles, spheres), (12, 2));
+        let every =
+            TablePlacement::choose(PlacementRule::UniformWhereFits, &scene, &limits(65536, 12));
+        assert_eq!(every.every_prim(), Some((12, 2)));
+        let defs = every.defs();
+        for (def, first) in [
+            ("TRIANGLES_FROM_8", 0),
+            ("TRIANGLES_FROM_4", 8),
+            ("SPHERES_FROM_2", 0),
+        ] {
+            assert_eq!(defs.get(def), Some(&ShaderDefValue::UInt(first)), "{def}");
+        }
+        assert!(defs.contains_key("EVERY_PRIM"));
+        assert_eq!(
+            defs.keys().filter(|k| k.contains("_FROM_")).count(),
+            3,
+            "{defs:?}"
+        );
+        for rule in [PlacementRule::Storage, PlacementRule::UniformWithBvh] {
+            let bvh = TablePlacement::choose(rule, &scene, &limits(65536, 12));
+            assert_eq!(bvh.every_prim(), None, "{rule:?}");
+            assert!(!bvh.defs().contains_key("EVERY_PRIM"), "{rule:?}");
+        }
+        let triangle_bytes = (scene.triangles.len() * size_of::<GpuTriangle>()) as u64;
+        let storage_triangles = TablePlacement::choose(
+            PlacementRule::UniformWhereFits,
+            &scene,
+            &limits(triangle_bytes - 16, 12),
+        );
+        assert_eq!(storage_triangles.every_prim(), None);
+        let mut large = glass_sphere();
+        large.uniform.num_triangles = EVERY_PRIM_LIMIT as u32;
+        let large =
+            TablePlacement::choose(PlacementRule::UniformWhereFits, &large, &limits(65536, 12));
+        assert_eq!(
+            large.every_prim(),
+            None,
+            "{EVERY_PRIM_LIMIT} triangles and 2 spheres"
         );
     }
 }
