@@ -468,7 +468,8 @@ fn traverse_bvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, fr
 // are unrolled: each `first` below is a constant at its call site once the functions are
 // inlined, and the defs TRIANGLES_FROM_<n> and SPHERES_FROM_<n> (n a power of two, the value
 // the first index of that block) split the scene's primitives into blocks of powers of two.
-// No test returns early: a masked-off lane runs every test anyway.
+// No test returns early (a masked-off lane runs every test anyway), but a block of four whose
+// box no lane enters is skipped: binding 1 holds those boxes instead of the BVH's nodes.
 fn test_triangles_1(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
     keep_closer(hit, first, intersect_triangle(first, origin, dir), origin, dir, front_wins_ties);
 }
@@ -479,6 +480,17 @@ fn test_triangles_2(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir:
 }
 
 fn test_triangles_4(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
+    // Binding 1 holds a box per block of four (src/passes/scene_resources.rs, block_boxes),
+    // with `count` 1 where it is worth testing. A box no lane enters skips the four tests: lavapipe
+    // jumps over code no lane runs.
+    let block = bvh_nodes[first / 4u];
+    if block.count != 0u {
+        // A tie may lie a hair beyond the closest hit so far (as in traverse_bvh).
+        let reach = select((*hit).t, (*hit).t + tie_span(origin, (*hit).t), front_wins_ties && (*hit).prim != NO_HIT);
+        if intersect_box(block.min, block.max, origin, safe_inverse(dir), reach) == T_INFINITE {
+            return;
+        }
+    }
     test_triangles_2(hit, first, origin, dir, front_wins_ties);
     test_triangles_2(hit, first + 2u, origin, dir, front_wins_ties);
 }
