@@ -196,8 +196,8 @@ impl TablePlacement {
             |binding: u32, len: usize| len == 0 || placement.uniform_len(binding).is_some();
         if rule == PlacementRule::UniformWhereFits
             && small
-            && triangles < 128
-            && spheres < 16
+            && triangles <= blocks_cover(&TRIANGLE_BLOCKS)
+            && spheres <= blocks_cover(&SPHERE_BLOCKS)
             && tested_uniform(3, triangles)
             && tested_uniform(4, spheres)
         {
@@ -310,6 +310,11 @@ fn block_boxes(triangles: &[GpuTriangle], scene: &GpuSceneUniform) -> Vec<BvhNod
             }
         })
         .collect()
+}
+
+/// The most primitives blocks of these sizes can test (each size used at most once).
+fn blocks_cover(blocks: &[u32]) -> usize {
+    blocks.iter().sum::<u32>() as usize
 }
 
 /// `count` primitives split into blocks of the sizes in `blocks` (powers of two, largest first),
@@ -521,6 +526,7 @@ mod tests {
     #[test]
     fn unrolled_blocks_cover_every_primitive_once() {
         for (blocks, most) in [(&TRIANGLE_BLOCKS[..], 127), (&SPHERE_BLOCKS[..], 15)] {
+            assert_eq!(blocks_cover(blocks), most as usize);
             for count in 0..=most {
                 let mut next = 0;
                 let mut defs = block_defs("B", blocks, count);
