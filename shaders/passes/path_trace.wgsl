@@ -128,6 +128,10 @@ struct PathState {
     mapped: vec3<f32>,
     // GLOSSY only: the last vertex was not diffuse, so `mapped` applies to what is reached now.
     after_specular: bool,
+    // Light gathered so far (throughput-weighted).
+    radiance: vec3<f32>,
+    // The segment traced next, counting from 1 at the camera.
+    depth: u32,
 }
 
 // Where the camera pass hands a sample over to photon mapping.
@@ -280,185 +284,188 @@ fn primary_direction(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u
     return camera_direction(pixel, u);
 }
 
-fn trace_path(pixel: vec2<u32>, sink: HitPointSink, splatted: bool, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
-    var path = PathState(scene_info.camera_origin, primary_direction(pixel, splatted, rng), vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false);
-    var result = vec3<f32>(0.0);
-    let max_depth = min(params.max_depth, SAFETY_MAX_DEPTH);
-    // `depth` counts segments traced so far (Mitsuba's rule).
-    for (var depth = 1u; depth <= max_depth; depth++) {
-        *rays += 1u;
-        let hit = intersect_scene(path.origin, path.dir);
-        if hit.prim == NO_HIT {
-#ifdef ENVIRONMENT
-            result += path.throughput * environment_emission(path);
-#endif
-            break;
-        }
-        var surface = surface_at(hit, path.origin, path.dir);
-        var material = materials[surface.material];
-        let wo = -path.dir;
-        var cos_o = dot(wo, surface.normal);
-        path.travelled += hit.t;
-
-#ifdef GLOSSY
-        if surface.light != NO_LIGHT && cos_o > 0.0 {
-            // Reached through specular lobes only from a photon-mapped vertex, the `mapped` share
-            // is the photons'; the rest keeps its MIS weight (a glossy lobe's pdf, not delta's).
-            let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - path.mapped, path.after_specular);
-            var weight = 1.0;
-            if !path.after_delta {
-                weight = power_heuristic(path.bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
-            }
-            result += path.throughput * kept * material.emission * weight;
-        }
-#else
-        if surface.light != NO_LIGHT && cos_o > 0.0 && !(path.after_delta && path.after_merge) {
-            var weight = 1.0;
-            if !path.after_delta {
-                weight = power_heuristic(path.bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
-            }
-            result += path.throughput * material.emission * weight;
-        }
-#endif
-        // A twosided material's back is its own BSDF, seen with the normal flipped.
-        if cos_o < 0.0 && material.back != NO_BACK {
-            material = materials[material.back];
-            surface.normal = -surface.normal;
-            surface.shading_normal = -surface.shading_normal;
-            cos_o = -cos_o;
-        }
-#ifdef TEXTURES
-        // Before any use of the colours: NEE, the bounce, hit-point weights, grid lookups.
-        material = textured_material(material, surface.uv);
-#endif
-        if depth == max_depth {
-            break;
-        }
-        if depth >= params.rr_depth {
-            let survive = min(max_component(path.throughput), 0.95);
-            if rng_next_f32(rng) >= survive {
-                break;
-            }
-            path.throughput /= survive;
-        }
-
-        if material.kind == MATERIAL_DIFFUSE {
-            // One-sided, as Mitsuba's diffuse: black from behind.
-            if cos_o <= 0.0 || !shading_agrees(surface, wo) {
-                break;
-            }
-            path.diffuse_vertices += 1u;
-            let at_hit_point = path.diffuse_vertices <= params.merge_depth;
-            // Past the hit points the photon grid adds the caustic, which the path then drops.
-            let looked_up = params.lookups != 0u && !at_hit_point;
-            path.after_merge = at_hit_point || looked_up;
-#ifdef GLOSSY
-            path.mapped = select(vec3<f32>(0.0), vec3<f32>(1.0), path.after_merge);
-            path.after_specular = false;
-#endif
-            if looked_up {
-                result += path.throughput * material.albedo * INV_PI * caustic_irradiance(surface, depth);
-            }
-            if at_hit_point {
-                let weight = path.throughput * material.albedo * INV_PI;
-                if sink.enabled && max_component(weight) > 0.0 {
-                    record_hit_point(sink, path.diffuse_vertices - 1u, surface, wo, depth, weight, path.travelled);
-                }
-                if params.trace_beyond == 0u {
-                    break;
-                }
-            }
-            result += path.throughput * direct_light(surface, material.albedo, rng, rays);
-            let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
-            let cos_i = dot(dir, surface.shading_normal);
-            if cos_i <= 0.0 || !shading_agrees(surface, dir) {
-                break;
-            }
-            path.throughput *= material.albedo;
-            path.bsdf_pdf = cos_i * INV_PI;
-            path.after_delta = false;
-            path.dir = dir;
-        } else if material.kind == MATERIAL_MIRROR {
-            if cos_o <= 0.0 || !shading_agrees(surface, wo) {
-                break;
-            }
-            path.dir = reflect_about(wo, surface.shading_normal);
-            path.after_delta = true;
-#ifdef GLOSSY
-            path.after_specular = true;
-#endif
-            if !shading_agrees(surface, path.dir) {
-                break;
-            }
-        } else if material.kind == MATERIAL_DIELECTRIC {
-#ifdef DIELECTRIC
-            if !shading_agrees(surface, wo) {
-                break;
-            }
-            let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
-            if !shading_agrees(surface, s.dir) {
-                break;
-            }
-            path.throughput *= s.weight;
-            path.dir = s.dir;
-            path.after_delta = true;
-#ifdef GLOSSY
-            path.after_specular = true;
-#endif
-#else
-            break;
-#endif
-        } else {
-            // Every other BSDF, in the shading frame of the side it is seen from; which side a
-            // direction is on is the geometric normal's to say (shading_agrees).
-            if !shading_agrees(surface, wo) {
-                break;
-            }
-            let frame = basis_from_normal(surface.shading_normal);
-            let wi = wo * frame;
-            if material_has_continuous_lobe(material.kind) {
-                result += path.throughput * direct_light_bsdf(surface, material, frame, wi, path.mapped, rng, rays);
-            }
-            let u1 = rng_next_f32(rng);
-            let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
-            if !s.valid {
-                break;
-            }
-            path.dir = normalize(frame * s.wo);
-            if !shading_agrees(surface, path.dir) {
-                break;
-            }
-            path.throughput *= s.weight;
-            path.after_delta = s.delta;
-            if !s.delta {
-                path.bsdf_pdf = s.pdf;
-#ifndef GLOSSY
-                // A path-traced vertex: what it reaches through specular vertices is ours.
-                path.after_merge = false;
-#endif
-            }
-#ifdef GLOSSY
-            // A specular lobe (delta or glossy) keeps the photons' share; any other lobe ends it.
-            path.mapped *= material_specular_share(material, wi, s, params.glossy_threshold);
-            path.after_merge = max_component(path.mapped) > 0.0;
-            path.after_specular = true;
-#endif
-        }
-        path.origin = spawn_origin(surface, path.dir);
-        if max_component(path.throughput) <= 0.0 {
-            break;
-        }
-    }
-    return result;
+// A camera path at the camera, through `pixel`.
+fn start_path(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> PathState {
+    let dir = primary_direction(pixel, splatted, rng);
+    return PathState(scene_info.camera_origin, dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, vec3<f32>(0.0), 1u);
 }
 
-@compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= scene_info.width || id.y >= scene_info.height {
-        return;
+// Traces the next segment of `path`, adds the light it reaches to its radiance and samples the
+// direction after it. Returns whether the path goes on.
+fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> bool {
+    // `depth` counts segments traced so far, this one included (Mitsuba's rule).
+    let depth = (*path).depth;
+    if depth > min(params.max_depth, SAFETY_MAX_DEPTH) {
+        return false;
     }
-    let pixel_index = id.y * scene_info.width + id.x;
-    let recording = params.merge_depth > 0u && params.record != 0u;
+    *rays += 1u;
+    let hit = intersect_scene((*path).origin, (*path).dir);
+    if hit.prim == NO_HIT {
+#ifdef ENVIRONMENT
+        (*path).radiance += (*path).throughput * environment_emission(*path);
+#endif
+        return false;
+    }
+    var surface = surface_at(hit, (*path).origin, (*path).dir);
+    var material = materials[surface.material];
+    let wo = -(*path).dir;
+    var cos_o = dot(wo, surface.normal);
+    (*path).travelled += hit.t;
+
+#ifdef GLOSSY
+    if surface.light != NO_LIGHT && cos_o > 0.0 {
+        // Reached through specular lobes only from a photon-mapped vertex, the `mapped` share
+        // is the photons'; the rest keeps its MIS weight (a glossy lobe's pdf, not delta's).
+        let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - (*path).mapped, (*path).after_specular);
+        var weight = 1.0;
+        if !(*path).after_delta {
+            weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
+        }
+        (*path).radiance += (*path).throughput * kept * material.emission * weight;
+    }
+#else
+    if surface.light != NO_LIGHT && cos_o > 0.0 && !((*path).after_delta && (*path).after_merge) {
+        var weight = 1.0;
+        if !(*path).after_delta {
+            weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
+        }
+        (*path).radiance += (*path).throughput * material.emission * weight;
+    }
+#endif
+    // A twosided material's back is its own BSDF, seen with the normal flipped.
+    if cos_o < 0.0 && material.back != NO_BACK {
+        material = materials[material.back];
+        surface.normal = -surface.normal;
+        surface.shading_normal = -surface.shading_normal;
+        cos_o = -cos_o;
+    }
+#ifdef TEXTURES
+    // Before any use of the colours: NEE, the bounce, hit-point weights, grid lookups.
+    material = textured_material(material, surface.uv);
+#endif
+    if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
+        return false;
+    }
+    if depth >= params.rr_depth {
+        let survive = min(max_component((*path).throughput), 0.95);
+        if rng_next_f32(rng) >= survive {
+            return false;
+        }
+        (*path).throughput /= survive;
+    }
+
+    if material.kind == MATERIAL_DIFFUSE {
+        // One-sided, as Mitsuba's diffuse: black from behind.
+        if cos_o <= 0.0 || !shading_agrees(surface, wo) {
+            return false;
+        }
+        (*path).diffuse_vertices += 1u;
+        let at_hit_point = (*path).diffuse_vertices <= params.merge_depth;
+        // Past the hit points the photon grid adds the caustic, which the path then drops.
+        let looked_up = params.lookups != 0u && !at_hit_point;
+        (*path).after_merge = at_hit_point || looked_up;
+#ifdef GLOSSY
+        (*path).mapped = select(vec3<f32>(0.0), vec3<f32>(1.0), (*path).after_merge);
+        (*path).after_specular = false;
+#endif
+        if looked_up {
+            (*path).radiance += (*path).throughput * material.albedo * INV_PI * caustic_irradiance(surface, depth);
+        }
+        if at_hit_point {
+            let weight = (*path).throughput * material.albedo * INV_PI;
+            if sink.enabled && max_component(weight) > 0.0 {
+                record_hit_point(sink, (*path).diffuse_vertices - 1u, surface, wo, depth, weight, (*path).travelled);
+            }
+            if params.trace_beyond == 0u {
+                return false;
+            }
+        }
+        (*path).radiance += (*path).throughput * direct_light(surface, material.albedo, rng, rays);
+        let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
+        let cos_i = dot(dir, surface.shading_normal);
+        if cos_i <= 0.0 || !shading_agrees(surface, dir) {
+            return false;
+        }
+        (*path).throughput *= material.albedo;
+        (*path).bsdf_pdf = cos_i * INV_PI;
+        (*path).after_delta = false;
+        (*path).dir = dir;
+    } else if material.kind == MATERIAL_MIRROR {
+        if cos_o <= 0.0 || !shading_agrees(surface, wo) {
+            return false;
+        }
+        (*path).dir = reflect_about(wo, surface.shading_normal);
+        (*path).after_delta = true;
+#ifdef GLOSSY
+        (*path).after_specular = true;
+#endif
+        if !shading_agrees(surface, (*path).dir) {
+            return false;
+        }
+    } else if material.kind == MATERIAL_DIELECTRIC {
+#ifdef DIELECTRIC
+        if !shading_agrees(surface, wo) {
+            return false;
+        }
+        let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
+        if !shading_agrees(surface, s.dir) {
+            return false;
+        }
+        (*path).throughput *= s.weight;
+        (*path).dir = s.dir;
+        (*path).after_delta = true;
+#ifdef GLOSSY
+        (*path).after_specular = true;
+#endif
+#else
+        return false;
+#endif
+    } else {
+        // Every other BSDF, in the shading frame of the side it is seen from; which side a
+        // direction is on is the geometric normal's to say (shading_agrees).
+        if !shading_agrees(surface, wo) {
+            return false;
+        }
+        let frame = basis_from_normal(surface.shading_normal);
+        let wi = wo * frame;
+        if material_has_continuous_lobe(material.kind) {
+            (*path).radiance += (*path).throughput * direct_light_bsdf(surface, material, frame, wi, (*path).mapped, rng, rays);
+        }
+        let u1 = rng_next_f32(rng);
+        let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
+        if !s.valid {
+            return false;
+        }
+        (*path).dir = normalize(frame * s.wo);
+        if !shading_agrees(surface, (*path).dir) {
+            return false;
+        }
+        (*path).throughput *= s.weight;
+        (*path).after_delta = s.delta;
+        if !s.delta {
+            (*path).bsdf_pdf = s.pdf;
+#ifndef GLOSSY
+            // A path-traced vertex: what it reaches through specular vertices is ours.
+            (*path).after_merge = false;
+#endif
+        }
+#ifdef GLOSSY
+        // A specular lobe (delta or glossy) keeps the photons' share; any other lobe ends it.
+        (*path).mapped *= material_specular_share(material, wi, s, params.glossy_threshold);
+        (*path).after_merge = max_component((*path).mapped) > 0.0;
+        (*path).after_specular = true;
+#endif
+    }
+    (*path).origin = spawn_origin(surface, (*path).dir);
+    if max_component((*path).throughput) <= 0.0 {
+        return false;
+    }
+    (*path).depth = depth + 1u;
+    return true;
+}
+
+// Clears (when recording) or refreshes the hit-point slots of `pixel_index` before its samples.
+fn prepare_hit_points(pixel_index: u32, recording: bool) {
     for (var slot = 0u; slot < params.merge_depth; slot++) {
         let index = pixel_index * params.merge_depth + slot;
         if recording {
@@ -467,42 +474,86 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             hit_points.points[index].radius = radii.radii[index];
         }
     }
+}
+
+fn pixel_of(pixel_index: u32) -> vec2<u32> {
+    return vec2<u32>(pixel_index % scene_info.width, pixel_index / scene_info.width);
+}
+
+// Each invocation renders the samples of pixels first, first + invocations, ... one after
+// another, and starts the next sample in the same lane as soon as a path ends (path
+// regeneration, Novak et al. 2010): SIMD lanes whose paths end early would otherwise idle
+// until the longest path of their group ends.
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let pixels = scene_info.width * scene_info.height;
+    let invocations = groups.x * 64u;
+    var pixel_index = id.x;
+    if pixel_index >= pixels {
+        return;
+    }
+    let recording = params.merge_depth > 0u && params.record != 0u;
+    for (var p = pixel_index; p < pixels; p += invocations) {
+        prepare_hit_points(p, recording);
+    }
+    let spp = params.samples_per_iteration;
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
     var accepted = 0u;
+    var discarded = 0u;
     var rays = 0u;
-    let spp = params.samples_per_iteration;
-    for (var s = 0u; s < spp; s++) {
-        var rng = rng_stream(pixel_index, params.sample_base + s, params.seed);
-        let sink = HitPointSink(pixel_index, recording && s == 0u);
-        let splatted = params.splat != 0u && !sink.enabled;
-        let sample = trace_path(id.xy, sink, splatted, &rng, &rays);
+    var s = 0u;
+    var rng = rng_stream(pixel_index, params.sample_base, params.seed);
+    var sink = HitPointSink(pixel_index, recording);
+    var splatted = params.splat != 0u && !sink.enabled;
+    var path = start_path(pixel_of(pixel_index), splatted, &rng);
+    loop {
+        if extend_path(&path, sink, &rng, &rays) {
+            continue;
+        }
+        let sample = path.radiance;
         // One NaN or Inf sample (or one that would overflow the sum) must not poison the
         // pixel: drop it and count it.
         if splatted {
             let keep = !any_not_finite(sample);
             film.samples[pixel_index * spp + s] = select(vec4<f32>(0.0), vec4<f32>(sample, 1.0), keep);
             accepted += u32(keep);
-            continue;
+        } else {
+            if params.splat != 0u {
+                film.samples[pixel_index * spp + s] = vec4<f32>(0.0);
+            }
+            let next = sum + sample * params.fis_weight;
+            if !any_not_finite(next) {
+                sum = next;
+                weight += params.fis_weight;
+                accepted += 1u;
+            }
         }
-        if params.splat != 0u {
-            film.samples[pixel_index * spp + s] = vec4<f32>(0.0);
+        s += 1u;
+        if s == spp {
+            let total = radiance[pixel_index] + vec4<f32>(sum, weight);
+            if any_not_finite(total.xyz) {
+                accepted = 0u;
+            } else {
+                radiance[pixel_index] = total;
+            }
+            discarded += spp - accepted;
+            sum = vec3<f32>(0.0);
+            weight = 0.0;
+            accepted = 0u;
+            s = 0u;
+            pixel_index += invocations;
+            if pixel_index >= pixels {
+                break;
+            }
         }
-        let next = sum + sample * params.fis_weight;
-        if !any_not_finite(next) {
-            sum = next;
-            weight += params.fis_weight;
-            accepted += 1u;
-        }
-    }
-    let total = radiance[pixel_index] + vec4<f32>(sum, weight);
-    if any_not_finite(total.xyz) {
-        accepted = 0u;
-    } else {
-        radiance[pixel_index] = total;
+        rng = rng_stream(pixel_index, params.sample_base + s, params.seed);
+        sink = HitPointSink(pixel_index, recording && s == 0u);
+        splatted = params.splat != 0u && !sink.enabled;
+        path = start_path(pixel_of(pixel_index), splatted, &rng);
     }
     add_u64(COUNTER_RAYS, rays);
-    add_u64(COUNTER_DISCARDED, params.samples_per_iteration - accepted);
+    add_u64(COUNTER_DISCARDED, discarded);
 }
 
 // Each pixel's share of this iteration's splatted samples within the filter's reach: the
