@@ -1,6 +1,6 @@
-// Photon tracing. Each invocation emits one photon from a light chosen in proportion to its power
-// (area lights: uniform position, cosine direction; point lights: uniform direction), traces it
-// through mirrors and dielectrics, and writes a photon hit where it deposits. Which hit points
+// Photon tracing. Each photon leaves a light chosen in proportion to its power (area lights:
+// uniform position, cosine direction; point lights: uniform direction); the pass traces it
+// through mirrors and dielectrics and writes a photon hit where it deposits. Which hit points
 // receive it is the gather's business (the hit-point structure nodes), not this pass's.
 //
 // Mode CAUSTIC deposits only at the first diffuse vertex after at least one specular vertex and
@@ -57,7 +57,8 @@ struct PhotonParams {
     aim: u32,
     // Microfacet lobes smoother than this are specular vertices (read with GLOSSY only).
     glossy_threshold: f32,
-    pad_b: u32,
+    // Invocations launched: each takes every invocations-th photon.
+    invocations: u32,
     pad_c: u32,
     // The sphere `aim` aims at: around the specular surfaces (and the glossy ones with GLOSSY).
     aim_center: vec3<f32>,
@@ -283,143 +284,180 @@ fn deposit(position: vec3<f32>, wi: vec3<f32>, flux: vec3<f32>, segments: u32) {
     photon_hits.hits[slot] = PhotonHit(position, remaining, wi, 0u, flux, 0u);
 }
 
-// Traces one photon; returns the segments traced.
-fn trace_photon(start: Photon, rng: ptr<function, vec4<u32>>) -> u32 {
-    var photon = start;
-    var after_specular = false;
-    let initial = max_component(start.flux);
-    let max_segments = min(params.max_depth, SAFETY_MAX_DEPTH);
-    var segments = 0u;
-    while segments < max_segments {
-        segments += 1u;
-        let hit = intersect_photon(photon.origin, photon.dir);
-        if hit.prim == NO_HIT {
-            break;
-        }
-        var surface = surface_at(hit, photon.origin, photon.dir);
-        var material = materials[surface.material];
-        let wi = -photon.dir;
-        var cos_i = dot(wi, surface.normal);
-        if cos_i < 0.0 && material.back != NO_BACK {
-            material = materials[material.back];
-            surface.normal = -surface.normal;
-            surface.shading_normal = -surface.shading_normal;
-            cos_i = -cos_i;
-        }
-#ifdef TEXTURES
-        // The diffuse bounce and every other lobe scatter with the surface's own colours.
-        material = textured_material(material, surface.uv);
-#endif
-        if material.kind == MATERIAL_DIFFUSE {
-            // One-sided, as the camera pass: the back of a diffuse surface absorbs.
-            if cos_i <= 0.0 || !shading_agrees(surface, wi) {
-                break;
-            }
-            // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
-            // over the geometric one it arrived with turns it into what the camera pass would
-            // gather there (1 on flat-shaded surfaces).
-            let deposited = photon.flux * (dot(wi, surface.shading_normal) / cos_i);
-            if params.mode == MODE_CAUSTIC {
-                if after_specular {
-                    deposit(surface.position, wi, deposited, segments);
-                }
-                break;
-            }
-            deposit(surface.position, wi, deposited, segments);
-            photon.dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
-            if !shading_agrees(surface, photon.dir) {
-                break;
-            }
-            // Cosine sampling: f cos / pdf = albedo.
-            photon.flux *= material.albedo * photon_shading_correction(surface, wi, photon.dir);
-            after_specular = false;
-        } else if material.kind == MATERIAL_MIRROR {
-            if cos_i <= 0.0 || !shading_agrees(surface, wi) {
-                break;
-            }
-            photon.dir = reflect_about(wi, surface.shading_normal);
-            if !shading_agrees(surface, photon.dir) {
-                break;
-            }
-            photon.flux *= photon_shading_correction(surface, wi, photon.dir);
-            after_specular = true;
-        } else if material.kind == MATERIAL_DIELECTRIC {
-#ifdef DIELECTRIC
-            // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
-            if !shading_agrees(surface, wi) {
-                break;
-            }
-            let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
-            if !shading_agrees(surface, s.dir) {
-                break;
-            }
-            photon.flux *= s.weight * photon_shading_correction(surface, wi, s.dir);
-            photon.dir = s.dir;
-            after_specular = true;
-#else
-            break;
-#endif
-        } else {
-            if !shading_agrees(surface, wi) {
-                break;
-            }
-            let frame = basis_from_normal(surface.shading_normal);
-            let u1 = rng_next_f32(rng);
-            let s = material_sample(material, wi * frame, u1, rng_next_vec2(rng), false);
-            if !s.valid {
-                break;
-            }
-#ifdef GLOSSY
-            var share = vec3<f32>(1.0);
-            if params.mode == MODE_CAUSTIC {
-                share = material_specular_share(material, wi * frame, s, params.glossy_threshold);
-                if max_component(share) <= 0.0 {
-                    break;
-                }
-            }
-#else
-            if !s.delta && params.mode == MODE_CAUSTIC {
-                break;
-            }
-#endif
-            photon.dir = normalize(frame * s.wo);
-            if !shading_agrees(surface, photon.dir) {
-                break;
-            }
-            photon.flux *= s.weight * photon_shading_correction(surface, wi, photon.dir);
-#ifdef GLOSSY
-            photon.flux *= share;
-            after_specular = s.delta || params.mode == MODE_CAUSTIC;
-#else
-            after_specular = s.delta;
-#endif
-        }
-        photon.origin = spawn_origin(surface, photon.dir);
-        if segments >= params.rr_depth {
-            let survive = min(max_component(photon.flux) / initial, 0.95);
-            if rng_next_f32(rng) >= survive {
-                break;
-            }
-            photon.flux /= survive;
-        }
-        if max_component(photon.flux) <= 0.0 {
-            break;
-        }
-    }
-    return segments;
+// A photon in flight: where it is, what it carries, and how far it has come.
+struct PhotonPath {
+    photon: Photon,
+    after_specular: bool,
+    // The emitted flux's largest component, which Russian roulette compares against.
+    initial: f32,
+    segments: u32,
 }
 
+fn start_photon(emitted: Photon) -> PhotonPath {
+    return PhotonPath(emitted, false, max_component(emitted.flux), 0u);
+}
+
+// Traces one segment of `path` and scatters it; false once the photon has ended.
+fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>) -> bool {
+    if (*path).segments >= min(params.max_depth, SAFETY_MAX_DEPTH) {
+        return false;
+    }
+    var photon = (*path).photon;
+    var after_specular = (*path).after_specular;
+    (*path).segments += 1u;
+    let segments = (*path).segments;
+    let initial = (*path).initial;
+    let hit = intersect_photon(photon.origin, photon.dir);
+    if hit.prim == NO_HIT {
+        return false;
+    }
+    var surface = surface_at(hit, photon.origin, photon.dir);
+    var material = materials[surface.material];
+    let wi = -photon.dir;
+    var cos_i = dot(wi, surface.normal);
+    if cos_i < 0.0 && material.back != NO_BACK {
+        material = materials[material.back];
+        surface.normal = -surface.normal;
+        surface.shading_normal = -surface.shading_normal;
+        cos_i = -cos_i;
+    }
+#ifdef TEXTURES
+    // The diffuse bounce and every other lobe scatter with the surface's own colours.
+    material = textured_material(material, surface.uv);
+#endif
+    if material.kind == MATERIAL_DIFFUSE {
+        // One-sided, as the camera pass: the back of a diffuse surface absorbs.
+        if cos_i <= 0.0 || !shading_agrees(surface, wi) {
+            return false;
+        }
+        // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
+        // over the geometric one it arrived with turns it into what the camera pass would
+        // gather there (1 on flat-shaded surfaces).
+        let deposited = photon.flux * (dot(wi, surface.shading_normal) / cos_i);
+        if params.mode == MODE_CAUSTIC {
+            if after_specular {
+                deposit(surface.position, wi, deposited, segments);
+            }
+            return false;
+        }
+        deposit(surface.position, wi, deposited, segments);
+        photon.dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
+        if !shading_agrees(surface, photon.dir) {
+            return false;
+        }
+        // Cosine sampling: f cos / pdf = albedo.
+        photon.flux *= material.albedo * photon_shading_correction(surface, wi, photon.dir);
+        after_specular = false;
+    } else if material.kind == MATERIAL_MIRROR {
+        if cos_i <= 0.0 || !shading_agrees(surface, wi) {
+            return false;
+        }
+        photon.dir = reflect_about(wi, surface.shading_normal);
+        if !shading_agrees(surface, photon.dir) {
+            return false;
+        }
+        photon.flux *= photon_shading_correction(surface, wi, photon.dir);
+        after_specular = true;
+    } else if material.kind == MATERIAL_DIELECTRIC {
+#ifdef DIELECTRIC
+        // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
+        if !shading_agrees(surface, wi) {
+            return false;
+        }
+        let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
+        if !shading_agrees(surface, s.dir) {
+            return false;
+        }
+        photon.flux *= s.weight * photon_shading_correction(surface, wi, s.dir);
+        photon.dir = s.dir;
+        after_specular = true;
+#else
+        return false;
+#endif
+    } else {
+        if !shading_agrees(surface, wi) {
+            return false;
+        }
+        let frame = basis_from_normal(surface.shading_normal);
+        let u1 = rng_next_f32(rng);
+        let s = material_sample(material, wi * frame, u1, rng_next_vec2(rng), false);
+        if !s.valid {
+            return false;
+        }
+#ifdef GLOSSY
+        var share = vec3<f32>(1.0);
+        if params.mode == MODE_CAUSTIC {
+            share = material_specular_share(material, wi * frame, s, params.glossy_threshold);
+            if max_component(share) <= 0.0 {
+                return false;
+            }
+        }
+#else
+        if !s.delta && params.mode == MODE_CAUSTIC {
+            return false;
+        }
+#endif
+        photon.dir = normalize(frame * s.wo);
+        if !shading_agrees(surface, photon.dir) {
+            return false;
+        }
+        photon.flux *= s.weight * photon_shading_correction(surface, wi, photon.dir);
+#ifdef GLOSSY
+        photon.flux *= share;
+        after_specular = s.delta || params.mode == MODE_CAUSTIC;
+#else
+        after_specular = s.delta;
+#endif
+    }
+    photon.origin = spawn_origin(surface, photon.dir);
+    if segments >= params.rr_depth {
+        let survive = min(max_component(photon.flux) / initial, 0.95);
+        if rng_next_f32(rng) >= survive {
+            return false;
+        }
+        photon.flux /= survive;
+    }
+    if max_component(photon.flux) <= 0.0 {
+        return false;
+    }
+    (*path).photon = photon;
+    (*path).after_specular = after_specular;
+    return true;
+}
+
+// Each invocation traces photons first, first + invocations, ... and emits the next as soon as
+// one ends (path regeneration, src/passes/lanes.rs): a photon's own stream makes it the same
+// photon whichever lane traces it.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    let index = (group.y * params.groups_per_row + group.x) * WORKGROUP + local;
+    var index = (group.y * params.groups_per_row + group.x) * WORKGROUP + local;
     var flux = vec3<f32>(0.0);
     var segments = 0u;
-    if index < params.photons {
-        var rng = rng_stream(index, params.iteration, params.seed);
-        let photon = emit_photon(&rng);
-        if photon.valid {
-            flux = photon.flux;
-            segments = trace_photon(photon, &rng);
+    var rng = vec4<u32>(0u);
+    var path: PhotonPath;
+    var tracing = false;
+    loop {
+        if !tracing {
+            if index >= params.photons {
+                break;
+            }
+            rng = rng_stream(index, params.iteration, params.seed);
+            // Saturating: photons and invocations may each pass half of u32's range.
+            if params.photons - index <= params.invocations {
+                index = params.photons;
+            } else {
+                index += params.invocations;
+            }
+            let photon = emit_photon(&rng);
+            if !photon.valid {
+                continue;
+            }
+            flux += photon.flux;
+            path = start_photon(photon);
+        }
+        tracing = extend_photon(&path, &rng);
+        if !tracing {
+            segments += path.segments;
         }
     }
     // One global atomic per workgroup for the counters, not one per photon.

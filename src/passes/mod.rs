@@ -6,6 +6,7 @@ pub mod hit_point_bvh_lbvh;
 pub mod hit_point_bvh_sah;
 pub mod hit_point_grid;
 pub mod hit_points;
+pub mod lanes;
 pub mod path_trace;
 pub mod photon_grid;
 pub mod photon_trace;

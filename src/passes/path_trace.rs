@@ -24,6 +24,7 @@ use crate::passes::SceneResources;
 use crate::passes::hit_points::{
     DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, PHOTON_HITS, RadiusRule,
 };
+use crate::passes::lanes::items_per_invocation;
 use crate::passes::photon_grid::PHOTON_GRID;
 use crate::passes::{check_glossy_threshold, depth_rule, glossy_defs, resolve_depths};
 use crate::scene::filter::{FILTER_BOX, PixelFilter};
@@ -35,8 +36,6 @@ const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/pat
 const WORKGROUP: u32 = 8;
 /// Invocations per workgroup of the camera entry point (one-dimensional).
 const LANES: u32 = 64;
-/// Samples each invocation traces in turn on a CPU adapter (pixels x samples per iteration).
-const CPU_SAMPLES_PER_LANE: u32 = 32;
 
 static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("radiance", IMAGE, Size::Pixels).persistent(),
@@ -194,7 +193,8 @@ struct Prepared {
     bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
     counters: wgpu::Buffer,
-    /// Workgroups of the camera entry point (see `pixels_per_invocation`).
+    /// Workgroups of the camera entry point, each lane taking several pixels in turn on CPU
+    /// adapters (`lanes`).
     workgroups: u32,
     width: u32,
     height: u32,
@@ -235,28 +235,6 @@ impl PathTrace {
         };
         Ok((max_depth, rr_depth, merge_slots))
     }
-}
-
-/// Pixels each invocation of the camera entry point renders, one after another, every sample
-/// of one before the next. A lane starts its next sample as soon as a path ends, so on a CPU
-/// adapter, where a workgroup's lanes run as SIMD vectors and a vector runs until its longest
-/// path ends, `CPU_SAMPLES_PER_LANE` samples per lane keep the vectors full (25% less CPU time
-/// for `pt` on lavapipe, BENCHMARKS.md). A GPU hides divergence with occupancy instead: one
-/// pixel per invocation there, unless the image has more pixels than one dimension of
-/// workgroups holds.
-fn pixels_per_invocation(
-    device: wgpu::DeviceType,
-    pixels: u32,
-    samples_per_iteration: u32,
-    max_workgroups: u32,
-) -> u32 {
-    let preferred = match device {
-        wgpu::DeviceType::Cpu => CPU_SAMPLES_PER_LANE.div_ceil(samples_per_iteration.max(1)),
-        _ => 1,
-    };
-    let most_invocations = max_workgroups.max(1).saturating_mul(LANES);
-    let needed = pixels.div_ceil(most_invocations);
-    preferred.max(needed).max(1)
 }
 
 /// Whether samples are splatted through the pixel filter as Mitsuba's film does: for a tent or
@@ -400,11 +378,13 @@ impl Pass for PathTrace {
             .transpose()?;
         // The film's sides are at most MAX_FILM_SIDE, so its pixels fit a u32.
         let pixels = ctx.width * ctx.height;
-        let per_invocation = pixels_per_invocation(
+        let per_invocation = items_per_invocation(
             gpu.info.device_type,
             pixels,
             self.params.samples_per_iteration,
-            gpu.limits.max_compute_workgroups_per_dimension,
+            gpu.limits
+                .max_compute_workgroups_per_dimension
+                .saturating_mul(LANES),
         );
         let workgroups = pixels.div_ceil(per_invocation).div_ceil(LANES);
         self.prepared = Some(Prepared {
@@ -519,34 +499,5 @@ impl Pass for PathTrace {
             ("rays", wide(c[0], c[1])),
             ("discarded_samples", wide(c[2], c[3])),
         ]))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    // Catches a dispatch that would exceed the adapter's workgroup limit (a render refused or
-    // silently cut short on large films) and a CPU rule that stops regenerating paths.
-    #[test]
-    fn pixels_per_invocation_fits_the_workgroup_limit() {
-        use wgpu::DeviceType::{Cpu, DiscreteGpu};
-        assert_eq!(pixels_per_invocation(Cpu, 128 * 128, 1, 65535), 32);
-        assert_eq!(pixels_per_invocation(Cpu, 128 * 128, 4, 65535), 8);
-        assert_eq!(pixels_per_invocation(Cpu, 128 * 128, 64, 65535), 1);
-        assert_eq!(pixels_per_invocation(DiscreteGpu, 1920 * 1080, 1, 65535), 1);
-        for (device, side) in [(DiscreteGpu, 16384), (Cpu, 16384), (DiscreteGpu, 4096)] {
-            let pixels = side * side;
-            let k = pixels_per_invocation(device, pixels, 1, 65535);
-            let workgroups = pixels.div_ceil(k).div_ceil(LANES);
-            assert!(
-                workgroups <= 65535,
-                "{side}^2 pixels: {workgroups} workgroups"
-            );
-            assert!(
-                workgroups * LANES * k >= pixels,
-                "{side}^2 pixels not all covered"
-            );
-        }
     }
 }

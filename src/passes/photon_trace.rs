@@ -14,6 +14,7 @@ use crate::graph::pass::{
 };
 use crate::graph::transport::{Transport, TransportCtx};
 use crate::passes::hit_points::PHOTON_HITS;
+use crate::passes::lanes::items_per_invocation;
 use crate::passes::{
     SPECULAR_OR_GLOSSY_SURFACE, SPECULAR_SURFACE, SceneResources, check_glossy_threshold,
     depth_rule, glossy_defs, resolve_depths,
@@ -39,7 +40,7 @@ static SLOTS: &[SlotDecl] = &[SlotDecl::output("photon_hits", PHOTON_HITS, Size:
 /// `GpuParams` against `PhotonParams` in the shader.
 const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PhotonParams" in SHADER, {
     photons, seed, iteration, mode, max_depth, rr_depth, flux_scale, groups_per_row, aim,
-    glossy_threshold, aim_center, aim_radius
+    glossy_threshold, invocations, aim_center, aim_radius
 });
 
 pub const KIND: PassKind = PassKind {
@@ -120,7 +121,8 @@ struct GpuParams {
     groups_per_row: u32,
     aim: u32,
     glossy_threshold: f32,
-    _pad: [u32; 2],
+    invocations: u32,
+    _pad: u32,
     aim_center: [f32; 3],
     aim_radius: f32,
 }
@@ -133,6 +135,11 @@ struct Prepared {
     counters: wgpu::Buffer,
     emitted: wgpu::Buffer,
     photons: u32,
+    /// The dispatch: workgroups, and per row of the grid; each lane takes every
+    /// `invocations`-th photon (several in turn on CPU adapters, `lanes`).
+    groups: u32,
+    groups_per_row: u32,
+    invocations: u32,
     max_depth: u32,
     rr_depth: u32,
     /// The sphere photons aim at (centre, radius): around the specular surfaces, and the glossy
@@ -175,6 +182,17 @@ impl PhotonTrace {
             u32::try_from(pixels * per_pixel as u64).unwrap_or(u32::MAX)
         })
     }
+}
+
+/// (workgroups, workgroups per row, invocations launched) for `photons`: rows of at most
+/// `GROUPS_PER_ROW`, and no more invocations than a u32 counts.
+fn dispatch_grid(device: wgpu::DeviceType, photons: u32) -> (u32, u32, u32) {
+    let row = WORKGROUP * GROUPS_PER_ROW;
+    let per_invocation = items_per_invocation(device, photons, 1, (u32::MAX / row) * row);
+    let groups = photons.div_ceil(per_invocation).div_ceil(WORKGROUP);
+    let groups_per_row = groups.clamp(1, GROUPS_PER_ROW);
+    let invocations = groups.div_ceil(groups_per_row) * groups_per_row * WORKGROUP;
+    (groups, groups_per_row, invocations)
 }
 
 impl Pass for PhotonTrace {
@@ -237,6 +255,7 @@ impl Pass for PhotonTrace {
         };
         let (max_depth, rr_depth) =
             resolve_depths(self.params.max_depth, self.params.rr_depth, &scene.uniform);
+        let (groups, groups_per_row, invocations) = dispatch_grid(gpu.info.device_type, photons);
         self.prepared = Some(Prepared {
             pipeline,
             scene: scene.bind_group.clone(),
@@ -245,6 +264,9 @@ impl Pass for PhotonTrace {
             counters,
             emitted,
             photons,
+            groups,
+            groups_per_row,
+            invocations,
             max_depth,
             rr_depth,
             aim_sphere,
@@ -256,8 +278,6 @@ impl Pass for PhotonTrace {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let groups = p.photons.div_ceil(WORKGROUP);
-        let groups_per_row = groups.clamp(1, GROUPS_PER_ROW);
         let gpu_params = GpuParams {
             photons: p.photons,
             seed: crate::passes::rng::photon_seed(ctx.seed),
@@ -269,22 +289,23 @@ impl Pass for PhotonTrace {
             max_depth: p.max_depth,
             rr_depth: p.rr_depth,
             flux_scale: (1.0 / p.photons.max(1) as f64) as f32,
-            groups_per_row,
+            groups_per_row: p.groups_per_row,
             aim: self.params.aim as u32,
             glossy_threshold: self.params.glossy_threshold,
-            _pad: [0; 2],
+            invocations: p.invocations,
+            _pad: 0,
             aim_center: [p.aim_sphere[0], p.aim_sphere[1], p.aim_sphere[2]],
             aim_radius: p.aim_sphere[3],
         };
         ctx.gpu
             .queue
             .write_buffer(&p.params, 0, bytemuck::bytes_of(&gpu_params));
-        if groups > 0 {
+        if p.groups > 0 {
             recorder.dispatch(
                 "photon_trace",
                 &p.pipeline,
                 &[&p.scene, &p.bind_group],
-                [groups_per_row, groups.div_ceil(groups_per_row), 1],
+                [p.groups_per_row, p.groups.div_ceil(p.groups_per_row), 1],
             );
         }
         Ok(())
@@ -340,5 +361,31 @@ impl Pass for PhotonTrace {
             ("photon_segments", wide(c[0], c[1])),
             ("photon_hits_dropped", wide(c[2], c[3])),
         ]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    // Catches a grid whose rows pass wgpu's 65535 limit, or whose invocation count wraps u32
+    // (lanes would then skip or repeat photons).
+    #[test]
+    fn dispatch_grid_stays_within_limits() {
+        use wgpu::DeviceType::{Cpu, DiscreteGpu};
+        for device in [Cpu, DiscreteGpu] {
+            for photons in [1, 64, 65, 16384, 1 << 26, u32::MAX / 2, u32::MAX] {
+                let (groups, per_row, invocations) = dispatch_grid(device, photons);
+                assert!(
+                    groups.div_ceil(per_row) <= 65535,
+                    "{photons}: {groups} groups"
+                );
+                assert!(per_row <= GROUPS_PER_ROW);
+                assert!(invocations >= groups.saturating_mul(WORKGROUP).min(u32::MAX - 63));
+                assert!(invocations > 0);
+            }
+        }
+        assert_eq!(dispatch_grid(Cpu, 16384).2, 512);
+        assert_eq!(dispatch_grid(DiscreteGpu, 16384).2, 16384);
     }
 }
