@@ -184,32 +184,42 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
     let hi = min(photon_cell(info, surface.position + vec3<f32>(info.radius)), lo + vec3<i32>(1));
     let links = info.bucket_mask + 1u;
     let words = arrayLength(&photon_grid.words);
+    // The cells and their lists walked in one loop: a SIMD group then runs for its lanes'
+    // longest walk, not the sum of each nesting level's longest.
+    let span = vec3<u32>(hi - lo) + vec3<u32>(1u);
+    let cells = span.x * span.y * span.z;
+    var next_cell = 0u;
+    var cell = lo;
+    var link = 0u;
     var flux = vec3<f32>(0.0);
-    for (var z = lo.z; z <= hi.z; z++) {
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
-                let cell = vec3<i32>(x, y, z);
-                var link = photon_grid.words[photon_bucket(info, cell)];
-                // A list is at most every photon hit long; the bound keeps a corrupt one finite.
-                for (var steps = 0u; link != 0u && steps < info.count; steps++) {
-                    let hit = photons.hits[link - 1u];
-                    let next = links + link - 1u;
-                    link = select(0u, photon_grid.words[next], next < words);
-                    // Buckets hold other cells' lists too: take each photon in its own cell only.
-                    if any(photon_cell(info, hit.position) != cell) {
-                        continue;
-                    }
-                    let d = hit.position - surface.position;
-                    if !(dot(d, d) <= r2) || dot(hit.wi, surface.normal) <= 0.0 {
-                        continue;
-                    }
-                    if hit.remaining != UNBOUNDED && depth > hit.remaining {
-                        continue;
-                    }
-                    flux += hit.flux;
-                }
+    // A list is at most every photon hit long; the bound keeps a corrupt one finite.
+    let most_steps = (info.count + 1u) * cells;
+    for (var steps = 0u; steps < most_steps; steps++) {
+        if link == 0u {
+            if next_cell == cells {
+                break;
             }
+            let c = vec3<u32>(next_cell % span.x, (next_cell / span.x) % span.y, next_cell / (span.x * span.y));
+            cell = lo + vec3<i32>(c);
+            link = photon_grid.words[photon_bucket(info, cell)];
+            next_cell += 1u;
+            continue;
         }
+        let hit = photons.hits[link - 1u];
+        let next = links + link - 1u;
+        link = select(0u, photon_grid.words[next], next < words);
+        // Buckets hold other cells' lists too: take each photon in its own cell only.
+        if any(photon_cell(info, hit.position) != cell) {
+            continue;
+        }
+        let d = hit.position - surface.position;
+        if !(dot(d, d) <= r2) || dot(hit.wi, surface.normal) <= 0.0 {
+            continue;
+        }
+        if hit.remaining != UNBOUNDED && depth > hit.remaining {
+            continue;
+        }
+        flux += hit.flux;
     }
     return flux / (PI * r2);
 }
