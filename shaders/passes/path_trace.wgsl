@@ -1,6 +1,7 @@
 // Path tracing with next-event estimation, MIS (power heuristic) for area lights, Mitsuba's depth
-// rule (max_depth counts segments) and optional Russian roulette. Each invocation adds
-// `samples_per_iteration` samples to one pixel's running sum (xyz) and count (w).
+// rule (max_depth counts segments) and optional Russian roulette. Each iteration adds
+// `samples_per_iteration` samples to every pixel's running sum (xyz) and count (w); an
+// invocation renders one or more pixels in turn (`main`, src/passes/lanes.rs).
 //
 // With `merge_depth` > 0 the first `merge_depth` diffuse vertices of the first sample are
 // photon-mapped (design.md section 1): each is recorded as a hit point, and emission reached from
