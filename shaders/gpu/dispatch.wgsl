@@ -16,3 +16,18 @@ fn flat_workgroup(group: vec3<u32>, groups: vec3<u32>) -> u32 {
 fn flat_invocation(group: vec3<u32>, groups: vec3<u32>, local: u32) -> u32 {
     return flat_workgroup(group, groups) * WORKGROUP_SIZE + local;
 }
+
+// Invocations in a grid of `groups` workgroups of WORKGROUP_SIZE: the stride of kernels whose
+// invocations take several items in turn (src/passes/lanes.rs).
+fn invocation_count(groups: vec3<u32>) -> u32 {
+    return groups.x * groups.y * groups.z * WORKGROUP_SIZE;
+}
+
+// The item after `index` for an invocation striding by `stride` over `count` items; `count`
+// once there is none (saturating: `index + stride` may pass u32's range).
+fn next_item(index: u32, stride: u32, count: u32) -> u32 {
+    if count - min(index, count) <= stride {
+        return count;
+    }
+    return index + stride;
+}

@@ -16,9 +16,9 @@
 // when two of its cells hash alike, so a photon is deposited at most once per hit point.
 
 #import common::scene::scene_info
-#import common::hit_points::NO_PIXEL
+#import common::hit_points::{NO_PIXEL, PhotonHit}
 #import common::gather::{hit_points, photon_hits, photon_hit_count, gather_at}
-#import gpu::dispatch::{WORKGROUP_SIZE, flat_invocation}
+#import gpu::dispatch::{WORKGROUP_SIZE, flat_invocation, invocation_count, next_item}
 #import common::spatial_hash::{grid_cell, cell_hash}
 
 // Radii are padded before they bound boxes, so that no photon the f32 distance test in
@@ -184,29 +184,49 @@ fn insert(
 // The gather: each photon hit walks the list of its cell's bucket. Entries of other cells that
 // share the bucket are rejected by gather_at's distance test, like entries whose sphere does not
 // reach the photon.
+fn first_link(hit: PhotonHit) -> u32 {
+    // gather_at rejects by `d.d > r*r`, which a NaN distance passes; the BVH's box test keeps
+    // such photons out, here they would reach every hit point of some bucket.
+    if !all(abs(hit.position) <= vec3<f32>(FAR)) {
+        return 0u;
+    }
+    return atomicLoad(&grid.words[bucket_of(cell_of(hit.position))]);
+}
+
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn main(
     @builtin(workgroup_id) group: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let index = flat_invocation(group, groups, local);
-    if index >= photon_hit_count() || atomicLoad(&grid.info.inserted) == 0u {
+    let count = photon_hit_count();
+    let stride = invocation_count(groups);
+    var index = flat_invocation(group, groups, local);
+    if index >= count || atomicLoad(&grid.info.inserted) == 0u {
         return;
     }
-    let hit = photon_hits.hits[index];
-    // gather_at rejects by `d.d > r*r`, which a NaN distance passes; the BVH's box test keeps
-    // such photons out, here they would reach every hit point of some bucket.
-    if !all(abs(hit.position) <= vec3<f32>(FAR)) {
-        return;
-    }
-    var link = atomicLoad(&grid.words[bucket_of(cell_of(hit.position))]);
     // Lists are acyclic (each entry is pushed once); the bound only keeps a corrupted grid from
     // hanging the device.
     let entries = 8u * params.slots;
-    for (var steps = 0u; link != 0u && steps < entries; steps++) {
+    // Photon hits index, index + invocations, ... each list walked in the same loop as the
+    // next one starts (as gather_bvh.wgsl's walks).
+    var hit = photon_hits.hits[index];
+    var link = first_link(hit);
+    var steps = 0u;
+    loop {
+        if link == 0u || steps >= entries {
+            index = next_item(index, stride, count);
+            if index == count {
+                break;
+            }
+            hit = photon_hits.hits[index];
+            link = first_link(hit);
+            steps = 0u;
+            continue;
+        }
         let entry = link - 1u;
         gather_at(entry >> 3u, hit);
         link = atomicLoad(&grid.words[params.buckets + entry]);
+        steps++;
     }
 }

@@ -1,5 +1,6 @@
-//! The gather half of a hit-point structure node: one kernel invocation per photon hit adds the
-//! photon to the hit points whose sphere contains it. Every structure's gather kernel binds hit
+//! The gather half of a hit-point structure node: for each photon hit a kernel invocation adds
+//! the photon to the hit points whose sphere contains it (several hits in turn per invocation
+//! on CPU adapters, `lanes`). Every structure's gather kernel binds hit
 //! points, photon hits and deposits first (shaders/common/gather.wgsl), then its own resources.
 
 use crate::Error;
@@ -8,6 +9,7 @@ use crate::gpu::dispatch::workgroup_grid;
 use crate::gpu::shaders::ShaderFile;
 use crate::graph::pass::{PrepareCtx, Recorder};
 use crate::passes::SceneResources;
+use crate::passes::lanes::items_per_invocation;
 use crate::shader_file;
 
 /// The BVH gather, shared by the SAH and LBVH builders (their trees have one layout).
@@ -47,7 +49,15 @@ impl Gather {
         let pipeline =
             ctx.shaders
                 .compute_pipeline(ctx.gpu, shader, entry, &[&scene.layout, &layout])?;
-        let groups = photon_hits.len.div_ceil(WORKGROUP).max(1);
+        let hits = u32::try_from(photon_hits.len).unwrap_or(u32::MAX);
+        // At most half of u32's range of invocations, so that the kernels' stride (the grid's
+        // invocations, rows padded) stays a u32.
+        let per_invocation = items_per_invocation(ctx.gpu.info.device_type, hits, 1, u32::MAX / 2);
+        let groups = photon_hits
+            .len
+            .div_ceil(per_invocation as u64)
+            .div_ceil(WORKGROUP)
+            .max(1);
         let groups = u32::try_from(groups).map_err(|_| {
             Error::Other(format!(
                 "{label}: {} photon hits are more than one dispatch can gather",
