@@ -41,6 +41,7 @@
 #import common::bsdf::sample_dielectric
 #endif
 #import common::hit_points::{PhotonHitsOut, PhotonHit}
+#import gpu::dispatch::next_item
 
 struct PhotonParams {
     photons: u32,
@@ -442,12 +443,7 @@ fn main(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index
                 break;
             }
             rng = rng_stream(index, params.iteration, params.seed);
-            // Saturating: photons and invocations may each pass half of u32's range.
-            if params.photons - index <= params.invocations {
-                index = params.photons;
-            } else {
-                index += params.invocations;
-            }
+            index = next_item(index, params.invocations, params.photons);
             let photon = emit_photon(&rng);
             if !photon.valid {
                 continue;
