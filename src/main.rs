@@ -359,6 +359,11 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             uniform_tables.join(" ")
         );
     }
+    if let Some(budget) = renderer.placement().node_budget() {
+        eprintln!(
+            "scene BVH collapsed to at most {budget} nodes (a few larger leaves) to fit a uniform binding"
+        );
+    }
     if let Some((triangles, spheres)) = renderer.placement().every_prim() {
         eprintln!(
             "rays test every primitive instead of the BVH ({triangles} triangles, {spheres} spheres)"

@@ -4,8 +4,8 @@ use std::path::Path;
 
 use glam::Vec3;
 use hppm::scene::bvh::{
-    Aabb, Bvh, MAX_SAH_DEPTH, build_sah, closest_hit, intersect_primitive, intersect_sphere,
-    intersect_triangle, scene_boxes,
+    Aabb, Bvh, BvhNode, MAX_SAH_DEPTH, build_sah, closest_hit, intersect_primitive,
+    intersect_sphere, intersect_triangle, scene_boxes,
 };
 use hppm::scene::{self, Bsdf, Camera, Integrator, Material, Scene, Sphere, Triangle};
 
@@ -454,4 +454,108 @@ fn a_million_boxes_build() {
     assert_eq!(bvh.indices.len(), boxes.len());
     assert!(bvh.depth() < 64);
     assert!(elapsed.as_secs_f32() < 20.0, "{elapsed:?}");
+}
+
+/// Two unit cubes two apart: the root's area is 14 and each leaf's 6, so the tree costs
+/// (14 + 6 + 6) / 14 primitive tests per ray (one box test costing one primitive test), and one
+/// leaf of both costs 2. Would catch a cost that forgets the box tests, the leaves' counts or
+/// the normalisation by the root.
+#[test]
+fn sah_cost_of_a_known_tree() {
+    let cube = |x: f32| Aabb {
+        min: Vec3::new(x, 0.0, 0.0),
+        max: Vec3::new(x + 1.0, 1.0, 1.0),
+    };
+    let bvh = build_sah(&[cube(0.0), cube(2.0)], 1);
+    assert_eq!(bvh.nodes.len(), 3);
+    assert!(
+        (bvh.sah_cost() - 26.0 / 14.0).abs() < 1e-6,
+        "{}",
+        bvh.sah_cost()
+    );
+    let one = bvh.collapsed_to(1);
+    assert_eq!(one.nodes.len(), 1);
+    assert_eq!(one.nodes[0].count, 2);
+    assert!((one.sah_cost() - 2.0).abs() < 1e-6, "{}", one.sah_cost());
+}
+
+/// A collapsed tree is still a tree over every box (each leaf's primitives inside its box,
+/// every node reachable once, queries equal to brute force), within its node budget, with the
+/// index table untouched. Would catch a merged leaf that drops or repeats a sibling's
+/// primitives, a child renumbered wrongly, or orphaned nodes left in the array.
+#[test]
+fn collapsing_keeps_every_box_and_query() {
+    let mut rng = Rng(11);
+    for n in [1usize, 2, 3, 17, 300] {
+        let boxes = random_boxes(&mut rng, n, 0.4);
+        let bvh = build_sah(&boxes, 4);
+        let built = bvh.nodes.len();
+        for budget in [
+            0,
+            1,
+            2,
+            3,
+            built / 2,
+            built.saturating_sub(2),
+            built,
+            built + 5,
+        ] {
+            let collapsed = bvh.collapsed_to(budget);
+            assert!(
+                collapsed.nodes.len() <= budget.max(1).min(built),
+                "{n} boxes to {budget}: {} nodes",
+                collapsed.nodes.len()
+            );
+            assert_eq!(collapsed.indices, bvh.indices);
+            if budget >= built {
+                assert_eq!(collapsed.nodes, bvh.nodes, "a tree within budget changed");
+            }
+            check_structure(&boxes, &collapsed, n);
+            check_queries(&boxes, &collapsed, &mut rng);
+        }
+    }
+}
+
+/// Merging one pair must merge the cheapest one: the collapsed tree's cost equals the least
+/// cost any single merge gives, computed here from the nodes for every candidate. Would catch
+/// a merge order by count or by index instead of by cost, or a wrong sign in the cost.
+#[test]
+fn collapsing_merges_the_cheapest_pair_first() {
+    let mut rng = Rng(12);
+    let boxes = random_boxes(&mut rng, 40, 0.6);
+    let bvh = build_sah(&boxes, 1);
+    let area = |n: &BvhNode| {
+        Aabb {
+            min: Vec3::from(n.min),
+            max: Vec3::from(n.max),
+        }
+        .surface_area()
+    };
+    let root_area = area(&bvh.nodes[0]);
+    let cheapest = bvh
+        .nodes
+        .iter()
+        .filter(|n| n.count == 0)
+        .filter_map(|n| {
+            let (l, r) = (
+                &bvh.nodes[n.left_or_first as usize],
+                &bvh.nodes[n.left_or_first as usize + 1],
+            );
+            (l.count > 0 && r.count > 0).then(|| {
+                (area(n) * ((l.count + r.count) as f32 - 1.0)
+                    - area(l) * l.count as f32
+                    - area(r) * r.count as f32)
+                    / root_area
+            })
+        })
+        .fold(f32::INFINITY, f32::min);
+    assert!(cheapest.is_finite());
+    let collapsed = bvh.collapsed_to(bvh.nodes.len() - 2);
+    assert_eq!(collapsed.nodes.len(), bvh.nodes.len() - 2);
+    let expected = bvh.sah_cost() + cheapest;
+    assert!(
+        (collapsed.sah_cost() - expected).abs() <= 1e-4 * expected,
+        "{} against {expected}",
+        collapsed.sah_cost()
+    );
 }

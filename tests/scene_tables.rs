@@ -16,9 +16,10 @@ use std::process::{Command, Output};
 use hppm::image::Image;
 
 /// Scenes that put different tables in uniform buffers on lavapipe: everything (spheres,
-/// plastics, conductors), everything with textures and an environment map, and a ring mesh whose
-/// nodes fit while its triangles and normals do not.
-const SCENES: [(&str, &[&str]); 3] = [
+/// plastics, conductors), everything with textures and an environment map, a ring mesh whose
+/// nodes fit while its triangles and normals do not, and a glass of water whose BVH is collapsed
+/// from 2,081 nodes to fit a uniform binding (a merged leaf that lost a triangle would show).
+const SCENES: [(&str, &[&str]); 4] = [
     (
         "tests/refs/scenes/materials_cornell/scene.xml",
         &[
@@ -34,6 +35,10 @@ const SCENES: [(&str, &[&str]); 3] = [
     ),
     (
         "scenes/glossy_ring/scene.xml",
+        &["BVH_NODES_UNIFORM", "PRIM_INDICES_UNIFORM"],
+    ),
+    (
+        "tests/refs/scenes/water_glass/scene.xml",
         &["BVH_NODES_UNIFORM", "PRIM_INDICES_UNIFORM"],
     ),
 ];
@@ -90,6 +95,13 @@ fn uniform_scene_tables_render_the_same_image_as_storage_tables() {
                 "{scene}: storage run bound uniforms"
             );
             let bound = uniform_tables(&uniform);
+            let collapsed =
+                String::from_utf8_lossy(&uniform.stderr).contains("scene BVH collapsed");
+            assert_eq!(
+                collapsed,
+                scene.contains("water_glass"),
+                "{scene}: BVH collapsed or not as expected"
+            );
             for table in expected {
                 assert!(
                     bound.iter().any(|b| b == table),

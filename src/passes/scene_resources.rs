@@ -9,7 +9,7 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::layout::StructLayout;
-use crate::scene::bvh::BvhNode;
+use crate::scene::bvh::{Bvh, BvhNode};
 use crate::scene::gpu_layout::{
     GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
     GpuTriangleUvs,
@@ -66,7 +66,18 @@ pub struct TablePlacement {
     uniform: Vec<(u32, u32)>,
     /// The scene's (triangles, spheres) when every primitive is tested instead of the BVH.
     every_prim: Option<(u32, u32)>,
+    /// The most nodes the BVH was collapsed to so that its nodes fit a uniform binding
+    /// ([`Bvh::collapsed_to`]); `None` when it is uploaded as built.
+    node_budget: Option<usize>,
 }
+
+/// How many more primitive tests per ray (by the surface area heuristic) than the tree as built
+/// a BVH collapsed to fit a uniform binding may take. On water_glass, with the nodes uniform,
+/// trees of 2,048, 1,500 and 1,024 nodes (0.3%, 3.9% and 11% more tests) rendered at one speed,
+/// 20-30% faster than the 2,081 nodes in storage, and one of 600 nodes (36% more) 10-30% slower
+/// than those (BENCHMARKS.md). Box tests are left out of the measure: from a uniform binding they
+/// cost far less than the storage reads of a triangle.
+pub const MAX_COLLAPSE_GROWTH: f32 = 0.10;
 
 /// The most primitives a scene may have for its rays to test every one instead of walking the
 /// BVH (where its triangles and spheres are uniform tables). The unrolled blocks in
@@ -176,17 +187,24 @@ impl TablePlacement {
             .max_uniform_buffers_per_shader_stage
             .saturating_sub(1 + PASS_UNIFORMS);
         let mut uniform = Vec::new();
+        let max_bytes = limits.max_uniform_buffer_binding_size;
+        let node_budget = fitting_node_budget(scene, max_bytes);
         for table in &UNIFORM_CAPABLE {
             let bytes = tables(scene)[table.binding as usize - 1].1.len() as u64;
-            let len = bytes.div_ceil(table.stride).max(1);
-            if free > 0 && len * table.stride <= limits.max_uniform_buffer_binding_size {
+            let len = match (table.binding, node_budget) {
+                (1, Some(budget)) => budget as u64,
+                _ => bytes.div_ceil(table.stride).max(1),
+            };
+            if free > 0 && len * table.stride <= max_bytes {
                 uniform.push((table.binding, len as u32));
                 free -= 1;
             }
         }
+        let nodes_uniform = uniform.iter().any(|&(binding, _)| binding == 1);
         let mut placement = Self {
             uniform,
             every_prim: None,
+            node_budget: node_budget.filter(|_| nodes_uniform),
         };
         // The counts, not the tables' lengths: an empty table holds one zeroed entry.
         let triangles = scene.uniform.num_triangles as usize;
@@ -234,6 +252,11 @@ impl TablePlacement {
     /// The scene's (triangles, spheres) when rays test every primitive instead of the BVH.
     pub fn every_prim(&self) -> Option<(u32, u32)> {
         self.every_prim
+    }
+
+    /// The most nodes the BVH was collapsed to so that its nodes fit a uniform binding.
+    pub fn node_budget(&self) -> Option<usize> {
+        self.node_budget
     }
 
     /// The array length of binding `binding`'s uniform declaration, if it is uniform.
@@ -332,6 +355,30 @@ fn block_defs(prefix: &str, blocks: &[u32], count: u32) -> Vec<(String, ShaderDe
 }
 
 /// Bindings 1-10 of group 0 in binding order: each table's label and bytes.
+/// The BVH as built, as a [`Bvh`].
+fn scene_bvh(scene: &GpuScene) -> Bvh {
+    Bvh {
+        nodes: scene.bvh_nodes.clone(),
+        indices: scene.prim_indices.clone(),
+    }
+}
+
+/// The node count to collapse the scene's BVH to so that its nodes fit a uniform binding of
+/// `max_bytes`, when they do not as built and the collapsed tree takes at most
+/// [`MAX_COLLAPSE_GROWTH`] more primitive tests per ray.
+fn fitting_node_budget(scene: &GpuScene, max_bytes: u64) -> Option<usize> {
+    let budget = (max_bytes / size_of::<BvhNode>() as u64) as usize;
+    if scene.bvh_nodes.len() <= budget || budget == 0 {
+        return None;
+    }
+    let built = scene_bvh(scene);
+    let collapsed = built.collapsed_to(budget);
+    let tests = |bvh: &Bvh| bvh.expected_tests().primitives;
+    (collapsed.nodes.len() <= budget
+        && tests(&collapsed) <= tests(&built) * (1.0 + MAX_COLLAPSE_GROWTH))
+        .then_some(budget)
+}
+
 fn tables(scene: &GpuScene) -> [(&'static str, &[u8]); 10] {
     use bytemuck::cast_slice;
     [
@@ -397,9 +444,14 @@ impl SceneResources {
         let block_boxes = placement.every_prim.map(|(triangles, _)| {
             block_boxes(&scene.triangles[..triangles as usize], &scene.uniform)
         });
+        // Or the BVH collapsed to fit its uniform binding.
+        let collapsed = placement
+            .node_budget
+            .map(|budget| scene_bvh(scene).collapsed_to(budget).nodes);
         for (binding, (label, bytes)) in (1u32..).zip(tables(scene)) {
-            let bytes = match (&block_boxes, binding) {
-                (Some(boxes), 1) => bytemuck::cast_slice(boxes),
+            let bytes = match (&block_boxes, &collapsed, binding) {
+                (Some(boxes), _, 1) => bytemuck::cast_slice(boxes),
+                (None, Some(nodes), 1) => bytemuck::cast_slice(nodes),
                 _ => bytes,
             };
             match placement.uniform_size(binding) {
@@ -456,6 +508,44 @@ mod tests {
             .join("tests/refs/scenes/cornell_glass_sphere/scene.xml");
         let scene = scene::load(&path).expect("scene");
         GpuScene::new(&scene, 16, 16)
+    }
+
+    fn scene_at(relative: &str) -> GpuScene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
+        GpuScene::new(&scene::load(&path).expect("scene"), 16, 16)
+    }
+
+    /// water_glass's BVH has 2,081 nodes: 33 more than a 64 KiB binding holds. Merging a few
+    /// leaves fits it for 0.3% more primitive tests, so its nodes go uniform (and are uploaded
+    /// collapsed); a binding of 512 nodes would take a tree with far more tests, so they stay in
+    /// storage. Would catch a collapse whose result overflows its declaration, a budget kept
+    /// when the nodes end up in storage, or a collapse at any cost.
+    #[test]
+    fn bvh_nodes_collapse_into_a_uniform_binding_only_when_cheap() {
+        let scene = scene_at("tests/refs/scenes/water_glass/scene.xml");
+        let node = size_of::<BvhNode>() as u64;
+        assert_eq!(
+            scene.bvh_nodes.len(),
+            2081,
+            "the test needs nodes just past 64 KiB"
+        );
+        let built = scene_bvh(&scene);
+        let tests = |bvh: &Bvh| bvh.expected_tests().primitives;
+        let rule = PlacementRule::UniformWhereFits;
+        let placement = TablePlacement::choose(rule, &scene, &limits(65536, 12));
+        assert_eq!(placement.node_budget(), Some(2048));
+        assert_eq!(placement.uniform_len(1), Some(2048));
+        let fitted = built.collapsed_to(2048);
+        assert!(fitted.nodes.len() <= 2048);
+        assert!(tests(&fitted) <= tests(&built) * 1.01);
+        let small = TablePlacement::choose(rule, &scene, &limits(512 * node, 12));
+        assert!(tests(&built.collapsed_to(512)) > tests(&built) * (1.0 + MAX_COLLAPSE_GROWTH));
+        assert_eq!((small.node_budget(), small.uniform_len(1)), (None, None));
+        // No uniform binding left for the nodes: no collapse either.
+        let none = TablePlacement::choose(rule, &scene, &limits(65536, 1 + PASS_UNIFORMS));
+        assert_eq!((none.node_budget(), none.uniform_len(1)), (None, None));
+        let storage = TablePlacement::choose(PlacementRule::Storage, &scene, &limits(65536, 12));
+        assert_eq!(storage.node_budget(), None);
     }
 
     fn limits(uniform_binding: u64, uniform_buffers: u32) -> wgpu::Limits {

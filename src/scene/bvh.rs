@@ -12,6 +12,9 @@
 //! tests and by passes that need ground truth: primitive `i < triangles.len()` is triangle `i`,
 //! the rest are spheres `i - triangles.len()` (the GPU uses the same numbering).
 
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
 use glam::Vec3;
 
 use super::Scene;
@@ -119,6 +122,14 @@ const ROUNDING_SLACK: f32 = 1.0 + 2.0 * (3.0 * 5.960_464_5e-8) / (1.0 - 3.0 * 5.
 pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     pub indices: Vec<u32>,
+}
+
+/// Tests per ray that enters a tree's root ([`Bvh::expected_tests`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ExpectedTests {
+    /// Interior nodes entered (each tests its node's box, as the SAH counts it).
+    pub boxes: f32,
+    pub primitives: f32,
 }
 
 /// Boxes of every scene primitive: triangles first, then spheres. A primitive index below
@@ -442,6 +453,83 @@ fn partition(items: &mut [Item], goes_left: impl Fn(Vec3) -> bool) -> [Aabb; 2] 
 }
 
 impl Bvh {
+    /// The surface area heuristic's expected cost of a ray that enters the root, in primitive
+    /// tests (a box test costs [`TRAVERSAL_COST`] of one).
+    pub fn sah_cost(&self) -> f32 {
+        let tests = self.expected_tests();
+        TRAVERSAL_COST * tests.boxes + tests.primitives
+    }
+
+    /// The box and primitive tests a ray that enters the root is expected to make, by the
+    /// surface area heuristic: each node's tests weighted by the chance (its area over the
+    /// root's) that the ray enters it.
+    pub fn expected_tests(&self) -> ExpectedTests {
+        let root_area = self.node_box(0).surface_area();
+        let mut tests = ExpectedTests::default();
+        let mut stack = vec![0usize];
+        while let Some(i) = stack.pop() {
+            let chance = if root_area > 0.0 {
+                self.node_box(i).surface_area() / root_area
+            } else {
+                1.0
+            };
+            if let Some(left) = self.children(i) {
+                tests.boxes += chance;
+                stack.extend([left, left + 1]);
+            } else {
+                tests.primitives += chance * self.nodes[i].count as f32;
+            }
+        }
+        tests
+    }
+
+    /// This tree with sibling leaves merged, the cheapest merge by the surface area heuristic
+    /// first, until at most `max_nodes` nodes remain (or the root is one leaf). Sibling leaves
+    /// hold adjacent ranges of `indices`, so a merged leaf holds their union and `indices` is
+    /// unchanged. On lavapipe nodes in a uniform binding read so much faster than in a storage
+    /// buffer that a few larger leaves pay for fitting them in one (BENCHMARKS.md).
+    pub fn collapsed_to(&self, max_nodes: usize) -> Bvh {
+        let mut nodes = self.nodes.clone();
+        let mut parent = vec![None; nodes.len()];
+        for i in 0..nodes.len() {
+            if let Some(left) = self.children(i) {
+                parent[left] = Some(i);
+                parent[left + 1] = Some(i);
+            }
+        }
+        let mut heap: BinaryHeap<Reverse<(CostKey, usize)>> = (0..nodes.len())
+            .filter_map(|i| merge_cost(&nodes, i).map(|c| Reverse((CostKey(c), i))))
+            .collect();
+        let mut live = nodes.len();
+        while live > max_nodes.max(1) {
+            let Some(Reverse((_, i))) = heap.pop() else {
+                break;
+            };
+            let left = nodes[i].left_or_first as usize;
+            let (l, r) = (nodes[left], nodes[left + 1]);
+            nodes[i].count = l.count + r.count;
+            // The left child's range comes first (build_sah partitions in place).
+            nodes[i].left_or_first = l.left_or_first;
+            live -= 2;
+            if let Some(p) = parent[i]
+                && let Some(c) = merge_cost(&nodes, p)
+            {
+                heap.push(Reverse((CostKey(c), p)));
+            }
+        }
+        Bvh {
+            nodes: reachable_in_order(&nodes),
+            indices: self.indices.clone(),
+        }
+    }
+
+    /// The left child of interior node `i` (the right one follows it); `None` for a leaf or
+    /// the empty tree's root.
+    fn children(&self, i: usize) -> Option<usize> {
+        let n = &self.nodes[i];
+        (n.count == 0 && !self.node_box(i).is_empty()).then_some(n.left_or_first as usize)
+    }
+
     pub fn node_box(&self, i: usize) -> Aabb {
         let n = &self.nodes[i];
         Aabb {
@@ -521,6 +609,72 @@ impl Bvh {
         }
         deepest
     }
+}
+
+/// A cost ordered totally (for the merge heap).
+#[derive(Clone, Copy, PartialEq)]
+struct CostKey(f32);
+
+impl Eq for CostKey {}
+
+impl PartialOrd for CostKey {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for CostKey {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
+
+/// What merging interior node `i`'s two children adds to the tree's cost (times the root's
+/// area), if both are leaves: its primitives are then tested whenever its box is entered, and
+/// neither its box test nor its children's primitive tests remain.
+fn merge_cost(nodes: &[BvhNode], i: usize) -> Option<f32> {
+    let n = nodes[i];
+    if n.count > 0 {
+        return None;
+    }
+    let left = n.left_or_first as usize;
+    let (l, r) = (nodes.get(left)?, nodes.get(left + 1)?);
+    if l.count == 0 || r.count == 0 {
+        return None;
+    }
+    let area = |node: &BvhNode| {
+        Aabb {
+            min: Vec3::from(node.min),
+            max: Vec3::from(node.max),
+        }
+        .surface_area()
+    };
+    Some(
+        area(&n) * ((l.count + r.count) as f32 - TRAVERSAL_COST)
+            - area(l) * l.count as f32
+            - area(r) * r.count as f32,
+    )
+}
+
+/// The nodes reachable from the root, numbered as `build_sah` numbers them: a node's two
+/// children are placed together when it is reached, and the left subtree is walked first.
+fn reachable_in_order(nodes: &[BvhNode]) -> Vec<BvhNode> {
+    let mut order = vec![nodes[0]];
+    // (index in `nodes`, index in `order`) of nodes whose children are still to be placed.
+    let mut stack = vec![(0usize, 0usize)];
+    while let Some((old, new)) = stack.pop() {
+        let n = nodes[old];
+        // Interior (the empty tree's root has no children: its left index is 0).
+        if n.count == 0 && n.left_or_first != 0 {
+            let left = n.left_or_first as usize;
+            let placed = order.len();
+            order[new].left_or_first = placed as u32;
+            order.extend([nodes[left], nodes[left + 1]]);
+            stack.push((left + 1, placed + 1));
+            stack.push((left, placed));
+        }
+    }
+    order
 }
 
 /// Möller–Trumbore: the distance along `dir` (in units of `dir`) at which the ray meets the
