@@ -7,6 +7,7 @@ use hppm::scene::bvh::{
     Aabb, Bvh, BvhNode, MAX_SAH_DEPTH, build_sah, closest_hit, intersect_primitive,
     intersect_sphere, intersect_triangle, scene_boxes,
 };
+use hppm::scene::split_boxes::split_references;
 use hppm::scene::{self, Bsdf, Camera, Integrator, Material, Scene, Sphere, Triangle};
 
 /// A deterministic pseudo-random stream (no extra dependency).
@@ -558,4 +559,59 @@ fn collapsing_merges_the_cheapest_pair_first() {
         "{} against {expected}",
         collapsed.sah_cost()
     );
+}
+
+/// Split references ([`split_references`]) in a BVH must find exactly the hits brute force
+/// finds, on a scene of the triangles they exist for: the water glass's fans (each wedge from
+/// a disk's centre to its rim) and its walls' long thin triangles, and random ones. And every
+/// point of every triangle must lie in a box of one of its references. Would catch a clipped
+/// box that lost a sliver of its triangle (a ray through that sliver misses: a crack), a
+/// reference mapped to the wrong primitive, or a split past the reference budget.
+#[test]
+fn split_references_keep_every_hit() {
+    let mut rng = Rng(21);
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/refs/scenes/water_glass/scene.xml");
+    let glass = scene::load(&path).unwrap();
+    let random = random_scene(&mut rng, 300, 20);
+    for (scene, spread) in [(&glass, 0.6), (&random, 6.0)] {
+        let refs = split_references(scene, 1.0);
+        let prims = scene.triangles.len() + scene.spheres.len();
+        assert!(refs.boxes.len() > prims, "nothing was split");
+        assert!(refs.boxes.len() <= 2 * prims);
+        assert_eq!(refs.prims.len(), refs.boxes.len());
+        for (b, &p) in refs.boxes.iter().zip(&refs.prims) {
+            let own = scene_boxes(scene)[p as usize];
+            assert!(own.contains(b), "a reference box outside its primitive's");
+        }
+        for (i, t) in scene.triangles.iter().enumerate() {
+            for _ in 0..20 {
+                let (mut u, mut v) = (rng.f32(), rng.f32());
+                if u + v > 1.0 {
+                    (u, v) = (1.0 - u, 1.0 - v);
+                }
+                let p = t.v[0] + u * (t.v[1] - t.v[0]) + v * (t.v[2] - t.v[0]);
+                let covered = refs
+                    .boxes
+                    .iter()
+                    .zip(&refs.prims)
+                    .any(|(b, &q)| q as usize == i && b.contains_point(p));
+                assert!(covered, "triangle {i}: {p} in no reference box");
+            }
+        }
+        let mut bvh = build_sah(&refs.boxes, 4);
+        for r in &mut bvh.indices {
+            *r = refs.prims[*r as usize];
+        }
+        let mut hits = 0;
+        for _ in 0..800 {
+            let o = rng.point(spread) + Vec3::Y * 0.5 * spread;
+            let d = rng.direction();
+            let fast = closest_hit(scene, &bvh, o, d).map(|h| h.0);
+            let slow = brute_force(scene, o, d).map(|h| h.0);
+            assert_eq!(fast, slow, "from {o} along {d}");
+            hits += usize::from(fast.is_some());
+        }
+        assert!(hits > 80, "too few hits ({hits}) to test anything");
+    }
 }

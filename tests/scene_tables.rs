@@ -18,7 +18,7 @@ use hppm::image::Image;
 /// Scenes that put different tables in uniform buffers on lavapipe: everything (spheres,
 /// plastics, conductors), everything with textures and an environment map, a ring mesh whose
 /// nodes fit while its triangles and normals do not, and a glass of water whose BVH is collapsed
-/// from 2,081 nodes to fit a uniform binding (a merged leaf that lost a triangle would show).
+/// from 3,249 nodes to fit a uniform binding (a merged leaf that lost a triangle would show).
 const SCENES: [(&str, &[&str]); 4] = [
     (
         "tests/refs/scenes/materials_cornell/scene.xml",

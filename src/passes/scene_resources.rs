@@ -73,7 +73,8 @@ pub struct TablePlacement {
 
 /// How many more primitive tests per ray (by the surface area heuristic) than the tree as built
 /// a BVH collapsed to fit a uniform binding may take. On water_glass, with the nodes uniform,
-/// trees of 2,048, 1,500 and 1,024 nodes (0.3%, 3.9% and 11% more tests) rendered at one speed,
+/// trees of 2,048, 1,500 and 1,024 nodes (0.3%, 3.9% and 11% more tests; measured before
+/// references were split) rendered at one speed,
 /// 20-30% faster than the 2,081 nodes in storage, and one of 600 nodes (36% more) 10-30% slower
 /// than those (BENCHMARKS.md). Box tests are left out of the measure: from a uniform binding they
 /// cost far less than the storage reads of a triangle.
@@ -515,29 +516,28 @@ mod tests {
         GpuScene::new(&scene::load(&path).expect("scene"), 16, 16)
     }
 
-    /// water_glass's BVH has 2,081 nodes: 33 more than a 64 KiB binding holds. Merging a few
-    /// leaves fits it for 0.3% more primitive tests, so its nodes go uniform (and are uploaded
-    /// collapsed); a binding of 512 nodes would take a tree with far more tests, so they stay in
-    /// storage. Would catch a collapse whose result overflows its declaration, a budget kept
-    /// when the nodes end up in storage, or a collapse at any cost.
+    /// water_glass's BVH has 3,249 nodes (2,081 before its references were split): more than a
+    /// 64 KiB binding holds. Merging leaves fits it for 5% more primitive tests, so its nodes go
+    /// uniform (and are uploaded collapsed); a binding of 512 nodes would take a tree with far
+    /// more tests, so they stay in storage. Would catch a collapse whose result overflows its
+    /// declaration, a budget kept when the nodes end up in storage, or a collapse at any cost.
     #[test]
     fn bvh_nodes_collapse_into_a_uniform_binding_only_when_cheap() {
         let scene = scene_at("tests/refs/scenes/water_glass/scene.xml");
         let node = size_of::<BvhNode>() as u64;
-        assert_eq!(
-            scene.bvh_nodes.len(),
-            2081,
-            "the test needs nodes just past 64 KiB"
-        );
         let built = scene_bvh(&scene);
         let tests = |bvh: &Bvh| bvh.expected_tests().primitives;
+        assert!(
+            scene.bvh_nodes.len() > 2048,
+            "the test needs nodes past 64 KiB"
+        );
         let rule = PlacementRule::UniformWhereFits;
         let placement = TablePlacement::choose(rule, &scene, &limits(65536, 12));
         assert_eq!(placement.node_budget(), Some(2048));
         assert_eq!(placement.uniform_len(1), Some(2048));
         let fitted = built.collapsed_to(2048);
         assert!(fitted.nodes.len() <= 2048);
-        assert!(tests(&fitted) <= tests(&built) * 1.01);
+        assert!(tests(&fitted) <= tests(&built) * (1.0 + MAX_COLLAPSE_GROWTH));
         let small = TablePlacement::choose(rule, &scene, &limits(512 * node, 12));
         assert!(tests(&built.collapsed_to(512)) > tests(&built) * (1.0 + MAX_COLLAPSE_GROWTH));
         assert_eq!((small.node_budget(), small.uniform_len(1)), (None, None));

@@ -85,6 +85,14 @@ impl Aabb {
         other.is_empty() || (other.min.cmpge(self.min).all() && other.max.cmple(self.max).all())
     }
 
+    /// The points in both boxes (empty if they do not overlap).
+    pub fn intersection(self, other: Aabb) -> Aabb {
+        Aabb {
+            min: self.min.max(other.min),
+            max: self.max.min(other.max),
+        }
+    }
+
     pub fn of_triangle(v: &[Vec3; 3]) -> Aabb {
         Aabb {
             min: v[0].min(v[1]).min(v[2]),
