@@ -525,13 +525,7 @@ fn collapsing_merges_the_cheapest_pair_first() {
     let mut rng = Rng(12);
     let boxes = random_boxes(&mut rng, 40, 0.6);
     let bvh = build_sah(&boxes, 1);
-    let area = |n: &BvhNode| {
-        Aabb {
-            min: Vec3::from(n.min),
-            max: Vec3::from(n.max),
-        }
-        .surface_area()
-    };
+    let area = |n: &BvhNode| n.bounds().surface_area();
     let root_area = area(&bvh.nodes[0]);
     let cheapest = bvh
         .nodes

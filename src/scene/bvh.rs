@@ -28,6 +28,21 @@ pub struct BvhNode {
     pub count: u32,
 }
 
+impl BvhNode {
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: Vec3::from(self.min),
+            max: Vec3::from(self.max),
+        }
+    }
+
+    /// The left child of an interior node (the right one follows it); `None` for a leaf or the
+    /// empty tree's root.
+    fn left_child(&self) -> Option<usize> {
+        (self.count == 0 && !self.bounds().is_empty()).then_some(self.left_or_first as usize)
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
     pub min: Vec3,
@@ -431,7 +446,7 @@ fn median_split(items: &mut [Item], centroid_bounds: &Aabb) -> usize {
     half
 }
 
-fn widest_axis(b: &Aabb) -> usize {
+pub(super) fn widest_axis(b: &Aabb) -> usize {
     let d = b.max - b.min;
     if d.x >= d.y && d.x >= d.z {
         0
@@ -481,7 +496,7 @@ impl Bvh {
             } else {
                 1.0
             };
-            if let Some(left) = self.children(i) {
+            if let Some(left) = self.nodes[i].left_child() {
                 tests.boxes += chance;
                 stack.extend([left, left + 1]);
             } else {
@@ -499,8 +514,8 @@ impl Bvh {
     pub fn collapsed_to(&self, max_nodes: usize) -> Bvh {
         let mut nodes = self.nodes.clone();
         let mut parent = vec![None; nodes.len()];
-        for i in 0..nodes.len() {
-            if let Some(left) = self.children(i) {
+        for (i, node) in nodes.iter().enumerate() {
+            if let Some(left) = node.left_child() {
                 parent[left] = Some(i);
                 parent[left + 1] = Some(i);
             }
@@ -531,19 +546,8 @@ impl Bvh {
         }
     }
 
-    /// The left child of interior node `i` (the right one follows it); `None` for a leaf or
-    /// the empty tree's root.
-    fn children(&self, i: usize) -> Option<usize> {
-        let n = &self.nodes[i];
-        (n.count == 0 && !self.node_box(i).is_empty()).then_some(n.left_or_first as usize)
-    }
-
     pub fn node_box(&self, i: usize) -> Aabb {
-        let n = &self.nodes[i];
-        Aabb {
-            min: Vec3::from(n.min),
-            max: Vec3::from(n.max),
-        }
+        self.nodes[i].bounds()
     }
 
     fn leaf_primitives(&self, node: &BvhNode) -> &[u32] {
@@ -609,19 +613,18 @@ impl Bvh {
         let mut stack = vec![(0usize, 1u32)];
         while let Some((i, d)) = stack.pop() {
             deepest = deepest.max(d);
-            let n = self.nodes[i];
-            if n.count == 0 && !self.node_box(i).is_empty() {
-                stack.push((n.left_or_first as usize, d + 1));
-                stack.push((n.left_or_first as usize + 1, d + 1));
+            if let Some(left) = self.nodes[i].left_child() {
+                stack.push((left, d + 1));
+                stack.push((left + 1, d + 1));
             }
         }
         deepest
     }
 }
 
-/// A cost ordered totally (for the merge heap).
+/// A cost ordered totally (for heaps of costs or areas).
 #[derive(Clone, Copy, PartialEq)]
-struct CostKey(f32);
+pub(super) struct CostKey(pub f32);
 
 impl Eq for CostKey {}
 
@@ -642,21 +645,12 @@ impl Ord for CostKey {
 /// neither its box test nor its children's primitive tests remain.
 fn merge_cost(nodes: &[BvhNode], i: usize) -> Option<f32> {
     let n = nodes[i];
-    if n.count > 0 {
-        return None;
-    }
-    let left = n.left_or_first as usize;
+    let left = n.left_child()?;
     let (l, r) = (nodes.get(left)?, nodes.get(left + 1)?);
     if l.count == 0 || r.count == 0 {
         return None;
     }
-    let area = |node: &BvhNode| {
-        Aabb {
-            min: Vec3::from(node.min),
-            max: Vec3::from(node.max),
-        }
-        .surface_area()
-    };
+    let area = |node: &BvhNode| node.bounds().surface_area();
     Some(
         area(&n) * ((l.count + r.count) as f32 - TRAVERSAL_COST)
             - area(l) * l.count as f32
@@ -671,10 +665,7 @@ fn reachable_in_order(nodes: &[BvhNode]) -> Vec<BvhNode> {
     // (index in `nodes`, index in `order`) of nodes whose children are still to be placed.
     let mut stack = vec![(0usize, 0usize)];
     while let Some((old, new)) = stack.pop() {
-        let n = nodes[old];
-        // Interior (the empty tree's root has no children: its left index is 0).
-        if n.count == 0 && n.left_or_first != 0 {
-            let left = n.left_or_first as usize;
+        if let Some(left) = nodes[old].left_child() {
             let placed = order.len();
             order[new].left_or_first = placed as u32;
             order.extend([nodes[left], nodes[left + 1]]);

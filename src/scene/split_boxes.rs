@@ -6,46 +6,18 @@
 //! the box of the part of the triangle inside a smaller box, so traversal is unchanged; a
 //! primitive may then sit in several leaves, which a closest-hit or any-hit query tolerates.
 
-use std::cmp::Ordering;
+use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use glam::Vec3;
 
 use super::Scene;
-use super::bvh::{Aabb, scene_boxes};
+use super::bvh::{Aabb, CostKey, scene_boxes, widest_axis};
 
 /// Boxes to build the BVH over, and the primitive each stands for (`prims[i]` for `boxes[i]`).
 pub struct References {
     pub boxes: Vec<Aabb>,
     pub prims: Vec<u32>,
-}
-
-/// A reference waiting in the split queue, largest box first.
-struct Queued {
-    area: f32,
-    reference: usize,
-}
-
-impl PartialEq for Queued {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-
-impl Eq for Queued {}
-
-impl PartialOrd for Queued {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Queued {
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.area
-            .total_cmp(&other.area)
-            .then(other.reference.cmp(&self.reference))
-    }
 }
 
 /// The scene's primitive boxes, with the largest triangle references split in two at the middle
@@ -63,15 +35,13 @@ pub fn split_references(scene: &Scene, extra: f32) -> References {
         .iter()
         .fold(Aabb::EMPTY, |a, b| a.union(*b))
         .surface_area();
-    let mut queue: BinaryHeap<Queued> = (0..triangles)
+    // Largest box first; of equal boxes, the lowest reference.
+    let mut queue: BinaryHeap<(CostKey, Reverse<usize>)> = (0..triangles)
         .filter(|&i| worth_splitting(&refs.boxes[i], &scene.triangles[i].v, scene_area))
-        .map(|i| Queued {
-            area: refs.boxes[i].surface_area(),
-            reference: i,
-        })
+        .map(|i| (CostKey(refs.boxes[i].surface_area()), Reverse(i)))
         .collect();
     while refs.boxes.len() < limit {
-        let Some(Queued { reference, .. }) = queue.pop() else {
+        let Some((_, Reverse(reference))) = queue.pop() else {
             break;
         };
         let prim = refs.prims[reference] as usize;
@@ -84,10 +54,7 @@ pub fn split_references(scene: &Scene, extra: f32) -> References {
         refs.prims.push(prim as u32);
         for (r, b) in [(reference, low), (refs.boxes.len() - 1, high)] {
             if worth_splitting(&b, corners, scene_area) {
-                queue.push(Queued {
-                    area: b.surface_area(),
-                    reference: r,
-                });
+                queue.push((CostKey(b.surface_area()), Reverse(r)));
             }
         }
     }
@@ -110,14 +77,7 @@ fn worth_splitting(bounds: &Aabb, corners: &[Vec3; 3], scene_area: f32) -> bool 
 /// The boxes of the parts of the triangle on each side of the middle of `bounds`' longest
 /// axis, each within `bounds`; `None` when one side holds none of it.
 fn split_in_half(corners: &[Vec3; 3], bounds: Aabb) -> Option<[Aabb; 2]> {
-    let extent = bounds.max - bounds.min;
-    let axis = if extent.x >= extent.y && extent.x >= extent.z {
-        0
-    } else if extent.y >= extent.z {
-        1
-    } else {
-        2
-    };
+    let axis = widest_axis(&bounds);
     let middle = 0.5 * (bounds.min[axis] + bounds.max[axis]);
     let mut low = bounds;
     low.max[axis] = middle;
