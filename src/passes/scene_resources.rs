@@ -60,15 +60,15 @@ pub const LAYOUTS: &[StructLayout] = &[
 /// BVH, by testing every primitive in unrolled code (`EVERY_PRIM` in shaders/common/scene.wgsl):
 /// lavapipe loads a uniform entry at a constant index once for all lanes, and that beats the
 /// BVH's divergent loads up to [`EVERY_PRIM_LIMIT`] primitives (BENCHMARKS.md).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct TablePlacement {
     /// (binding, length in array elements of its uniform declaration) of each uniform table.
     uniform: Vec<(u32, u32)>,
     /// The scene's (triangles, spheres) when every primitive is tested instead of the BVH.
     every_prim: Option<(u32, u32)>,
-    /// The most nodes the BVH was collapsed to so that its nodes fit a uniform binding
-    /// ([`Bvh::collapsed_to`]); `None` when it is uploaded as built.
-    node_budget: Option<usize>,
+    /// The BVH's nodes collapsed to fit their uniform binding ([`Bvh::collapsed_to`]), uploaded
+    /// instead of the scene's; `None` when it is uploaded as built.
+    collapsed_nodes: Option<Vec<BvhNode>>,
 }
 
 /// How many more primitive tests per ray (by the surface area heuristic) than the tree as built
@@ -189,11 +189,11 @@ impl TablePlacement {
             .saturating_sub(1 + PASS_UNIFORMS);
         let mut uniform = Vec::new();
         let max_bytes = limits.max_uniform_buffer_binding_size;
-        let node_budget = fitting_node_budget(scene, max_bytes);
+        let mut collapsed = collapsed_to_fit(scene, max_bytes);
         for table in &UNIFORM_CAPABLE {
             let bytes = tables(scene)[table.binding as usize - 1].1.len() as u64;
-            let len = match (table.binding, node_budget) {
-                (1, Some(budget)) => budget as u64,
+            let len = match (table.binding, &collapsed) {
+                (1, Some((budget, _))) => *budget as u64,
                 _ => bytes.div_ceil(table.stride).max(1),
             };
             if free > 0 && len * table.stride <= max_bytes {
@@ -201,11 +201,13 @@ impl TablePlacement {
                 free -= 1;
             }
         }
-        let nodes_uniform = uniform.iter().any(|&(binding, _)| binding == 1);
+        if !uniform.iter().any(|&(binding, _)| binding == 1) {
+            collapsed = None;
+        }
         let mut placement = Self {
             uniform,
             every_prim: None,
-            node_budget: node_budget.filter(|_| nodes_uniform),
+            collapsed_nodes: collapsed.map(|(_, nodes)| nodes),
         };
         // The counts, not the tables' lengths: an empty table holds one zeroed entry.
         let triangles = scene.uniform.num_triangles as usize;
@@ -255,9 +257,11 @@ impl TablePlacement {
         self.every_prim
     }
 
-    /// The most nodes the BVH was collapsed to so that its nodes fit a uniform binding.
+    /// The most nodes the BVH was collapsed to so that its nodes fit a uniform binding (its
+    /// declared length there).
     pub fn node_budget(&self) -> Option<usize> {
-        self.node_budget
+        self.collapsed_nodes.as_ref()?;
+        self.uniform_len(1).map(|len| len as usize)
     }
 
     /// The array length of binding `binding`'s uniform declaration, if it is uniform.
@@ -355,7 +359,6 @@ fn block_defs(prefix: &str, blocks: &[u32], count: u32) -> Vec<(String, ShaderDe
     defs
 }
 
-/// Bindings 1-10 of group 0 in binding order: each table's label and bytes.
 /// The BVH as built, as a [`Bvh`].
 fn scene_bvh(scene: &GpuScene) -> Bvh {
     Bvh {
@@ -364,10 +367,10 @@ fn scene_bvh(scene: &GpuScene) -> Bvh {
     }
 }
 
-/// The node count to collapse the scene's BVH to so that its nodes fit a uniform binding of
-/// `max_bytes`, when they do not as built and the collapsed tree takes at most
+/// The node count a uniform binding of `max_bytes` holds and the scene's BVH nodes collapsed
+/// to it, when they do not fit as built and the collapsed tree takes at most
 /// [`MAX_COLLAPSE_GROWTH`] more primitive tests per ray.
-fn fitting_node_budget(scene: &GpuScene, max_bytes: u64) -> Option<usize> {
+fn collapsed_to_fit(scene: &GpuScene, max_bytes: u64) -> Option<(usize, Vec<BvhNode>)> {
     let budget = (max_bytes / size_of::<BvhNode>() as u64) as usize;
     if scene.bvh_nodes.len() <= budget || budget == 0 {
         return None;
@@ -377,9 +380,10 @@ fn fitting_node_budget(scene: &GpuScene, max_bytes: u64) -> Option<usize> {
     let tests = |bvh: &Bvh| bvh.expected_tests().primitives;
     (collapsed.nodes.len() <= budget
         && tests(&collapsed) <= tests(&built) * (1.0 + MAX_COLLAPSE_GROWTH))
-        .then_some(budget)
+        .then_some((budget, collapsed.nodes))
 }
 
+/// Bindings 1-10 of group 0 in binding order: each table's label and bytes.
 fn tables(scene: &GpuScene) -> [(&'static str, &[u8]); 10] {
     use bytemuck::cast_slice;
     [
@@ -446,11 +450,8 @@ impl SceneResources {
             block_boxes(&scene.triangles[..triangles as usize], &scene.uniform)
         });
         // Or the BVH collapsed to fit its uniform binding.
-        let collapsed = placement
-            .node_budget
-            .map(|budget| scene_bvh(scene).collapsed_to(budget).nodes);
         for (binding, (label, bytes)) in (1u32..).zip(tables(scene)) {
-            let bytes = match (&block_boxes, &collapsed, binding) {
+            let bytes = match (&block_boxes, &placement.collapsed_nodes, binding) {
                 (Some(boxes), _, 1) => bytemuck::cast_slice(boxes),
                 (None, Some(nodes), 1) => bytemuck::cast_slice(nodes),
                 _ => bytes,
