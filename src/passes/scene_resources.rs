@@ -506,10 +506,7 @@ mod tests {
     use crate::scene::{self, gpu_layout::GpuScene};
 
     fn glass_sphere() -> GpuScene {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/refs/scenes/cornell_glass_sphere/scene.xml");
-        let scene = scene::load(&path).expect("scene");
-        GpuScene::new(&scene, 16, 16)
+        scene_at("tests/refs/scenes/cornell_glass_sphere/scene.xml")
     }
 
     fn scene_at(relative: &str) -> GpuScene {
@@ -689,9 +686,7 @@ mod tests {
     /// reverse, and binding 1 declared shorter than the boxes.
     #[test]
     fn block_boxes_hold_their_triangles_and_cull_only_small_ones() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/refs/scenes/cornell_diffuse/scene.xml");
-        let scene = GpuScene::new(&scene::load(&path).expect("scene"), 16, 16);
+        let scene = scene_at("tests/refs/scenes/cornell_diffuse/scene.xml");
         let triangles = &scene.triangles[..scene.uniform.num_triangles as usize];
         assert_eq!(triangles.len(), 36);
         let boxes = block_boxes(triangles, &scene.uniform);
