@@ -517,6 +517,32 @@ fn collapsing_keeps_every_box_and_query() {
     }
 }
 
+/// A collapse bounded by the primitive tests it may add gives up exactly when the full
+/// collapse would add more: it returns the same tree when the bound holds what the merges
+/// added (by `expected_tests`, computed here), and `None` when the bound is half of that. Would
+/// catch an early stop that counts a merge's cost without the box test it removes (it would
+/// give up on trees within the bound), or one that never stops.
+#[test]
+fn bounded_collapse_gives_up_exactly_past_its_bound() {
+    let mut rng = Rng(13);
+    let boxes = random_boxes(&mut rng, 300, 0.4);
+    let bvh = build_sah(&boxes, 4);
+    let tests = |b: &Bvh| b.expected_tests().primitives;
+    for budget in [bvh.nodes.len() / 2, bvh.nodes.len() / 4, 9] {
+        let full = bvh.collapsed_to(budget);
+        let added = tests(&full) - tests(&bvh);
+        assert!(added > 0.0, "budget {budget}: no tests added");
+        let within = bvh.collapsed_within(budget, added * 1.001 + 1e-6);
+        assert_eq!(within.map(|b| b.nodes), Some(full.nodes), "budget {budget}");
+        assert!(
+            bvh.collapsed_within(budget, added * 0.5).is_none(),
+            "budget {budget}"
+        );
+    }
+    // A tree within budget needs no merge, whatever the bound.
+    assert!(bvh.collapsed_within(bvh.nodes.len(), 0.0).is_some());
+}
+
 /// Merging one pair must merge the cheapest one: the collapsed tree's cost equals the least
 /// cost any single merge gives, computed here from the nodes for every candidate. Would catch
 /// a merge order by count or by index instead of by cost, or a wrong sign in the cost.

@@ -376,8 +376,11 @@ fn collapsed_to_fit(scene: &GpuScene, max_bytes: u64) -> Option<(usize, Vec<BvhN
         return None;
     }
     let built = scene_bvh(scene);
-    let collapsed = built.collapsed_to(budget);
     let tests = |bvh: &Bvh| bvh.expected_tests().primitives;
+    let allowed = tests(&built) * MAX_COLLAPSE_GROWTH;
+    // A little past the bound, so that the merges' running sum (another order of additions
+    // than expected_tests') cannot refuse a tree the final check below would take.
+    let collapsed = built.collapsed_within(budget, allowed * 1.01)?;
     (collapsed.nodes.len() <= budget
         && tests(&collapsed) <= tests(&built) * (1.0 + MAX_COLLAPSE_GROWTH))
         .then_some((budget, collapsed.nodes))

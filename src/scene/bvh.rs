@@ -512,6 +512,27 @@ impl Bvh {
     /// unchanged. On lavapipe nodes in a uniform binding read so much faster than in a storage
     /// buffer that a few larger leaves pay for fitting them in one (BENCHMARKS.md).
     pub fn collapsed_to(&self, max_nodes: usize) -> Bvh {
+        match self.collapsed_within(max_nodes, f32::INFINITY) {
+            Some(bvh) => bvh,
+            // Unreachable: no merge adds more than infinitely many tests.
+            None => Bvh {
+                nodes: self.nodes.clone(),
+                indices: self.indices.clone(),
+            },
+        }
+    }
+
+    /// [`Bvh::collapsed_to`], or `None` as soon as the merges add more than
+    /// `max_added_primitive_tests` to the [`Bvh::expected_tests`] primitives (merges only ever
+    /// add some, cheapest first, so a tree that cannot fit within the bound is given up without
+    /// merging it all the way: a 400,000-triangle scene spent a third of a second there).
+    pub fn collapsed_within(
+        &self,
+        max_nodes: usize,
+        max_added_primitive_tests: f32,
+    ) -> Option<Bvh> {
+        let root_area = self.node_box(0).surface_area();
+        let mut added = 0.0f32;
         let mut nodes = self.nodes.clone();
         let mut parent = vec![None; nodes.len()];
         for (i, node) in nodes.iter().enumerate() {
@@ -525,9 +546,16 @@ impl Bvh {
             .collect();
         let mut live = nodes.len();
         while live > max_nodes.max(1) {
-            let Some(Reverse((_, i))) = heap.pop() else {
+            let Some(Reverse((CostKey(cost), i))) = heap.pop() else {
                 break;
             };
+            // The merge's primitive tests: its SAH cost plus the box test it removes.
+            if root_area > 0.0 {
+                added += (cost + TRAVERSAL_COST * nodes[i].bounds().surface_area()) / root_area;
+                if added > max_added_primitive_tests {
+                    return None;
+                }
+            }
             let left = nodes[i].left_or_first as usize;
             let (l, r) = (nodes[left], nodes[left + 1]);
             nodes[i].count = l.count + r.count;
@@ -540,10 +568,10 @@ impl Bvh {
                 heap.push(Reverse((CostKey(c), p)));
             }
         }
-        Bvh {
+        Some(Bvh {
             nodes: reachable_in_order(&nodes),
             indices: self.indices.clone(),
-        }
+        })
     }
 
     pub fn node_box(&self, i: usize) -> Aabb {
