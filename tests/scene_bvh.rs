@@ -600,9 +600,12 @@ fn split_references_keep_every_hit() {
         assert!(refs.boxes.len() > prims, "nothing was split");
         assert!(refs.boxes.len() <= 2 * prims);
         assert_eq!(refs.prims.len(), refs.boxes.len());
+        let own = scene_boxes(scene);
         for (b, &p) in refs.boxes.iter().zip(&refs.prims) {
-            let own = scene_boxes(scene)[p as usize];
-            assert!(own.contains(b), "a reference box outside its primitive's");
+            assert!(
+                own[p as usize].contains(b),
+                "a reference box outside its primitive's"
+            );
         }
         for (i, t) in scene.triangles.iter().enumerate() {
             for _ in 0..20 {

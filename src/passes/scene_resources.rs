@@ -377,12 +377,12 @@ fn collapsed_to_fit(scene: &GpuScene, max_bytes: u64) -> Option<(usize, Vec<BvhN
     }
     let built = scene_bvh(scene);
     let tests = |bvh: &Bvh| bvh.expected_tests().primitives;
-    let allowed = tests(&built) * MAX_COLLAPSE_GROWTH;
+    let built_tests = tests(&built);
     // A little past the bound, so that the merges' running sum (another order of additions
     // than expected_tests') cannot refuse a tree the final check below would take.
-    let collapsed = built.collapsed_within(budget, allowed * 1.01)?;
+    let collapsed = built.collapsed_within(budget, built_tests * MAX_COLLAPSE_GROWTH * 1.01)?;
     (collapsed.nodes.len() <= budget
-        && tests(&collapsed) <= tests(&built) * (1.0 + MAX_COLLAPSE_GROWTH))
+        && tests(&collapsed) <= built_tests * (1.0 + MAX_COLLAPSE_GROWTH))
         .then_some((budget, collapsed.nodes))
 }
 
