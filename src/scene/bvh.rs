@@ -142,6 +142,7 @@ impl Aabb {
 /// `1 + 2 gamma(3)` with gamma(n) = n eps / (1 - n eps), eps = 2^-24 (PBRT 3, section 3.9).
 const ROUNDING_SLACK: f32 = 1.0 + 2.0 * (3.0 * 5.960_464_5e-8) / (1.0 - 3.0 * 5.960_464_5e-8);
 
+#[derive(Clone)]
 pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     pub indices: Vec<u32>,
@@ -512,14 +513,9 @@ impl Bvh {
     /// unchanged. On lavapipe nodes in a uniform binding read so much faster than in a storage
     /// buffer that a few larger leaves pay for fitting them in one (BENCHMARKS.md).
     pub fn collapsed_to(&self, max_nodes: usize) -> Bvh {
-        match self.collapsed_within(max_nodes, f32::INFINITY) {
-            Some(bvh) => bvh,
-            // Unreachable: no merge adds more than infinitely many tests.
-            None => Bvh {
-                nodes: self.nodes.clone(),
-                indices: self.indices.clone(),
-            },
-        }
+        // No merge adds more than infinitely many tests, so this never falls back.
+        self.collapsed_within(max_nodes, f32::INFINITY)
+            .unwrap_or_else(|| self.clone())
     }
 
     /// [`Bvh::collapsed_to`], or `None` as soon as the merges add more than
