@@ -372,13 +372,30 @@ fn faces_ray(prim: u32, origin: vec3<f32>, dir: vec3<f32>, t: f32) -> bool {
     return dot(dir, cross(triangles[prim].edge_a, triangles[prim].edge_b)) < 0.0;
 }
 
+// Of two hits at exactly the same computed distance, whether `prim` beats `held`: the one whose
+// front faces the ray, then the lower index. Which leaf the traversal reaches first depends on
+// the tree and on the signs of the ray's direction, so a tie left to that order changes with
+// position and direction: where a glass stands on a table (its bottom in the table's plane) a
+// camera ray inside the glass met the table on one side of the scene and left through the
+// glass's bottom on the other, and the glass came out a third darker on one half of the image
+// (tests/coplanar.rs).
+fn wins_exact_tie(prim: u32, held: u32, origin: vec3<f32>, dir: vec3<f32>, t: f32) -> bool {
+    let front = faces_ray(prim, origin, dir, t);
+    let held_front = faces_ray(held, origin, dir, t);
+    if front != held_front {
+        return front;
+    }
+    return prim < held;
+}
+
 // Keeps `prim` at distance `t` in `hit` if it is closer; returns whether it was kept. With
 // `front_wins_ties`, of two coplanar hits the one whose front faces the ray wins: where a
 // dielectric's face lies on a diffuse surface (a glass standing on a table), a photon arriving
 // at the contact lands on the table, as the reverse of a camera path leaving the table (which
-// starts on the table's front side, past the contact) does. Otherwise the tie goes to whichever
-// triangle rounds closer, and photons lost through the contact would darken the caustic the
-// camera pass leaves to them.
+// starts on the table's front side, past the contact) does. Otherwise the closer computed
+// distance wins, exact ties by wins_exact_tie, as Mitsuba's closest hit (the tie's outcome then
+// follows the distances' rounding, the same on every side of the scene); photons lost through
+// the contact would darken the caustic the camera pass leaves to them.
 fn keep_closer(hit: ptr<function, Hit>, prim: u32, t: f32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) -> bool {
     if front_wins_ties && t < T_INFINITE && abs(t - (*hit).t) <= tie_span(origin, (*hit).t) {
         if (*hit).prim == NO_HIT || (faces_ray(prim, origin, dir, t) && !faces_ray((*hit).prim, origin, dir, (*hit).t)) {
@@ -387,7 +404,7 @@ fn keep_closer(hit: ptr<function, Hit>, prim: u32, t: f32, origin: vec3<f32>, di
         }
         return false;
     }
-    if t < (*hit).t {
+    if t < (*hit).t || (t == (*hit).t && (*hit).prim != NO_HIT && wins_exact_tie(prim, (*hit).prim, origin, dir, t)) {
         *hit = Hit(t, prim);
         return true;
     }
