@@ -12,6 +12,11 @@ pub struct MeshData {
     pub normals: Option<Vec<[Vec3; 3]>>,
     /// Texture coordinates at each triangle's corners, when the file gives them.
     pub uvs: Option<Vec<[Vec2; 3]>>,
+    /// Per triangle, the vertex of each corner where `normals` were computed from the faces
+    /// (the file gave none), else `None`: placing the mesh computes those normals again from the
+    /// placed positions, as Mitsuba does (under a non-uniform scale, normals averaged over the
+    /// faces in the file's space and carried into the world are not the world faces' average).
+    pub computed_normal_vertices: Option<Vec<Option<[usize; 3]>>>,
 }
 
 /// Vertex normals as Mitsuba 3 computes them for a mesh file that has none (Thürmer and
@@ -50,6 +55,7 @@ pub fn rectangle_mesh() -> MeshData {
         triangles: vec![[p[0], p[1], p[2]], [p[0], p[2], p[3]]],
         normals: None,
         uvs: Some(vec![[uv[0], uv[1], uv[2]], [uv[0], uv[2], uv[3]]]),
+        computed_normal_vertices: None,
     }
 }
 

@@ -720,9 +720,14 @@ pub fn place_mesh(
     material: u32,
     flip_normals: bool,
 ) -> impl Iterator<Item = Triangle> {
-    let swap = (to_world.determinant() < 0.0) != flip_normals;
+    let mirrored = to_world.determinant() < 0.0;
+    let swap = mirrored != flip_normals;
     let normal_map = glam::Mat3::from_mat4(to_world).inverse().transpose();
     let sign = if flip_normals { -1.0 } else { 1.0 };
+    let recomputed = mesh
+        .computed_normal_vertices
+        .as_ref()
+        .map(|vertices| world_vertex_normals(&mesh.triangles, vertices, to_world, mirrored));
     let normals = mesh.normals;
     let uvs = mesh.uvs;
     mesh.triangles
@@ -732,7 +737,13 @@ pub fn place_mesh(
             let [a, b, c] = corners.map(|p| to_world.transform_point3(p));
             let v = if swap { [a, c, b] } else { [a, b, c] };
             let normals = normals.as_ref().and_then(|n| {
-                let placed = n.get(i)?.map(|n| (sign * (normal_map * n)).try_normalize());
+                let world = recomputed
+                    .as_ref()
+                    .and_then(|r| r.get(i).copied().flatten());
+                let placed = match world {
+                    Some(w) => w.map(|n| (sign * n).try_normalize()),
+                    None => n.get(i)?.map(|n| (sign * (normal_map * n)).try_normalize()),
+                };
                 let [Some(na), Some(nb), Some(nc)] = placed else {
                     return None;
                 };
@@ -749,6 +760,46 @@ pub fn place_mesh(
                 uvs,
             }
         })
+}
+
+/// Vertex normals computed from the faces after `to_world` has placed them, per triangle corner
+/// in the file's order, for the triangles `vertices` names (see
+/// `MeshData::computed_normal_vertices`); outward under a mirroring `to_world`, whose winding
+/// `place_mesh` reverses.
+fn world_vertex_normals(
+    triangles: &[[Vec3; 3]],
+    vertices: &[Option<[usize; 3]>],
+    to_world: glam::Mat4,
+    mirrored: bool,
+) -> Vec<Option<[Vec3; 3]>> {
+    let count = vertices
+        .iter()
+        .flatten()
+        .flatten()
+        .max()
+        .map_or(0, |&v| v + 1);
+    let mut positions = vec![Vec3::ZERO; count];
+    let mut faces = Vec::new();
+    for (corners, ids) in triangles.iter().zip(vertices) {
+        if let Some(ids) = ids {
+            for k in 0..3 {
+                positions[ids[k]] = to_world.transform_point3(corners[k]);
+            }
+            faces.push(if mirrored {
+                [ids[0], ids[2], ids[1]]
+            } else {
+                *ids
+            });
+        }
+    }
+    let mut computed = mesh::angle_weighted_normals(&positions, &faces).into_iter();
+    vertices
+        .iter()
+        .map(|ids| {
+            ids.and_then(|_| computed.next())
+                .map(|n| if mirrored { [n[0], n[2], n[1]] } else { n })
+        })
+        .collect()
 }
 
 /// The uniform scale of an affine transform made only of uniform scaling, rotation, mirroring

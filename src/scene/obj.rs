@@ -65,6 +65,9 @@ pub fn parse_mesh(path: &Path, text: &str) -> Result<MeshData, SceneError> {
         ..MeshData::default()
     };
     let mut uv_parts = Vec::new();
+    // The vertices of triangles whose normals are computed, numbered across the file's models.
+    let mut corner_vertices: Vec<Option<[usize; 3]>> = Vec::new();
+    let mut computed_vertices = 0;
     for model in &models {
         let m = &model.mesh;
         let out_of_range = || SceneError::File {
@@ -119,8 +122,14 @@ pub fn parse_mesh(path: &Path, text: &str) -> Result<MeshData, SceneError> {
                     })
                 }));
             }
+            let first = computed_vertices;
+            computed_vertices += vertex_positions.len();
+            corner_vertices.extend(vertex_corners.iter().map(|c| Some(c.map(|v| first + v))));
             angle_weighted_normals(&vertex_positions, &vertex_corners)
         };
+        if file_normals {
+            corner_vertices.extend(std::iter::repeat_n(None, corners.len()));
+        }
         mesh.normals.get_or_insert_with(Vec::new).extend(normals);
         // Texture coordinates where every corner of every face names one (as OBJ stores them;
         // Mitsuba's flip_tex_coords is the loader's business).
@@ -160,6 +169,9 @@ pub fn parse_mesh(path: &Path, text: &str) -> Result<MeshData, SceneError> {
             file: path.to_path_buf(),
             message: "the OBJ file has no faces".into(),
         });
+    }
+    if corner_vertices.iter().any(Option::is_some) {
+        mesh.computed_normal_vertices = Some(corner_vertices);
     }
     Ok(mesh)
 }

@@ -118,6 +118,9 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<MeshData, SceneError> {
                 .map(|c| c.map(|t| Vec2::new(t.x, t.y)))
                 .collect()
         }),
+        computed_normal_vertices: normals
+            .is_none()
+            .then(|| corners_of_triangles.iter().map(|&c| Some(c)).collect()),
     };
     Ok(mesh)
 }
