@@ -128,7 +128,12 @@ fn glass_slab(cells: i32) -> String {
         for i in 0..cells {
             for j in 0..cells {
                 let (x0, z0) = (-half + 0.25 * i as f32, -half + 0.25 * j as f32);
-                for (x, z) in [(x0, z0), (x0 + 0.25, z0), (x0 + 0.25, z0 + 0.25), (x0, z0 + 0.25)] {
+                for (x, z) in [
+                    (x0, z0),
+                    (x0 + 0.25, z0),
+                    (x0 + 0.25, z0 + 0.25),
+                    (x0, z0 + 0.25),
+                ] {
                     obj += &format!("v {x} {y} {z}\n");
                 }
                 // Counter-clockwise seen from +y: (a, d, c), (a, c, b); from -y reversed.
@@ -155,8 +160,9 @@ fn contact_rays(rng: &mut Rng, cells: i32, count: usize) -> Vec<(Vec3, Vec3)> {
     // boxes end. A ray with a zero direction component that lies exactly in a box's face plane
     // misses the box on one side of it (the slab test's exit is 0 there); only a hit exactly on
     // a triangle's edge can be in that box, and the triangle across the edge is found instead.
-    let dyadic =
-        |rng: &mut Rng, lim: f32| (((rng.unit() * 2.0 - 1.0) * lim * 32.0).floor() * 2.0 + 1.0) / 64.0;
+    let dyadic = |rng: &mut Rng, lim: f32| {
+        (((rng.unit() * 2.0 - 1.0) * lim * 32.0).floor() * 2.0 + 1.0) / 64.0
+    };
     (0..count)
         .map(|i| {
             let x = dyadic(rng, half * 0.5);
@@ -252,7 +258,8 @@ fn closest_hits_match_brute_force_in_every_octant() {
     let gpu = gpu_hits(&scene, &rays);
     let (mut checked, mut octants) = (0, [0usize; 8]);
     for ((o, d), hit) in rays.iter().zip(&gpu) {
-        let octant = (d.x < 0.0) as usize | ((d.y < 0.0) as usize) << 1 | ((d.z < 0.0) as usize) << 2;
+        let octant =
+            (d.x < 0.0) as usize | ((d.y < 0.0) as usize) << 1 | ((d.z < 0.0) as usize) << 2;
         match brute_force(&scene, *o, *d) {
             Some((expected, gap)) if gap > 1e-4 => {
                 assert_eq!(*hit, Some(expected), "ray {o} -> {d}");
@@ -263,5 +270,8 @@ fn closest_hits_match_brute_force_in_every_octant() {
         }
     }
     eprintln!("{checked} unambiguous hits checked, by octant {octants:?}");
-    assert!(octants.iter().all(|&n| n > 100), "every octant tested: {octants:?}");
+    assert!(
+        octants.iter().all(|&n| n > 100),
+        "every octant tested: {octants:?}"
+    );
 }

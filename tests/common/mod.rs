@@ -77,5 +77,6 @@ pub fn relmse(image: &Image, reference: &Image) -> f64 {
     image.relmse(reference).unwrap_or_else(|e| panic!("{e}"))
 }
 pub mod convergence;
+pub mod differential;
 pub mod pass_harness;
 pub mod rng;

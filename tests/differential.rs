@@ -1,0 +1,97 @@
+//! Differential tests against Mitsuba 3 on generated scenes (tests/differential/generate.py):
+//! each scene of the corpus rendered by `pt` and, where it can agree with Mitsuba's path tracer,
+//! by the default hybrid, several seeds each, with the bias statistic of tests/bias.rs applied
+//! to every 8x8 block of the image (tests/common/differential.rs). A fault confined to one
+//! direction, one material, one emitter kind or one region of one scene fails it; the faults
+//! shown caught are in tests/differential_faults.rs.
+//!
+//! The corpus (40 scenes at 32x32, references rendered by Mitsuba 3.9.1 `llvm_ad_rgb` at 32,768
+//! spp) runs in four shards so the test harness runs them side by side. A longer run over any
+//! corpus the generator writes (a thousand scenes, say):
+//!
+//! ```text
+//! python3 tests/differential/generate.py --first 1000 --count 1000 --out /tmp/corpus
+//! HPPM_DIFFERENTIAL_CORPUS=/tmp/corpus cargo test --release --test differential -- --ignored
+//! ```
+
+mod common;
+
+use common::differential::*;
+use common::*;
+
+const SEEDS: u64 = 6;
+const SPP: u64 = 8;
+const SHARDS: usize = 4;
+
+/// Renders every case of `cases` through each of its graphs; returns one line per failure.
+fn check(cases: &[&Case]) -> Vec<String> {
+    let gpu = gpu();
+    let mut failures = Vec::new();
+    for case in cases {
+        let scene = case.scene();
+        for graph in &case.graphs {
+            let file = format!("graphs/{graph}.ron");
+            let images = render_seeds(&gpu, &scene, &file, 0..SEEDS, SPP);
+            let (flagged, worst) = flagged(case, &images, SPP);
+            eprintln!("{} {graph}: worst {worst}", case.name);
+            if let Some(first) = flagged.first() {
+                failures.push(format!(
+                    "{} ({}) through {graph}: {} of 16 blocks biased, worst {first}",
+                    case.name,
+                    case.dir.display(),
+                    flagged.len()
+                ));
+            }
+        }
+    }
+    failures
+}
+
+fn shard(k: usize) {
+    let cases = corpus(CORPUS);
+    assert!(cases.len() >= 40, "the corpus has {} scenes", cases.len());
+    let mine: Vec<&Case> = cases.iter().skip(k).step_by(SHARDS).collect();
+    let failures = check(&mine);
+    assert!(
+        failures.is_empty(),
+        "biased against Mitsuba:\n{}",
+        failures.join("\n")
+    );
+}
+
+#[test]
+fn corpus_shard_0() {
+    shard(0);
+}
+
+#[test]
+fn corpus_shard_1() {
+    shard(1);
+}
+
+#[test]
+fn corpus_shard_2() {
+    shard(2);
+}
+
+#[test]
+fn corpus_shard_3() {
+    shard(3);
+}
+
+/// The corpus named by HPPM_DIFFERENTIAL_CORPUS (written by generate.py), every scene.
+#[test]
+#[ignore = "long: set HPPM_DIFFERENTIAL_CORPUS to a generated corpus"]
+fn corpus_from_env() {
+    let dir = std::env::var("HPPM_DIFFERENTIAL_CORPUS")
+        .expect("HPPM_DIFFERENTIAL_CORPUS names a corpus from tests/differential/generate.py");
+    let cases = corpus(&dir);
+    let all: Vec<&Case> = cases.iter().collect();
+    let failures = check(&all);
+    eprintln!("{} scenes, {} failures", cases.len(), failures.len());
+    assert!(
+        failures.is_empty(),
+        "biased against Mitsuba:\n{}",
+        failures.join("\n")
+    );
+}

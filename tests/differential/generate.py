@@ -1,0 +1,414 @@
+#!/usr/bin/env python3
+"""Random Mitsuba 3 scenes from the plugin set hppm loads, with Mitsuba's own reference images.
+
+Each scene is a seeded draw: analytic shapes and meshes (spheres, cubes, rectangles, disks, OBJ
+and PLY meshes, hollow rings standing on the floor) under random transforms including mirrored
+ones; every BSDF hppm supports with random parameters; every emitter kind; a camera from a
+random direction; thin walls, nested and touching dielectrics; a scene scale from 1e-2 to 1e2.
+The same index always gives the same scene (Python's `random.Random(index)`), so a failing
+scene can be regenerated and studied on its own.
+
+    python3 tests/differential/generate.py --first 0 --count 40 --out tests/differential/corpus
+    python3 tests/differential/generate.py --first 1000 --count 1000 --out /tmp/corpus --spp 1024
+
+Writes `<out>/NNNN/scene.xml` (with its meshes), `<out>/NNNN/reference.exr` (the mean of
+`--batches` independent Mitsuba renders) and `<out>/NNNN/reference_se.exr` (each pixel's standard
+error of that mean, from the batches' spread), and `<out>/manifest.txt`: `# reference_spp N`, then
+one line per scene, `NNNN pt hybrid`, or `NNNN pt` where the hybrid cannot agree with Mitsuba's
+path tracer (a delta light seen through a delta BSDF, `L S+ D E`, which only photons reach). References need `pip install mitsuba==3.9.1 numpy`
+and Debian's `libllvm19` (`DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so`).
+With `--check BINARY` every scene is first loaded by hppm (`BINARY render --spp 1`) and the run
+stops on one it refuses: the generator draws only from what hppm claims to support.
+"""
+
+import argparse
+import math
+import os
+import random
+import subprocess
+import sys
+
+SIZE = 32
+MAX_DEPTH = 8
+
+
+def fmt(v):
+    return ", ".join(f"{x:.6g}" for x in v)
+
+
+def normalize(v):
+    n = math.sqrt(sum(x * x for x in v))
+    return [x / n for x in v]
+
+
+def cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def rgb(r, lo=0.05, hi=0.95):
+    return [r.uniform(lo, hi) for _ in range(3)]
+
+
+# --- BSDFs -------------------------------------------------------------------------------------
+
+CONDUCTORS = ["none", "Au", "Ag", "Cu", "Al", "Cr"]
+
+
+def rough_params(r):
+    dist = r.choice(["ggx", "beckmann"])
+    alpha = r.choice([r.uniform(0.02, 0.1), r.uniform(0.1, 0.6)])
+    return f'<string name="distribution" value="{dist}"/><float name="alpha" value="{alpha:.4g}"/>'
+
+
+def bsdf_xml(r, kind):
+    if kind == "diffuse":
+        return f'<bsdf type="diffuse"><rgb name="reflectance" value="{fmt(rgb(r))}"/></bsdf>'
+    if kind == "dielectric":
+        ior = r.choice([1.33, 1.5, r.uniform(1.05, 2.4)])
+        return (f'<bsdf type="dielectric"><float name="int_ior" value="{ior:.4g}"/>'
+                f'<float name="ext_ior" value="1"/></bsdf>')
+    if kind == "thindielectric":
+        ior = r.uniform(1.2, 2.0)
+        return (f'<bsdf type="thindielectric"><float name="int_ior" value="{ior:.4g}"/>'
+                f'<float name="ext_ior" value="1"/></bsdf>')
+    if kind == "roughdielectric":
+        ior = r.uniform(1.2, 1.9)
+        return (f'<bsdf type="roughdielectric">{rough_params(r)}'
+                f'<float name="int_ior" value="{ior:.4g}"/><float name="ext_ior" value="1"/></bsdf>')
+    if kind == "conductor":
+        return f'<bsdf type="conductor"><string name="material" value="{r.choice(CONDUCTORS)}"/></bsdf>'
+    if kind == "roughconductor":
+        return (f'<bsdf type="roughconductor"><string name="material" value="{r.choice(CONDUCTORS[1:])}"/>'
+                f'{rough_params(r)}</bsdf>')
+    if kind == "plastic":
+        return (f'<bsdf type="plastic"><rgb name="diffuse_reflectance" value="{fmt(rgb(r))}"/>'
+                f'<float name="int_ior" value="{r.uniform(1.3, 1.8):.4g}"/></bsdf>')
+    if kind == "roughplastic":
+        dist = r.choice(["ggx", "beckmann"])
+        return (f'<bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="{fmt(rgb(r))}"/>'
+                f'<string name="distribution" value="{dist}"/>'
+                f'<float name="alpha" value="{r.uniform(0.05, 0.5):.4g}"/></bsdf>')
+    if kind == "twosided":
+        inner = r.choice(["diffuse", "plastic", "roughconductor"])
+        return f'<bsdf type="twosided">{bsdf_xml(r, inner)}</bsdf>'
+    raise ValueError(kind)
+
+
+BSDFS = ["diffuse", "diffuse", "dielectric", "dielectric", "thindielectric", "roughdielectric",
+         "conductor", "roughconductor", "plastic", "roughplastic", "twosided"]
+# BSDFs with a delta lobe: with a delta light, the paths through them reach no path tracer.
+DELTA_BSDFS = {"dielectric", "thindielectric", "conductor", "plastic"}
+
+
+# --- transforms --------------------------------------------------------------------------------
+
+def placement(r, scale, center, size, uniform=False, mirror_ok=True):
+    """A to_world: random rotation, a (possibly non-uniform, possibly mirrored) scale, then the
+    object moved to `center`, everything scaled by the scene scale.
+
+    Meshes (`obj`, `ply`, `cube`) are never mirrored: Mitsuba 3.9.1 moves their vertices by a
+    mirroring to_world without reversing the triangles' winding, so their faces turn inside out
+    (a diffuse mesh renders black from outside), while hppm, like Mitsuba's later versions,
+    reverses the winding. The analytic `rectangle` and `disk` agree and are mirrored."""
+    parts = []
+    if uniform:
+        parts.append(f'<scale value="{size:.5g}"/>')
+    else:
+        s = [size * r.uniform(0.5, 1.5) for _ in range(3)]
+        if mirror_ok and r.random() < 0.3:
+            s[r.randrange(3)] *= -1
+        parts.append(f'<scale x="{s[0]:.5g}" y="{s[1]:.5g}" z="{s[2]:.5g}"/>')
+    axis = normalize([r.gauss(0, 1) for _ in range(3)])
+    parts.append(f'<rotate x="{axis[0]:.5g}" y="{axis[1]:.5g}" z="{axis[2]:.5g}" angle="{r.uniform(0, 360):.4g}"/>')
+    parts.append(f'<translate x="{center[0]:.5g}" y="{center[1]:.5g}" z="{center[2]:.5g}"/>')
+    parts.append(f'<scale value="{scale:.5g}"/>')
+    return '<transform name="to_world">' + "".join(parts) + "</transform>"
+
+
+# --- meshes ------------------------------------------------------------------------------------
+
+def uv_sphere_obj(r, smooth):
+    rows, cols = r.randint(4, 10), r.randint(6, 16)
+    v, vn, f = [], [], []
+    for i in range(rows + 1):
+        th = math.pi * i / rows
+        for j in range(cols):
+            ph = 2 * math.pi * j / cols
+            p = [math.sin(th) * math.cos(ph), math.cos(th), math.sin(th) * math.sin(ph)]
+            v.append(p)
+            vn.append(p)
+    idx = lambda i, j: i * cols + (j % cols) + 1
+    for i in range(rows):
+        for j in range(cols):
+            a, b, c, d = idx(i, j), idx(i, j + 1), idx(i + 1, j + 1), idx(i + 1, j)
+            if i != 0:
+                f.append((a, b, c))
+            if i != rows - 1:
+                f.append((a, c, d))
+    return obj_text(v, vn if smooth else None, f)
+
+
+def ring_obj(r):
+    """A hollow cylinder (a glass ring or tube), y in [0, h], standing on y = 0."""
+    segs, r_out = r.randint(12, 48), 1.0
+    r_in, h = r.uniform(0.6, 0.95), r.uniform(0.2, 1.0)
+    v, f = [], []
+    for ring_r, y in [(r_out, 0), (r_out, h), (r_in, 0), (r_in, h)]:
+        for j in range(segs):
+            a = 2 * math.pi * j / segs
+            v.append([ring_r * math.cos(a), y, ring_r * math.sin(a)])
+    o0, o1, i0, i1 = 0, segs, 2 * segs, 3 * segs
+    for j in range(segs):
+        k = (j + 1) % segs
+        q = lambda base, x: base + x + 1
+        f += [(q(o0, j), q(o1, j), q(o1, k)), (q(o0, j), q(o1, k), q(o0, k))]  # outside wall
+        f += [(q(i0, j), q(i0, k), q(i1, k)), (q(i0, j), q(i1, k), q(i1, j))]  # inside wall
+        f += [(q(o1, j), q(i1, j), q(i1, k)), (q(o1, j), q(i1, k), q(o1, k))]  # top
+        f += [(q(o0, j), q(o0, k), q(i0, k)), (q(o0, j), q(i0, k), q(i0, j))]  # bottom
+    return obj_text(v, None, f), h
+
+
+def obj_text(v, vn, f):
+    lines = [f"v {p[0]:.7g} {p[1]:.7g} {p[2]:.7g}" for p in v]
+    if vn:
+        lines += [f"vn {n[0]:.7g} {n[1]:.7g} {n[2]:.7g}" for n in vn]
+        lines += [f"f {a}//{a} {b}//{b} {c}//{c}" for a, b, c in f]
+    else:
+        lines += [f"f {a} {b} {c}" for a, b, c in f]
+    return "\n".join(lines) + "\n"
+
+
+def box_ply():
+    """An ASCII PLY cube [-1, 1]^3, counter-clockwise from outside."""
+    v = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = []
+    for a, b, c, d in faces:
+        tris += [(a, b, c), (a, c, d)]
+    head = ("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n")
+    return head + "".join(f"{p[0]} {p[1]} {p[2]}\n" for p in v) + "".join(
+        f"3 {a} {b} {c}\n" for a, b, c in tris)
+
+
+# --- the scene ---------------------------------------------------------------------------------
+
+def generate(index):
+    r = random.Random(index)
+    scale = r.choice([1.0, 1.0, 1.0, 0.01, 100.0, r.uniform(0.1, 10)])
+    files = {}
+    shapes = []
+    bsdfs_used = set()
+    lights = []
+
+    floor = r.random() < 0.85
+    if floor:
+        kind = r.choice(["diffuse", "diffuse", "diffuse", "roughplastic", "twosided"])
+        bsdfs_used.add(kind)
+        shapes.append(
+            f'<shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/>'
+            f'<scale value="{6 * scale:.5g}"/></transform>{bsdf_xml(r, kind)}</shape>')
+
+    for k in range(r.randint(1, 4)):
+        kind = r.choice(BSDFS)
+        bsdfs_used.add(kind)
+        bsdf = bsdf_xml(r, kind)
+        shape = r.choice(["sphere", "sphere", "cube", "rectangle", "disk", "obj", "obj_smooth",
+                          "ply", "ring", "thin_wall", "nested"])
+        size = r.uniform(0.3, 0.9)
+        center = [r.uniform(-1.5, 1.5), size if floor else r.uniform(-1, 1.5), r.uniform(-1.5, 1.5)]
+        if shape == "sphere":
+            shapes.append(f'<shape type="sphere">{placement(r, scale, center, size, uniform=True)}{bsdf}</shape>')
+        elif shape in ("cube", "rectangle", "disk"):
+            mirror_ok = shape != "cube"
+            shapes.append(f'<shape type="{shape}">{placement(r, scale, center, size, mirror_ok=mirror_ok)}{bsdf}</shape>')
+        elif shape in ("obj", "obj_smooth"):
+            name = f"mesh{k}.obj"
+            files[name] = uv_sphere_obj(r, shape == "obj_smooth")
+            face = '' if shape == "obj_smooth" else '<boolean name="face_normals" value="true"/>'
+            shapes.append(f'<shape type="obj"><string name="filename" value="{name}"/>{face}'
+                          f'{placement(r, scale, center, size, mirror_ok=False)}{bsdf}</shape>')
+        elif shape == "ply":
+            name = f"mesh{k}.ply"
+            files[name] = box_ply()
+            shapes.append(f'<shape type="ply"><string name="filename" value="{name}"/>'
+                          f'{placement(r, scale, center, size, mirror_ok=False)}{bsdf}</shape>')
+        elif shape == "ring":
+            # Standing on the floor: its bottom in the floor's plane (coplanar faces).
+            name = f"ring{k}.obj"
+            files[name], _ = ring_obj(r)
+            y0 = 0.0 if floor else center[1]
+            ang = r.uniform(0, 360)
+            shapes.append(
+                f'<shape type="obj"><string name="filename" value="{name}"/>'
+                f'<boolean name="face_normals" value="true"/><transform name="to_world">'
+                f'<scale value="{size:.5g}"/><rotate y="1" angle="{ang:.4g}"/>'
+                f'<translate x="{center[0]:.5g}" y="{y0:.5g}" z="{center[2]:.5g}"/>'
+                f'<scale value="{scale:.5g}"/></transform>{bsdf}</shape>')
+        elif shape == "thin_wall":
+            # A pane of glass a few thousandths thick, standing or tilted.
+            t = r.choice([0.002, 0.01, 0.05])
+            bsdfs_used.add("dielectric")
+            shapes.append(
+                f'<shape type="cube"><transform name="to_world"><scale x="{size:.5g}" y="{size:.5g}" z="{t:.5g}"/>'
+                f'<rotate y="1" angle="{r.uniform(0, 360):.4g}"/><rotate x="1" angle="{r.uniform(-40, 40):.4g}"/>'
+                f'<translate x="{center[0]:.5g}" y="{center[1]:.5g}" z="{center[2]:.5g}"/>'
+                f'<scale value="{scale:.5g}"/></transform>{bsdf_xml(r, "dielectric")}</shape>')
+        elif shape == "nested":
+            # A dielectric sphere inside (or touching) another of a different index.
+            bsdfs_used.add("dielectric")
+            inner = size * r.choice([0.5, 0.8, 1.0])  # 1.0: the two surfaces coincide
+            shapes.append(f'<shape type="sphere">{placement(r, scale, center, size, uniform=True)}'
+                          f'{bsdf_xml(r, "dielectric")}</shape>')
+            shapes.append(f'<shape type="sphere">{placement(r, scale, center, inner * 0.999, uniform=True)}'
+                          f'{bsdf_xml(r, "dielectric")}</shape>')
+
+    # Emitters: one or two, of every kind.
+    for _ in range(r.choice([1, 1, 2])):
+        kind = r.choice(["area_rect", "area_rect", "area_sphere", "point", "spot", "directional",
+                         "constant"])
+        power = r.uniform(0.5, 2.0)
+        if kind in ("area_rect", "area_sphere"):
+            d = normalize([r.uniform(-1, 1), r.uniform(0.4, 1.2), r.uniform(-1, 1)])
+            dist = r.uniform(3, 5)
+            pos = [x * dist for x in d]
+            size = r.uniform(0.2, 1.0)
+            radiance = power * 12.0 * dist * dist / (size * size)
+            if kind == "area_rect":
+                target = [0, 0.3, 0]
+                up = [0, 1, 0] if abs(d[1]) < 0.95 else [1, 0, 0]
+                shapes.append(
+                    f'<shape type="rectangle"><transform name="to_world"><scale value="{size:.5g}"/>'
+                    f'<lookat origin="{fmt(pos)}" target="{fmt(target)}" up="{fmt(up)}"/>'
+                    f'<scale value="{scale:.5g}"/></transform>'
+                    f'<bsdf type="diffuse"><rgb name="reflectance" value="0, 0, 0"/></bsdf>'
+                    f'<emitter type="area"><rgb name="radiance" value="{fmt([radiance] * 3)}"/></emitter></shape>')
+            else:
+                radiance /= math.pi
+                shapes.append(
+                    f'<shape type="sphere"><point name="center" value="{fmt([x * scale for x in pos])}"/>'
+                    f'<float name="radius" value="{size * 0.5 * scale:.5g}"/>'
+                    f'<emitter type="area"><rgb name="radiance" value="{fmt([radiance] * 3)}"/></emitter></shape>')
+        elif kind in ("point", "spot"):
+            d = normalize([r.uniform(-1, 1), r.uniform(0.3, 1.2), r.uniform(-1, 1)])
+            dist = r.uniform(2, 4)
+            pos = [x * dist * scale for x in d]
+            intensity = power * 3.0 * dist * dist * scale * scale
+            lights.append(kind)
+            if kind == "point":
+                lights_xml = (f'<emitter type="point"><point name="position" value="{fmt(pos)}"/>'
+                              f'<rgb name="intensity" value="{fmt([intensity] * 3)}"/></emitter>')
+            else:
+                cutoff = r.uniform(15, 50)
+                lights_xml = (f'<emitter type="spot"><transform name="to_world">'
+                              f'<lookat origin="{fmt(pos)}" target="0, 0, 0" up="0, 1, 0.01"/></transform>'
+                              f'<rgb name="intensity" value="{fmt([intensity] * 3)}"/>'
+                              f'<float name="cutoff_angle" value="{cutoff:.4g}"/>'
+                              f'<float name="beam_width" value="{cutoff * r.uniform(0.4, 0.95):.4g}"/></emitter>')
+            shapes.append(lights_xml)
+        elif kind == "directional":
+            lights.append(kind)
+            d = normalize([r.uniform(-1, 1), -r.uniform(0.3, 1.2), r.uniform(-1, 1)])
+            shapes.append(f'<emitter type="directional"><vector name="direction" value="{fmt(d)}"/>'
+                          f'<rgb name="irradiance" value="{fmt([power * 2.0] * 3)}"/></emitter>')
+        else:
+            shapes.append(f'<emitter type="constant"><rgb name="radiance" value="{fmt(rgb(r, 0.1, 0.6))}"/></emitter>')
+
+    # Camera: from a random direction, a little above the floor when there is one.
+    az = r.uniform(0, 2 * math.pi)
+    el = r.uniform(0.1, 1.2) if floor else r.uniform(-1.2, 1.2)
+    dist = r.uniform(4.5, 8)
+    origin = [dist * math.cos(el) * math.cos(az), dist * math.sin(el), dist * math.cos(el) * math.sin(az)]
+    target = [r.uniform(-0.3, 0.3), r.uniform(0, 0.6), r.uniform(-0.3, 0.3)]
+    fov = r.uniform(30, 60)
+
+    hybrid = not (lights and bsdfs_used & DELTA_BSDFS)
+    xml = f"""<scene version="3.0.0">
+    <!-- tests/differential/generate.py, scene {index} (scale {scale:.4g}) -->
+    <default name="spp" value="64"/>
+    <default name="max_depth" value="{MAX_DEPTH}"/>
+    <integrator type="path">
+        <integer name="max_depth" value="$max_depth"/>
+        <integer name="rr_depth" value="1000"/>
+    </integrator>
+    <sensor type="perspective">
+        <float name="fov" value="{fov:.4g}"/>
+        <string name="fov_axis" value="x"/>
+        <float name="near_clip" value="{0.001 * scale:.4g}"/>
+        <float name="far_clip" value="{1000 * scale:.4g}"/>
+        <transform name="to_world">
+            <lookat origin="{fmt([x * scale for x in origin])}" target="{fmt([x * scale for x in target])}" up="0, 1, 0"/>
+        </transform>
+        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="{SIZE}"/>
+            <integer name="height" value="{SIZE}"/>
+            <rfilter type="box"/>
+            <string name="pixel_format" value="rgb"/>
+        </film>
+    </sensor>
+""" + "".join(f"    {s}\n" for s in shapes) + "</scene>\n"
+    return xml, files, hybrid
+
+
+def render_reference(scene_path, spp, batches):
+    import mitsuba as mi
+    import numpy as np
+    mi.set_variant("llvm_ad_rgb")
+    scene = mi.load_file(scene_path)
+    images = []
+    per = max(1, spp // batches)
+    for b in range(batches):
+        img = np.array(mi.render(scene, spp=per, seed=b * 1_000_003 + 17), dtype=np.float64)
+        images.append(img)
+    stack = np.stack(images)
+    mean = stack.mean(axis=0)
+    se = stack.std(axis=0, ddof=1) / math.sqrt(batches)
+    return mean, se
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--first", type=int, default=0)
+    p.add_argument("--count", type=int, default=40)
+    p.add_argument("--out", default="tests/differential/corpus")
+    p.add_argument("--spp", type=int, default=16384, help="reference samples per pixel")
+    p.add_argument("--batches", type=int, default=16)
+    p.add_argument("--check", help="an hppm binary that must load every scene")
+    p.add_argument("--no-references", action="store_true")
+    a = p.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    manifest = []
+    for index in range(a.first, a.first + a.count):
+        xml, files, hybrid = generate(index)
+        d = os.path.join(a.out, f"{index:04d}")
+        os.makedirs(d, exist_ok=True)
+        for name, text in files.items():
+            with open(os.path.join(d, name), "w") as f:
+                f.write(text)
+        scene_path = os.path.join(d, "scene.xml")
+        with open(scene_path, "w") as f:
+            f.write(xml)
+        if a.check:
+            out = subprocess.run([a.check, "render", scene_path, "--graph", "graphs/pt.ron", "--spp", "1",
+                                  "--size", "8x8", "--out", os.path.join(d, "_check.exr")],
+                                 capture_output=True, text=True)
+            if os.path.exists(os.path.join(d, "_check.exr")):
+                os.remove(os.path.join(d, "_check.exr"))
+            if out.returncode != 0:
+                sys.exit(f"hppm refuses scene {index} ({scene_path}):\n{out.stderr}")
+        if not a.no_references:
+            import mitsuba as mi
+            mean, se = render_reference(scene_path, a.spp, a.batches)
+            mi.Bitmap(mean.astype("float32")).write(os.path.join(d, "reference.exr"))
+            mi.Bitmap(se.astype("float32")).write(os.path.join(d, "reference_se.exr"))
+        manifest.append(f"{index:04d} pt" + (" hybrid" if hybrid else ""))
+        print(manifest[-1], flush=True)
+    path = os.path.join(a.out, "manifest.txt")
+    header = [] if os.path.exists(path) else [f"# reference_spp {a.spp}"]
+    with open(path, "a") as f:
+        f.write("".join(line + "\n" for line in header + manifest))
+
+
+if __name__ == "__main__":
+    main()
