@@ -237,6 +237,16 @@ struct Hit {
     t: f32,
     // Index into triangles, or num_triangles + index into spheres; NO_HIT on a miss.
     prim: u32,
+    // Whether the ray meets the front (the geometric normal's side) of `prim`: what decides ties
+    // between coplanar faces (keep_closer).
+    front: bool,
+}
+
+// Where a ray crosses one primitive: the distance (T_INFINITE when it misses) and whether it
+// meets the primitive's front.
+struct Crossing {
+    t: f32,
+    front: bool,
 }
 
 struct Surface {
@@ -260,31 +270,38 @@ struct Surface {
 // Möller-Trumbore on triangle `index`. Returns the distance, or T_INFINITE when missed or
 // degenerate. Only the three vectors it needs are loaded: on lavapipe, storage loads dominate
 // traversal time, and loading the whole struct costs about a fifth more.
-fn intersect_triangle(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
+fn triangle_crossing(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> Crossing {
     let vertex = triangles[index].vertex;
     let edge_a = triangles[index].edge_a;
     let edge_b = triangles[index].edge_b;
     let p = cross(dir, edge_b);
     let det = dot(edge_a, p);
     if det == 0.0 {
-        return T_INFINITE;
+        return Crossing(T_INFINITE, false);
     }
     let inv_det = 1.0 / det;
     let to_origin = origin - vertex;
     let u = dot(to_origin, p) * inv_det;
     if u < 0.0 || u > 1.0 {
-        return T_INFINITE;
+        return Crossing(T_INFINITE, false);
     }
     // Scaled before the last dot product: dot(edge_b, cross(to_origin, edge_a)) is a length
     // cubed, which overflows f32 for scenes past about 1e12 (and underflows below 1e-12).
     let q = cross(to_origin, edge_a) * inv_det;
     let v = dot(dir, q);
     if v < 0.0 || u + v > 1.0 {
-        return T_INFINITE;
+        return Crossing(T_INFINITE, false);
     }
     let t = dot(edge_b, q);
-    return select(T_INFINITE, t, t > 0.0);
+    // det = -dot(dir, cross(edge_a, edge_b)): positive when the ray meets the front.
+    return Crossing(select(T_INFINITE, t, t > 0.0), det > 0.0);
 }
+
+fn intersect_triangle(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
+    return triangle_crossing(index, origin, dir).t;
+}
+
+
 
 // The barycentrics (of vertex + edge_a, vertex + edge_b) where a ray hits triangle `tri`, by
 // the same arithmetic as intersect_triangle.
@@ -324,13 +341,21 @@ fn intersect_sphere(sphere: Sphere, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
 }
 #endif
 
-fn intersect_prim(prim: u32, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
+#ifdef SPHERES
+fn sphere_crossing(sphere: Sphere, origin: vec3<f32>, dir: vec3<f32>) -> Crossing {
+    let t = intersect_sphere(sphere, origin, dir);
+    let outward = dot(dir, origin + t * dir - sphere.center) < 0.0;
+    return Crossing(t, outward != (sphere.flip_normals != 0u));
+}
+#endif
+
+fn prim_crossing(prim: u32, origin: vec3<f32>, dir: vec3<f32>) -> Crossing {
 #ifdef SPHERES
     if prim >= scene_info.num_triangles {
-        return intersect_sphere(spheres[prim - scene_info.num_triangles], origin, dir);
+        return sphere_crossing(spheres[prim - scene_info.num_triangles], origin, dir);
     }
 #endif
-    return intersect_triangle(prim, origin, dir);
+    return triangle_crossing(prim, origin, dir);
 }
 
 // Slab test; returns the entry distance or T_INFINITE.
@@ -360,52 +385,32 @@ fn tie_span(origin: vec3<f32>, t: f32) -> f32 {
     return 1e-5 * (t + max(max(o.x, o.y), o.z));
 }
 
-// Whether the ray meets the front (the geometric normal's side) of `prim` at distance `t`.
-fn faces_ray(prim: u32, origin: vec3<f32>, dir: vec3<f32>, t: f32) -> bool {
-#ifdef SPHERES
-    if prim >= scene_info.num_triangles {
-        let sphere = spheres[prim - scene_info.num_triangles];
-        let outward = dot(dir, origin + t * dir - sphere.center) < 0.0;
-        return outward != (sphere.flip_normals != 0u);
-    }
-#endif
-    return dot(dir, cross(triangles[prim].edge_a, triangles[prim].edge_b)) < 0.0;
-}
-
-// Of two hits at exactly the same computed distance, whether `prim` beats `held`: the one whose
-// front faces the ray, then the lower index. Which leaf the traversal reaches first depends on
-// the tree and on the signs of the ray's direction, so a tie left to that order changes with
-// position and direction: where a glass stands on a table (its bottom in the table's plane) a
-// camera ray inside the glass met the table on one side of the scene and left through the
-// glass's bottom on the other, and the glass came out a third darker on one half of the image
-// (tests/coplanar.rs).
-fn wins_exact_tie(prim: u32, held: u32, origin: vec3<f32>, dir: vec3<f32>, t: f32) -> bool {
-    let front = faces_ray(prim, origin, dir, t);
-    let held_front = faces_ray(held, origin, dir, t);
-    if front != held_front {
-        return front;
-    }
-    return prim < held;
-}
-
-// Keeps `prim` at distance `t` in `hit` if it is closer; returns whether it was kept. With
-// `front_wins_ties`, of two coplanar hits the one whose front faces the ray wins: where a
-// dielectric's face lies on a diffuse surface (a glass standing on a table), a photon arriving
-// at the contact lands on the table, as the reverse of a camera path leaving the table (which
-// starts on the table's front side, past the contact) does. Otherwise the closer computed
-// distance wins, exact ties by wins_exact_tie, as Mitsuba's closest hit (the tie's outcome then
-// follows the distances' rounding, the same on every side of the scene); photons lost through
-// the contact would darken the caustic the camera pass leaves to them.
-fn keep_closer(hit: ptr<function, Hit>, prim: u32, t: f32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) -> bool {
-    if front_wins_ties && t < T_INFINITE && abs(t - (*hit).t) <= tie_span(origin, (*hit).t) {
-        if (*hit).prim == NO_HIT || (faces_ray(prim, origin, dir, t) && !faces_ray((*hit).prim, origin, dir, (*hit).t)) {
-            *hit = Hit(t, prim);
+// Keeps `prim`, crossed at `c`, in `hit` if it is closer; returns whether it was kept.
+//
+// With `front_wins_ties` (photons), of two coplanar hits the one whose front faces the ray wins:
+// where a dielectric's face lies on a diffuse surface (a glass standing on a table), a photon
+// arriving at the contact lands on the table, as the reverse of a camera path leaving the table
+// (which starts on the table's front side, past the contact) does; photons lost through the
+// contact would darken the caustic the camera pass leaves to them.
+//
+// Otherwise the closer computed distance wins, as in Mitsuba's closest hit, and of two hits at
+// exactly the same distance the front face, then the lower index. Which leaf the traversal
+// reaches first depends on the tree and on the signs of the ray's direction, so a tie left to
+// that order changed with position and direction: a camera ray inside a glass ring standing on
+// a floor met the floor on one side of the scene and left through the glass's bottom on the
+// other, and the ring came out a third darker on one half of the image (tests/coplanar.rs,
+// docs/coplanar-contacts.md). The comparison is branch-free: it runs for every primitive tested.
+fn keep_closer(hit: ptr<function, Hit>, prim: u32, c: Crossing, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) -> bool {
+    if front_wins_ties && c.t < T_INFINITE && abs(c.t - (*hit).t) <= tie_span(origin, (*hit).t) {
+        if (*hit).prim == NO_HIT || (c.front && !(*hit).front) {
+            *hit = Hit(c.t, prim, c.front);
             return true;
         }
         return false;
     }
-    if t < (*hit).t || (t == (*hit).t && (*hit).prim != NO_HIT && wins_exact_tie(prim, (*hit).prim, origin, dir, t)) {
-        *hit = Hit(t, prim);
+    let wins_tie = select(prim < (*hit).prim, c.front, c.front != (*hit).front);
+    if (c.t < (*hit).t) | ((c.t == (*hit).t) & ((*hit).prim != NO_HIT) & wins_tie) {
+        *hit = Hit(c.t, prim, c.front);
         return true;
     }
     return false;
@@ -422,24 +427,24 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_
 }
 
 fn traverse_bvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, front_wins_ties: bool) -> Hit {
-    var hit = Hit(t_max, NO_HIT);
+    var hit = Hit(t_max, NO_HIT, false);
     let inv_dir = safe_inverse(dir);
     var stack: array<u32, BVH_STACK_SIZE>;
     var top = 0u;
     var node_index = 0u;
     // An empty scene's root has an inverted box and no children (see src/scene/bvh.rs).
     if scene_info.num_triangles + scene_info.num_spheres == 0u {
-        return Hit(T_INFINITE, NO_HIT);
+        return Hit(T_INFINITE, NO_HIT, false);
     }
     if intersect_box(bvh_nodes[0].min, bvh_nodes[0].max, origin, inv_dir, t_max) == T_INFINITE {
-        return Hit(T_INFINITE, NO_HIT);
+        return Hit(T_INFINITE, NO_HIT, false);
     }
     loop {
         let node = bvh_nodes[node_index];
         if node.count > 0u {
             for (var i = 0u; i < node.count; i++) {
                 let prim = prim_index(node.left_or_first + i);
-                let kept = keep_closer(&hit, prim, intersect_prim(prim, origin, dir), origin, dir, front_wins_ties);
+                let kept = keep_closer(&hit, prim, prim_crossing(prim, origin, dir), origin, dir, front_wins_ties);
                 if kept && any_hit {
                     return hit;
                 }
@@ -488,7 +493,7 @@ fn traverse_bvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, fr
 // No test returns early (a masked-off lane runs every test anyway), but a block of four whose
 // box no lane enters is skipped: binding 1 holds those boxes instead of the BVH's nodes.
 fn test_triangles_1(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
-    keep_closer(hit, first, intersect_triangle(first, origin, dir), origin, dir, front_wins_ties);
+    keep_closer(hit, first, triangle_crossing(first, origin, dir), origin, dir, front_wins_ties);
 }
 
 fn test_triangles_2(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
@@ -534,8 +539,7 @@ fn test_triangles_64(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir
 
 #ifdef SPHERES
 fn test_spheres_1(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
-    let t = intersect_sphere(spheres[first], origin, dir);
-    keep_closer(hit, scene_info.num_triangles + first, t, origin, dir, front_wins_ties);
+    keep_closer(hit, scene_info.num_triangles + first, sphere_crossing(spheres[first], origin, dir), origin, dir, front_wins_ties);
 }
 
 fn test_spheres_2(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
@@ -555,7 +559,7 @@ fn test_spheres_8(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: v
 #endif
 
 fn test_every_prim(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, front_wins_ties: bool) -> Hit {
-    var hit = Hit(t_max, NO_HIT);
+    var hit = Hit(t_max, NO_HIT, false);
 #ifdef TRIANGLES_FROM_64
     test_triangles_64(&hit, #{TRIANGLES_FROM_64}u, origin, dir, front_wins_ties);
 #endif
