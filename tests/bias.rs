@@ -605,22 +605,10 @@ fn rectangle(name: &str, image: &Image, (x0, x1): (u32, u32), (y0, y1): (u32, u3
 /// (no sin(pi) rounding), so that every intersection computes the same distances, rounded the
 /// same way, and only what depends on the order of the scene's primitives can change.
 fn turned(scene: &Scene) -> Scene {
-    let m = glam::Affine3A::from_scale(Vec3::new(-1.0, 1.0, -1.0));
-    let mut out = scene.clone();
-    for t in &mut out.triangles {
-        t.v = t.v.map(|v| m.transform_point3(v));
-        t.normals = t.normals.map(|n| n.map(|n| m.transform_vector3(n)));
-    }
-    for s in &mut out.spheres {
-        s.center = m.transform_point3(s.center);
-    }
-    for p in &mut out.point_lights {
-        p.position = m.transform_point3(p.position);
-    }
-    out.camera.origin = m.transform_point3(out.camera.origin);
-    out.camera.target = m.transform_point3(out.camera.target);
-    out.camera.up = m.transform_vector3(out.camera.up);
-    out
+    moved(
+        scene,
+        glam::Affine3A::from_scale(Vec3::new(-1.0, 1.0, -1.0)),
+    )
 }
 
 /// The mean of `images` and the standard error of its mean over `region`.

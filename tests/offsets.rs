@@ -26,24 +26,8 @@ fn with_plane_half_size(scene: &Scene, half: f32) -> Scene {
     out
 }
 
-/// `scene` moved rigidly by `m` (a rotation and a translation): the image is the same, but no
-/// surface is axis-aligned any more, so every component of every position carries rounding.
-fn moved(scene: &Scene, m: Affine3A) -> Scene {
-    let mut out = scene.clone();
-    for t in &mut out.triangles {
-        t.v = t.v.map(|v| m.transform_point3(v));
-    }
-    for s in &mut out.spheres {
-        s.center = m.transform_point3(s.center);
-    }
-    for p in &mut out.point_lights {
-        p.position = m.transform_point3(p.position);
-    }
-    out.camera.origin = m.transform_point3(out.camera.origin);
-    out.camera.target = m.transform_point3(out.camera.target);
-    out.camera.up = m.transform_vector3(out.camera.up);
-    out
-}
+// `moved` (tests/common) with a rotation and a translation: the image is the same, but no
+// surface is axis-aligned any more, so every component of every position carries rounding.
 
 fn tilt() -> Affine3A {
     Affine3A::from_rotation_translation(

@@ -72,6 +72,26 @@ pub fn render_to(renderer: &mut Renderer<'_>, spp: u64) -> Image {
     renderer.image().unwrap_or_else(|e| panic!("readback: {e}"))
 }
 
+/// `scene` moved by the affine map `m`: triangles (with their vertex normals), spheres, point
+/// lights and the camera. With a rigid `m` the picture is the same.
+pub fn moved(scene: &Scene, m: glam::Affine3A) -> Scene {
+    let mut out = scene.clone();
+    for t in &mut out.triangles {
+        t.v = t.v.map(|v| m.transform_point3(v));
+        t.normals = t.normals.map(|n| n.map(|n| m.transform_vector3(n)));
+    }
+    for s in &mut out.spheres {
+        s.center = m.transform_point3(s.center);
+    }
+    for p in &mut out.point_lights {
+        p.position = m.transform_point3(p.position);
+    }
+    out.camera.origin = m.transform_point3(out.camera.origin);
+    out.camera.target = m.transform_point3(out.camera.target);
+    out.camera.up = m.transform_vector3(out.camera.up);
+    out
+}
+
 /// Relative MSE between two images of the same size.
 pub fn relmse(image: &Image, reference: &Image) -> f64 {
     image.relmse(reference).unwrap_or_else(|e| panic!("{e}"))
