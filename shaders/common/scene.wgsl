@@ -267,8 +267,8 @@ struct Surface {
     uv: vec2<f32>,
 }
 
-// Möller-Trumbore on triangle `index`. Returns the distance, or T_INFINITE when missed or
-// degenerate. Only the three vectors it needs are loaded: on lavapipe, storage loads dominate
+// Möller-Trumbore on triangle `index`. Returns the distance, T_INFINITE when missed or
+// degenerate, and the side met. Only the three vectors it needs are loaded: on lavapipe, storage loads dominate
 // traversal time, and loading the whole struct costs about a fifth more.
 fn triangle_crossing(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> Crossing {
     let vertex = triangles[index].vertex;
@@ -297,14 +297,8 @@ fn triangle_crossing(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> Crossing 
     return Crossing(select(T_INFINITE, t, t > 0.0), det > 0.0);
 }
 
-fn intersect_triangle(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> f32 {
-    return triangle_crossing(index, origin, dir).t;
-}
-
-
-
 // The barycentrics (of vertex + edge_a, vertex + edge_b) where a ray hits triangle `tri`, by
-// the same arithmetic as intersect_triangle.
+// the same arithmetic as triangle_crossing.
 fn triangle_barycentrics(tri: Triangle, origin: vec3<f32>, dir: vec3<f32>) -> vec2<f32> {
     let p = cross(dir, tri.edge_b);
     let inv_det = 1.0 / dot(tri.edge_a, p);
