@@ -724,9 +724,11 @@ pub fn place_mesh(
     let swap = mirrored != flip_normals;
     let normal_map = glam::Mat3::from_mat4(to_world).inverse().transpose();
     let sign = if flip_normals { -1.0 } else { 1.0 };
+    // Not where the scene asked for face normals (`normals` dropped).
     let recomputed = mesh
         .computed_normal_vertices
         .as_ref()
+        .filter(|_| mesh.normals.is_some())
         .map(|vertices| world_vertex_normals(&mesh.triangles, vertices, to_world, mirrored));
     let normals = mesh.normals;
     let uvs = mesh.uvs;
