@@ -107,7 +107,7 @@ pub fn render_seeds(
         .collect()
 }
 
-fn luminance_sum(p: &[f32; 3]) -> f64 {
+fn rgb_mean(p: &[f32; 3]) -> f64 {
     p.iter().map(|&c| c as f64).sum::<f64>() / 3.0
 }
 
@@ -188,7 +188,7 @@ pub fn block_biases(
             let n = pixels.len() as f64;
             let reference_mean = pixels
                 .iter()
-                .map(|&i| luminance_sum(&reference.pixels[i]))
+                .map(|&i| rgb_mean(&reference.pixels[i]))
                 .sum::<f64>()
                 / n;
             let d: Vec<f64> = images
@@ -196,7 +196,7 @@ pub fn block_biases(
                 .map(|img| {
                     pixels
                         .iter()
-                        .map(|&i| luminance_sum(&img.pixels[i]))
+                        .map(|&i| rgb_mean(&img.pixels[i]))
                         .sum::<f64>()
                         / n
                         - reference_mean
@@ -208,10 +208,7 @@ pub fn block_biases(
             let pooled_variance = pixels
                 .iter()
                 .map(|&i| {
-                    let v: Vec<f64> = images
-                        .iter()
-                        .map(|img| luminance_sum(&img.pixels[i]))
-                        .collect();
+                    let v: Vec<f64> = images.iter().map(|img| rgb_mean(&img.pixels[i])).collect();
                     let m = v.iter().sum::<f64>() / k as f64;
                     v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1) as f64
                 })
@@ -222,7 +219,7 @@ pub fn block_biases(
             // mean of theirs): the larger of the two readings.
             let reference_variance = pixels
                 .iter()
-                .map(|&i| luminance_sum(&reference_se.pixels[i]).powi(2))
+                .map(|&i| rgb_mean(&reference_se.pixels[i]).powi(2))
                 .sum::<f64>()
                 / (n * n);
             Raw {
