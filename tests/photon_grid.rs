@@ -142,6 +142,7 @@ fn the_photon_grid_lists_every_photon_once_and_finds_all_within_its_radius() {
     let input = photon_hits_resource_with(&gpu, &hits, count);
     let params = PhotonGridParams {
         radius: 0.03,
+        lookup_photons: 8.0,
         alpha: 0.7,
     };
     let mut pass = PhotonGrid::new(params);
@@ -159,7 +160,8 @@ fn the_photon_grid_lists_every_photon_once_and_finds_all_within_its_radius() {
     let scale = RadiusSchedule::new(0.7f32 as f64)
         .ratio_at(iteration)
         .sqrt();
-    let expected_radius = 0.03 * u.scene_radius as f64 * scale;
+    let by_count = (8.0 / hits.len() as f64).sqrt();
+    let expected_radius = by_count.min(0.03) * u.scene_radius as f64 * scale;
     assert!(
         (info.radius as f64 - expected_radius).abs() <= 1e-6 * expected_radius,
         "radius {} against the schedule's {expected_radius}",
@@ -210,5 +212,72 @@ fn the_photon_grid_lists_every_photon_once_and_finds_all_within_its_radius() {
     assert!(
         found_total > 2000,
         "the queries must find photons ({found_total})"
+    );
+}
+
+/// `hits` photons spread evenly over the square [-2, 2] x [-2, 2] of the plane y = 0.
+fn even_hits(hits: usize, seed: u64) -> Vec<GpuPhotonHit> {
+    let mut rng = Lcg(seed);
+    (0..hits)
+        .map(|_| photon(Vec3::new(2.0 * rng.signed(), 0.0, 2.0 * rng.signed())))
+        .collect()
+}
+
+/// The first radius follows the photon count, so a lookup's expected work does not grow with
+/// the image (photons per iteration follow the pixel count): 16 times the photons over the same
+/// square give a radius a quarter as wide and as many photons per lookup. Would catch a radius
+/// fixed to the scene (16 times the photons per lookup, the camera's cost in pixels squared), a
+/// rule that ignores the cap, or one that overshoots the other way (a lookup that finds nothing).
+#[test]
+fn a_lookup_finds_as_many_photons_whatever_the_photon_count() {
+    let gpu = gpu();
+    let scene = load_scene("tests/data/scenes/mirror_over_floor.ron");
+    let h = PassHarness::new(&gpu, &scene, (16, 16), gpu.has_float_atomics());
+    // No cap, so the count rule decides at both counts.
+    let params = PhotonGridParams {
+        radius: 1.0,
+        ..Default::default()
+    };
+    let mut per_lookup = Vec::new();
+    let mut radii = Vec::new();
+    for hits in [4096usize, 65536] {
+        let photons = even_hits(hits, 11);
+        let input = photon_hits_resource_with(&gpu, &photons, hits as u32);
+        let mut pass = PhotonGrid::new(params);
+        let out = h.prepare(&photon_grid::KIND, &mut pass, &[("photon_hits", &input)]);
+        h.run(&mut pass, 0, 1);
+        let info: PhotonGridInfo = out["grid"].read_header(&gpu).expect("readback");
+        let r_over_scene = info.radius as f64 / h.scene().uniform.scene_radius as f64;
+        assert!(
+            (r_over_scene - photon_grid::first_radius_fraction(params, hits as u64)).abs()
+                < 1e-6 * r_over_scene,
+            "{hits} hits: radius {r_over_scene} of the scene's"
+        );
+        let mut rng = Lcg(5);
+        let lookups = 2000;
+        let r2 = info.radius * info.radius;
+        let found: usize = (0..lookups)
+            .map(|_| {
+                let x = Vec3::new(1.5 * rng.signed(), 0.0, 1.5 * rng.signed());
+                photons
+                    .iter()
+                    .filter(|p| (Vec3::from(p.position) - x).length_squared() <= r2)
+                    .count()
+            })
+            .sum();
+        per_lookup.push(found as f64 / lookups as f64);
+        radii.push(info.radius as f64);
+    }
+    eprintln!("radii {radii:?}, photons per lookup {per_lookup:?}");
+    let radius_ratio = radii[1] / radii[0];
+    assert!(
+        (radius_ratio - 0.25).abs() < 1e-5,
+        "16x the photons: radius ratio {radius_ratio}, not 1/4"
+    );
+    assert!(per_lookup[0] > 1.0, "lookups find photons: {per_lookup:?}");
+    let growth = per_lookup[1] / per_lookup[0];
+    assert!(
+        (0.8..1.25).contains(&growth),
+        "16x the photons: {growth}x the photons per lookup"
     );
 }

@@ -6,6 +6,16 @@
 //! independent density estimate; the camera's running mean averages them, so the looked-up
 //! caustic converges as the radius shrinks, with no per-pixel statistics.
 //!
+//! The first radius follows the photon count: a lookup would find `lookup_photons` photons if
+//! this iteration's hits covered the scene's bounding disc evenly, r_1 = R sqrt(lookup_photons /
+//! hits). Photons per iteration follow the pixel count, so a radius fixed to the scene would make
+//! every lookup walk more photons as the image grows (cost in pixels squared: 113 s per
+//! iteration at 1024x1024, BENCHMARKS.md); this way a lookup's expected work is bounded whatever
+//! the image, and only the scene's own concentration of caustics (a constant) multiplies it. The
+//! rule uses the hit capacity, known before rendering, rather than counting this iteration's
+//! hits, so that every shard and resumed render steps the very same radii. `radius` caps r_1 (as
+//! a fraction of R), so small images keep a kernel no wider than they had.
+//!
 //! Why: with sppm at the first diffuse vertex only, a caustic seen after a diffuse bounce
 //! (`L S+ D D E`, the ceiling lit by a glass sphere's caustic) is left to path tracing, where a
 //! small light makes it fireflies; hit points at every depth cost a slot per vertex per pixel.
@@ -36,6 +46,9 @@ const WORKGROUP: u64 = 256;
 const CELL_MARGIN: f32 = 1.0 / 64.0;
 /// Smallest radius as a fraction of the scene's bounding radius, as for hit points.
 const MIN_RADIUS_FRACTION: f32 = crate::passes::hit_points::MIN_RADIUS_FRACTION;
+/// 8: at 128x128 (16,384 caustic photons) the cap `radius` 0.02 still decides, so the radius
+/// measured there (BENCHMARKS.md) is kept; from about 141x141 up the photon count does.
+pub const DEFAULT_LOOKUP_PHOTONS: f32 = 8.0;
 /// Most photon hits the grid lists (links and heads share one u32-indexed buffer).
 const MAX_PHOTON_HITS: u64 = 1 << 29;
 
@@ -109,9 +122,16 @@ fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
     }
     if !(params.radius > MIN_RADIUS_FRACTION && params.radius <= 1.0) {
         return Err(params_error(format!(
-            "radius (the first search radius as a fraction of the scene's bounding radius) must \
-             lie in ({MIN_RADIUS_FRACTION}, 1], got {}",
+            "radius (the largest first search radius as a fraction of the scene's bounding \
+             radius) must lie in ({MIN_RADIUS_FRACTION}, 1], got {}",
             params.radius
+        )));
+    }
+    if !(params.lookup_photons.is_finite() && params.lookup_photons > 0.0) {
+        return Err(params_error(format!(
+            "lookup_photons (photons a first-iteration lookup expects if the hits covered the \
+             scene evenly) must be positive, got {}",
+            params.lookup_photons
         )));
     }
     Ok(Box::new(PhotonGrid::new(params)))
@@ -120,8 +140,11 @@ fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PhotonGridParams {
-    /// First search radius as a fraction of the scene's bounding radius.
+    /// Largest first search radius, as a fraction of the scene's bounding radius R.
     pub radius: f32,
+    /// Photons a first-iteration lookup would find if the iteration's photon hits covered a disc
+    /// of radius R evenly: sets r_1 = R sqrt(lookup_photons / hits), capped by `radius`.
+    pub lookup_photons: f32,
     /// Knaus & Zwicker's alpha in (0, 1): how fast the radius shrinks.
     pub alpha: f32,
 }
@@ -130,6 +153,7 @@ impl Default for PhotonGridParams {
     fn default() -> Self {
         Self {
             radius: 0.02,
+            lookup_photons: DEFAULT_LOOKUP_PHOTONS,
             alpha: 0.7,
         }
     }
@@ -160,6 +184,12 @@ impl PhotonGrid {
             schedule: RadiusSchedule::new(params.alpha as f64),
         }
     }
+}
+
+/// r_1 / R for a grid of `hits` photon hits per iteration: the count rule, capped.
+pub fn first_radius_fraction(params: PhotonGridParams, hits: u64) -> f64 {
+    let by_count = (params.lookup_photons as f64 / hits.max(1) as f64).sqrt();
+    by_count.min(params.radius as f64)
 }
 
 fn hit_capacity(len: u64) -> Result<u64, Error> {
@@ -211,7 +241,7 @@ impl Pass for PhotonGrid {
             bind_group,
             params,
             groups: workgroup_grid(groups),
-            first_radius: self.params.radius as f64 * u.scene_radius as f64,
+            first_radius: first_radius_fraction(self.params, hits) * u.scene_radius as f64,
             min_radius: MIN_RADIUS_FRACTION * u.scene_radius,
             bucket_mask,
             center,
