@@ -190,6 +190,13 @@ struct BenchArgs {
     /// Iterations of the 512x512 report workload to run (with --hybrid).
     #[arg(long, default_value_t = 4)]
     workload_iterations: u64,
+    /// Render the seed report's Cornell workload whole (512x512, 512 spp, 2M photons) with pt,
+    /// ppm_only and hybrid: whole-run seconds, per-node times, rays/s.
+    #[arg(long, conflicts_with_all = ["hybrid", "gather"])]
+    seed_workload: bool,
+    /// Fraction of the seed workload's samples and photons to render (with --seed-workload).
+    #[arg(long, default_value_t = 1.0, requires = "seed_workload")]
+    scale: f64,
 }
 
 /// `NAME=VALUE` of `-D`: a name as Mitsuba's `$name` references spell it (letters, digits,
@@ -678,6 +685,19 @@ fn bench_hybrid(args: &BenchArgs) -> Result<(), Error> {
     Ok(())
 }
 
+fn bench_seed(args: &BenchArgs) -> Result<(), Error> {
+    let options = hppm::app::bench_seed::SeedWorkloadOptions {
+        adapter: args.adapter.as_deref(),
+        scale: args.scale,
+    };
+    let text = hppm::app::bench_seed::run(&options, bundled)?;
+    print!("{text}");
+    if let Some(path) = &args.write {
+        bench::append_markdown(path, &text)?;
+    }
+    Ok(())
+}
+
 fn bench_gather(args: &BenchArgs) -> Result<(), Error> {
     let text = hppm::app::bench_gather::run(args.adapter.as_deref(), bundled)?;
     print!("{text}");
@@ -716,6 +736,7 @@ fn main() -> ExitCode {
         } => show_graph(&file, dot, scene.as_deref(), &defines),
         Command::Bench(args) if args.hybrid => bench_hybrid(&args),
         Command::Bench(args) if args.gather => bench_gather(&args),
+        Command::Bench(args) if args.seed_workload => bench_seed(&args),
         Command::Bench(args) => bench::run(
             args.adapter.as_deref(),
             args.spp,

@@ -1,6 +1,6 @@
 //! `hppm bench --hybrid`: the figures of the hybrid (BENCHMARKS.md): per-node time and photon
-//! segments/s, the CPU hit-point BVH build per 1M hit points, the report's workload (512x512,
-//! 512 spp + 2M photons) for pt / ppm_only / hybrid, and relMSE after equal wall-clock budgets
+//! segments/s, the CPU hit-point BVH build per 1M hit points, part of the report's workload
+//! (`bench_seed`) for pt / ppm_only / hybrid, and relMSE after equal wall-clock budgets
 //! against the Mitsuba references in tests/refs.
 
 use std::path::{Path, PathBuf};
@@ -17,7 +17,7 @@ use crate::image::Image;
 use crate::passes::hit_points::{GpuHitPoint, build_tree};
 use crate::{Error, passes, scene};
 
-const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
+pub(crate) const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const POINT_LIGHT: &str = "tests/refs/scenes/point_light_caustic/scene.xml";
 const GRAPHS: &[&str] = &["graphs/pt.ron", "graphs/hybrid.ron", "graphs/ppm_only.ron"];
 
@@ -30,7 +30,7 @@ pub struct HybridBenchOptions<'a> {
 }
 
 /// A graph file with `replace` applied to its text (to set a param for one measurement).
-fn graph_with(path: &Path, replace: Option<(&str, &str)>) -> Result<ValidGraph, Error> {
+pub(crate) fn graph_with(path: &Path, replace: Option<(&str, &str)>) -> Result<ValidGraph, Error> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
         path: path.to_path_buf(),
         source,
@@ -42,7 +42,7 @@ fn graph_with(path: &Path, replace: Option<(&str, &str)>) -> Result<ValidGraph, 
     Ok(parse_graph(path, &text, passes::registry())?)
 }
 
-fn run_iterations(renderer: &mut Renderer<'_>, iterations: u64) -> Result<f64, Error> {
+pub(crate) fn run_iterations(renderer: &mut Renderer<'_>, iterations: u64) -> Result<f64, Error> {
     let never = AtomicBool::new(false);
     let target = renderer.samples_per_pixel() + iterations * renderer.spp_per_iteration().max(1);
     let budget = Budget {
@@ -138,40 +138,6 @@ fn bvh_build_table() -> String {
         "| hit points | CPU SAH build (ms, median of 3, one thread) |\n|---|---|\n| 1,000,000 | {:.0} |\n",
         times[1]
     )
-}
-
-/// The report's workload: 512x512, 512 spp and 2M photons (4096 per iteration).
-fn workload_table(
-    gpu: &GpuContext,
-    locate: fn(&str) -> PathBuf,
-    iterations: u64,
-) -> Result<String, Error> {
-    let scene = scene::load(&locate(GLASS))?;
-    let mut out = String::from(
-        "| graph | iterations run | s/iteration | node ms/iteration | extrapolated 512 spp (s) |\n|---|---|---|---|---|\n",
-    );
-    for graph_path in GRAPHS {
-        let graph = graph_with(
-            &locate(graph_path),
-            Some(("(mode: ", "(photons_per_iteration: 4096, mode: ")),
-        )?;
-        let mut r = Renderer::new(gpu, &scene, graph, 512, 512, 1)?;
-        run_iterations(&mut r, 1)?;
-        let seconds = run_iterations(&mut r, iterations)? / iterations as f64;
-        r.enable_profiling()?;
-        run_iterations(&mut r, 2)?;
-        let nodes: Vec<String> = r
-            .node_times()
-            .iter()
-            .map(|t| format!("{} {:.0}", t.name, t.wall_seconds / 2.0 * 1e3))
-            .collect();
-        out.push_str(&format!(
-            "| {graph_path} | {iterations} | {seconds:.2} | {} | {:.0} |\n",
-            nodes.join(", "),
-            seconds * 512.0
-        ));
-    }
-    Ok(out)
 }
 
 /// Pixels where the point-light composite reference is exact (the camera sees the plane).
@@ -271,12 +237,14 @@ pub fn run(options: &HybridBenchOptions<'_>, locate: fn(&str) -> PathBuf) -> Res
     out.push_str(&node_table(&gpu, locate)?);
     out.push_str("\nHit-point BVH:\n\n");
     out.push_str(&bvh_build_table());
-    out.push_str(&format!(
-        "\nThe report's workload, glass Cornell box at 512x512, 512 spp + 2M photons (4096 per \
-         iteration); {} iterations run, 512 extrapolated:\n\n",
-        options.workload_iterations
-    ));
-    out.push_str(&workload_table(&gpu, locate, options.workload_iterations)?);
+    out.push_str(
+        "\nThe report's workload, in part (`hppm bench --seed-workload` runs it whole):\n\n",
+    );
+    out.push_str(&crate::app::bench_seed::table(
+        &gpu,
+        locate,
+        options.workload_iterations,
+    )?);
     if !options.seconds.is_empty() {
         out.push_str("\nEqual time, 128x128, relMSE against Mitsuba 3:\n\n");
         out.push_str(&equal_time_table(&gpu, locate, &options.seconds)?);

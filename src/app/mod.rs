@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod bench_gather;
 pub mod bench_hybrid;
+pub mod bench_seed;
 pub mod compare;
 pub mod plot;
 pub mod render;
