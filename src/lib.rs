@@ -35,4 +35,18 @@ pub enum Error {
     },
     #[error("{0}")]
     Other(String),
+    /// An error of one node, placed at the node in its graph file.
+    #[error("{place}: {source}")]
+    InNode { place: String, source: Box<Error> },
+}
+
+impl Error {
+    /// A buffer larger than the adapter binds or allocates: a smaller image (or tile) may fit.
+    pub fn is_too_large(&self) -> bool {
+        match self {
+            Error::Gpu(gpu::GpuError::BufferTooLarge { .. }) => true,
+            Error::InNode { source, .. } => source.is_too_large(),
+            _ => false,
+        }
+    }
 }

@@ -411,6 +411,13 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     if args.profile {
         renderer.enable_profiling()?;
     }
+    if renderer.bands() > 1 {
+        eprintln!(
+            "{width}x{height} does not fit the adapter's bindings whole: rendering it in {} bands \
+             of rows, each tracing the photons of the whole image",
+            renderer.bands()
+        );
+    }
     let cancel = cancel_flag();
     // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
     eprintln!(

@@ -15,6 +15,7 @@ struct SceneUniform {
     camera_right: vec3<f32>,
     tan_half_y: f32,
     camera_up: vec3<f32>,
+    // The pixel grid this dispatch's buffers hold: the film, or a tile of it at (tile_x, tile_y).
     width: u32,
     camera_forward: vec3<f32>,
     height: u32,
@@ -37,9 +38,13 @@ struct SceneUniform {
     specular_radius: f32,
     // The constant or map light escaping rays see, or NO_LIGHT.
     environment: u32,
-    pad_env_a: u32,
-    pad_env_b: u32,
-    pad_env_c: u32,
+    film_width: u32,
+    film_height: u32,
+    tile_x: u32,
+    tile_y: u32,
+    pad_tile_a: u32,
+    pad_tile_b: u32,
+    pad_tile_c: u32,
 }
 
 struct BvhNode {

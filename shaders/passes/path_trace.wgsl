@@ -30,7 +30,7 @@
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
 #endif
-#import common::camera::{camera_direction, camera_direction_through}
+#import common::camera::{camera_direction, camera_direction_through, film_index, film_pixel}
 #import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
 #import common::texture::textured_material
@@ -144,7 +144,7 @@ struct HitPointSink {
 
 fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f32>, depth: u32, weight: vec3<f32>, travelled: f32) {
     let index = sink.pixel * params.merge_depth + slot;
-    let footprint = travelled * 2.0 * scene_info.tan_half_x / f32(scene_info.width);
+    let footprint = travelled * 2.0 * scene_info.tan_half_x / f32(scene_info.film_width);
     var radius = radii.radii[index];
     if radius <= 0.0 {
         radius = initial_radius(radii.rule, footprint);
@@ -289,10 +289,11 @@ fn environment_emission(path: PathState) -> vec3<f32> {
 // the point again from them).
 fn primary_direction(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> vec3<f32> {
     let u = rng_next_vec2(rng);
+    let on_film = film_pixel(pixel);
     if splatted {
-        return camera_direction_through(vec2<f32>(pixel) + u);
+        return camera_direction_through(vec2<f32>(on_film) + u);
     }
-    return camera_direction(pixel, u);
+    return camera_direction(on_film, u);
 }
 
 // A camera path at the camera, through `pixel`.
@@ -514,7 +515,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     var discarded = 0u;
     var rays = 0u;
     var s = 0u;
-    var rng = rng_stream(pixel_index, params.sample_base, params.seed);
+    var rng = rng_stream(film_index(pixel_index), params.sample_base, params.seed);
     var sink = HitPointSink(pixel_index, recording);
     var splatted = params.splat != 0u && !sink.enabled;
     var path = start_path(pixel_of(pixel_index), splatted, &rng);
@@ -558,7 +559,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
                 break;
             }
         }
-        rng = rng_stream(pixel_index, params.sample_base + s, params.seed);
+        rng = rng_stream(film_index(pixel_index), params.sample_base + s, params.seed);
         sink = HitPointSink(pixel_index, recording && s == 0u);
         splatted = params.splat != 0u && !sink.enabled;
         path = start_path(pixel_of(pixel_index), splatted, &rng);
@@ -578,7 +579,6 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
     let param = scene_info.filter_param;
     let reach = i32(ceil(filter_radius(kind, param) - 0.5));
     let size = vec2<i32>(i32(scene_info.width), i32(scene_info.height));
-    let center = vec2<f32>(id.xy) + 0.5;
     let spp = params.samples_per_iteration;
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
@@ -594,8 +594,10 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
                 if sample.w == 0.0 {
                     continue;
                 }
-                var rng = rng_stream(q_index, params.sample_base + s, params.seed);
-                let offset = vec2<f32>(q) + rng_next_vec2(&rng) - center;
+                var rng = rng_stream(film_index(q_index), params.sample_base + s, params.seed);
+                // From the integer step, not film positions: the same rounding in every pixel
+                // (and in a band of the image as in the whole).
+                let offset = vec2<f32>(f32(dx), f32(dy)) + (rng_next_vec2(&rng) - 0.5);
                 let w = filter_weight(kind, param, offset.x) * filter_weight(kind, param, offset.y);
                 sum += w * sample.xyz;
                 weight += w;

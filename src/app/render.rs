@@ -50,13 +50,27 @@ impl Budget {
     }
 }
 
-/// A graph prepared on a device for one scene, ready to iterate.
-pub struct Renderer<'a> {
-    gpu: &'a GpuContext,
+/// One band of the image: a graph prepared for the film rows `grid_y..grid_y + grid_rows`, of
+/// which it contributes `keep_y..keep_y + keep_rows` (the rest is the halo that splatting pixel
+/// filters read across the band's edge).
+struct Tile {
     graph: PreparedGraph,
     output: Resource,
     /// Every image output of the output node and every image it reads (its AOVs), by slot.
     aovs: Vec<(&'static str, Resource)>,
+    grid_y: u32,
+    grid_rows: u32,
+    keep_y: u32,
+    keep_rows: u32,
+}
+
+/// A graph prepared on a device for one scene, ready to iterate. An image whose buffers would
+/// not fit the adapter's bindings is rendered in bands, each its own prepared graph: rays and
+/// random streams follow film pixels and every band traces the photons the whole image would,
+/// so the bands together are the image the untiled render would make.
+pub struct Renderer<'a> {
+    gpu: &'a GpuContext,
+    tiles: Vec<Tile>,
     width: u32,
     height: u32,
     seed: u64,
@@ -72,6 +86,15 @@ pub struct Renderer<'a> {
     scene_hash: u64,
     /// Which scene tables are bound as uniform buffers.
     placement: TablePlacement,
+}
+
+/// Rows above and below a band that its pixels' splatted samples come from: the pixel filter's
+/// reach as path_trace.wgsl's `splat` computes it (none for the box filter, which never splats).
+fn halo_rows(scene: &Scene) -> u32 {
+    match scene.camera.filter {
+        crate::scene::filter::PixelFilter::Box => 0,
+        filter => (filter.radius() - 0.5).ceil().max(0.0) as u32,
+    }
 }
 
 impl<'a> Renderer<'a> {
@@ -91,11 +114,25 @@ impl<'a> Renderer<'a> {
     pub fn with_schedule(
         gpu: &'a GpuContext,
         scene: &Scene,
-        mut graph: ValidGraph,
+        graph: ValidGraph,
         width: u32,
         height: u32,
         seed: u64,
         schedule: Schedule,
+    ) -> Result<Self, Error> {
+        Self::with_bands(gpu, scene, graph, (width, height), seed, schedule, None)
+    }
+
+    /// As [`Renderer::with_schedule`], in `bands` bands of rows (`None`: the fewest whose
+    /// buffers fit the adapter, trying 1, 2, 4, ...).
+    pub fn with_bands(
+        gpu: &'a GpuContext,
+        scene: &Scene,
+        mut graph: ValidGraph,
+        (width, height): (u32, u32),
+        seed: u64,
+        schedule: Schedule,
+        bands: Option<u32>,
     ) -> Result<Self, Error> {
         if schedule.stride == 0 {
             return Err(Error::Other(
@@ -108,37 +145,76 @@ impl<'a> Renderer<'a> {
         let features = scene.features();
         let pruned = graph.prune(|need| scene_meets(&features, need))?;
         graph.check_transport(&paths::CLASSES)?;
-        let gpu_scene = GpuScene::new(scene, width, height);
-        let resources = SceneResources::for_adapter(gpu, &gpu_scene)?;
-        let placement = resources.placement.clone();
-        let shaders = shader_library(gpu.has_float_atomics(), scene, &placement)?;
-        let mut shared = Shared::default();
+        let mut gpu_scene = GpuScene::new(scene, width, height);
         let scene_hash = scene_fingerprint(&gpu_scene);
-        shared.insert(resources);
-        let graph =
-            PreparedGraph::new(gpu, &shaders, &shared, graph, width, height, schedule.first)?;
-        let out_node = graph.graph().output.0;
-        let kind = graph.graph().nodes[out_node].kind;
-        let mut aovs: Vec<(&'static str, Resource)> = kind
-            .slots
-            .iter()
-            .filter(|slot| slot.kind == IMAGE)
-            .filter_map(|slot| {
-                graph
-                    .resource(out_node, slot.name)
-                    .or_else(|| graph.input(out_node, slot.name))
-                    .map(|r| (slot.name, r.clone()))
-            })
-            .collect();
-        aovs.sort_by_key(|(slot, _)| *slot);
-        let output = graph.output()?.clone();
-        let spp_per_iteration = graph.spp_per_iteration();
-        let photons_per_iteration = graph.photons_per_iteration();
+        let placement = TablePlacement::choose(
+            crate::passes::PlacementRule::for_adapter(gpu)?,
+            &gpu_scene,
+            &gpu.limits,
+        );
+        let shaders = shader_library(gpu.has_float_atomics(), scene, &placement)?;
+        let halo = halo_rows(scene);
+        let mut prepare = |bands: u32| -> Result<Vec<Tile>, Error> {
+            let rows = height.div_ceil(bands.max(1));
+            let mut tiles = Vec::new();
+            for keep_y in (0..height).step_by(rows.max(1) as usize) {
+                let keep_rows = rows.min(height - keep_y);
+                let grid_y = keep_y.saturating_sub(halo);
+                let grid_rows = (keep_y + keep_rows + halo).min(height) - grid_y;
+                gpu_scene.set_tile(0, grid_y, width, grid_rows);
+                let graph = prepare_tile(
+                    gpu,
+                    &shaders,
+                    &gpu_scene,
+                    &placement,
+                    graph.instance()?,
+                    (width, grid_rows),
+                    schedule.first,
+                )?;
+                tiles.push(Tile {
+                    output: graph.output()?.clone(),
+                    aovs: image_aovs(&graph),
+                    graph,
+                    grid_y,
+                    grid_rows,
+                    keep_y,
+                    keep_rows,
+                });
+            }
+            Ok(tiles)
+        };
+        let tiles = match bands {
+            Some(bands) => prepare(bands)?,
+            None => {
+                let mut bands = 1;
+                loop {
+                    match prepare(bands) {
+                        Ok(tiles) => break tiles,
+                        Err(e) if e.is_too_large() && bands < height => {
+                            bands = (bands * 2).min(height)
+                        }
+                        Err(e) if bands > 1 => {
+                            return Err(Error::Other(format!(
+                                "{e}\n(the image was split into bands of as few as {} rows, and \
+                                 a band still does not fit: buffers that grow with the photons \
+                                 or per pixel do not shrink with the bands)",
+                                height.div_ceil(bands)
+                            )));
+                        }
+                        Err(e) => return Err(e),
+                    }
+                }
+            }
+        };
+        let first = tiles
+            .first()
+            .ok_or_else(|| Error::Other("an image of no rows has nothing to render".into()))?;
+        let spp_per_iteration = first.graph.spp_per_iteration();
+        // Every band traces the same photons: the image counts them once.
+        let photons_per_iteration = first.graph.photons_per_iteration();
         Ok(Self {
             gpu,
-            graph,
-            output,
-            aovs,
+            tiles,
             width,
             height,
             seed,
@@ -150,6 +226,11 @@ impl<'a> Renderer<'a> {
             placement,
             scene_hash,
         })
+    }
+
+    /// Bands of rows the image is rendered in (1 when its buffers fit the adapter whole).
+    pub fn bands(&self) -> usize {
+        self.tiles.len()
     }
 
     /// Fingerprint of the scene as the GPU sees it: two renders with equal fingerprints render
@@ -165,21 +246,73 @@ impl<'a> Renderer<'a> {
     /// The accumulators whose means add up to the image, read back as per-pixel sums and
     /// counts, by `node.slot` (what a shard writes and `hppm merge` sums).
     pub fn read_terms(&self) -> Result<Vec<crate::app::state::Term>, Error> {
-        self.graph
-            .output_terms()?
-            .into_iter()
-            .map(|(name, r)| Ok((name, self.gpu.read_pod(&r.buffer, r.len as usize)?)))
-            .collect()
+        let mut terms: Vec<crate::app::state::Term> = Vec::new();
+        for (t, tile) in self.tiles.iter().enumerate() {
+            for (i, (name, r)) in tile.graph.output_terms()?.into_iter().enumerate() {
+                if t == 0 {
+                    terms.push((name.clone(), self.blank()));
+                }
+                let (_, sums) = terms.get_mut(i).ok_or_else(|| {
+                    Error::Other(format!("band {t} has a term {name} the first band lacks"))
+                })?;
+                self.place(tile, &r, sums)?;
+            }
+        }
+        Ok(terms)
+    }
+
+    /// Zeroed per-pixel sums of the whole image.
+    fn blank(&self) -> Vec<[f32; 4]> {
+        vec![[0.0; 4]; self.width as usize * self.height as usize]
+    }
+
+    /// Copies the rows `tile` keeps of its image resource `r` into the whole image's `sums`.
+    fn place(&self, tile: &Tile, r: &Resource, sums: &mut [[f32; 4]]) -> Result<(), Error> {
+        let width = self.width as usize;
+        if r.len != width as u64 * tile.grid_rows as u64 {
+            return Err(Error::Other(format!(
+                "an image of {} pixels in a band of {width}x{}",
+                r.len, tile.grid_rows
+            )));
+        }
+        let grid: Vec<[f32; 4]> = self.gpu.read_pod(&r.buffer, r.len as usize)?;
+        let skip = (tile.keep_y - tile.grid_y) as usize * width;
+        let kept = tile.keep_rows as usize * width;
+        let at = tile.keep_y as usize * width;
+        sums[at..at + kept].copy_from_slice(&grid[skip..skip + kept]);
+        Ok(())
     }
 
     /// Every buffer whose contents carry between iterations, read back whole, by name (what a
     /// checkpoint holds, besides the iteration count).
     pub fn read_state(&self) -> Result<Vec<(String, Vec<u8>)>, Error> {
         self.gpu.wait()?;
-        self.graph
-            .state_buffers()
+        self.state_buffers()
             .into_iter()
             .map(|(name, buffer)| Ok((name, self.gpu.read_buffer(buffer, 0, buffer.size())?)))
+            .collect()
+    }
+
+    /// Every band's state buffers, named as one graph's are, prefixed `bandK/` when there are
+    /// several bands.
+    fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
+        let several = self.tiles.len() > 1;
+        self.tiles
+            .iter()
+            .enumerate()
+            .flat_map(|(k, tile)| {
+                tile.graph
+                    .state_buffers()
+                    .into_iter()
+                    .map(move |(name, b)| {
+                        let name = if several {
+                            format!("band{k}/{name}")
+                        } else {
+                            name
+                        };
+                        (name, b)
+                    })
+            })
             .collect()
     }
 
@@ -190,7 +323,7 @@ impl<'a> Renderer<'a> {
         iterations: u64,
         sections: &[(String, Vec<u8>)],
     ) -> Result<(), Error> {
-        let buffers = self.graph.state_buffers();
+        let buffers = self.state_buffers();
         let ours: Vec<String> = buffers.iter().map(|(n, _)| n.clone()).collect();
         let theirs: Vec<String> = sections.iter().map(|(n, _)| n.clone()).collect();
         if ours != theirs {
@@ -217,8 +350,10 @@ impl<'a> Renderer<'a> {
 
     /// Records and submits one iteration of every node, in schedule order.
     pub fn iterate(&mut self) -> Result<(), Error> {
-        self.graph
-            .iterate(self.gpu, self.schedule, self.iteration, self.seed)?;
+        for tile in &mut self.tiles {
+            tile.graph
+                .iterate(self.gpu, self.schedule, self.iteration, self.seed)?;
+        }
         self.iteration += 1;
         Ok(())
     }
@@ -235,12 +370,27 @@ impl<'a> Renderer<'a> {
 
     /// Times every node from now on (see `PreparedGraph::enable_profiling`).
     pub fn enable_profiling(&mut self) -> Result<(), Error> {
-        self.graph.enable_profiling(self.gpu)
+        for tile in &mut self.tiles {
+            tile.graph.enable_profiling(self.gpu)?;
+        }
+        Ok(())
     }
 
-    /// Per-node times summed since profiling began, in schedule order.
+    /// Per-node times summed since profiling began (over every band), in schedule order.
     pub fn node_times(&self) -> Vec<NodeTime> {
-        self.graph.node_times()
+        let mut times: Vec<NodeTime> = Vec::new();
+        for tile in &self.tiles {
+            let band = tile.graph.node_times();
+            if times.is_empty() {
+                times = band;
+                continue;
+            }
+            for (total, t) in times.iter_mut().zip(band) {
+                total.wall_seconds += t.wall_seconds;
+                total.gpu_seconds = total.gpu_seconds.zip(t.gpu_seconds).map(|(a, b)| a + b);
+            }
+        }
+        times
     }
 
     /// Iterations this render has run.
@@ -259,7 +409,7 @@ impl<'a> Renderer<'a> {
     /// Why this graph's renders of disjoint iterations cannot be summed into one image, naming
     /// the node; `None` when they can.
     pub fn shard_refusal(&self) -> Option<(String, &'static str)> {
-        self.graph.shard_refusal()
+        self.tiles.first().and_then(|t| t.graph.shard_refusal())
     }
 
     pub fn samples_per_pixel(&self) -> u64 {
@@ -281,26 +431,38 @@ impl<'a> Renderer<'a> {
 
     /// Reads the output slot back and averages it.
     pub fn image(&self) -> Result<Image, Error> {
-        self.read_radiance(&self.output)
+        let mut sums = self.blank();
+        for tile in &self.tiles {
+            self.place(tile, &tile.output, &mut sums)?;
+        }
+        Ok(Image::from_sums(self.width, self.height, &sums))
     }
 
     /// Every image slot of the output node, written or read (e.g. `combined`, `pt`,
     /// `caustic`, `radius` of `resolve`), by slot name.
     pub fn aovs(&self) -> Result<Vec<(&'static str, Image)>, Error> {
-        self.aovs
-            .iter()
-            .map(|(slot, r)| Ok((*slot, self.read_radiance(r)?)))
-            .collect()
+        let Some(first) = self.tiles.first() else {
+            return Ok(Vec::new());
+        };
+        let mut out = Vec::new();
+        for (i, (slot, _)) in first.aovs.iter().enumerate() {
+            let mut sums = self.blank();
+            for tile in &self.tiles {
+                let (_, r) = &tile.aovs[i];
+                self.place(tile, r, &mut sums)?;
+            }
+            out.push((*slot, Image::from_sums(self.width, self.height, &sums)));
+        }
+        Ok(out)
     }
 
-    fn read_radiance(&self, resource: &Resource) -> Result<Image, Error> {
-        let sums: Vec<[f32; 4]> = self.gpu.read_pod(&resource.buffer, resource.len as usize)?;
-        Ok(Image::from_sums(self.width, self.height, &sums))
-    }
-
-    /// Counters summed over every node.
+    /// Counters summed over every node of every band.
     pub fn counters(&self) -> Result<Counters, Error> {
-        self.graph.counters(self.gpu)
+        let mut total = Counters::default();
+        for tile in &self.tiles {
+            total.add(&tile.graph.counters(self.gpu)?);
+        }
+        Ok(total)
     }
 
     /// Global iterations the whole render of `budget` runs (all shards together), when the
@@ -365,6 +527,51 @@ impl<'a> Renderer<'a> {
             cancelled: cancel.load(Ordering::Relaxed),
         })
     }
+}
+
+/// The graph prepared for one band (or the whole image), with its own copy of the scene's
+/// uniform (which rows it renders) and tables.
+fn prepare_tile(
+    gpu: &GpuContext,
+    shaders: &crate::gpu::shaders::ShaderLibrary,
+    gpu_scene: &GpuScene,
+    placement: &TablePlacement,
+    graph: ValidGraph,
+    grid: (u32, u32),
+    first_iteration: u64,
+) -> Result<PreparedGraph, Error> {
+    let film = &gpu_scene.uniform;
+    let film_pixels = film.film_width as u64 * film.film_height as u64;
+    let mut shared = Shared::default();
+    shared.insert(SceneResources::upload(gpu, gpu_scene, placement)?);
+    PreparedGraph::new(
+        gpu,
+        shaders,
+        &shared,
+        graph,
+        grid,
+        film_pixels,
+        first_iteration,
+    )
+}
+
+/// Every image slot of the graph's output node, written or read, by slot name.
+fn image_aovs(graph: &PreparedGraph) -> Vec<(&'static str, Resource)> {
+    let out_node = graph.graph().output.0;
+    let kind = graph.graph().nodes[out_node].kind;
+    let mut aovs: Vec<(&'static str, Resource)> = kind
+        .slots
+        .iter()
+        .filter(|slot| slot.kind == IMAGE)
+        .filter_map(|slot| {
+            graph
+                .resource(out_node, slot.name)
+                .or_else(|| graph.input(out_node, slot.name))
+                .map(|r| (slot.name, r.clone()))
+        })
+        .collect();
+    aovs.sort_by_key(|(slot, _)| *slot);
+    aovs
 }
 
 /// FNV-1a over the uploaded scene (uniform and tables), so a shard or checkpoint made from

@@ -97,10 +97,13 @@ fn begin_iteration<'a>(gpu: &'a GpuContext, cleared: &[Resource]) -> Recorder<'a
 
 /// A node's error, placed at the node in its graph file.
 fn in_node(node: &super::ValidNode, error: Error) -> Error {
-    Error::Other(format!(
-        "{}: node \"{}\" ({}): {error}",
-        node.location, node.name, node.kind.name
-    ))
+    Error::InNode {
+        place: format!(
+            "{}: node \"{}\" ({})",
+            node.location, node.name, node.kind.name
+        ),
+        source: Box::new(error),
+    }
 }
 
 impl PreparedGraph {
@@ -109,8 +112,8 @@ impl PreparedGraph {
         shaders: &ShaderLibrary,
         shared: &Shared,
         mut graph: ValidGraph,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
+        film_pixels: u64,
         first_iteration: u64,
     ) -> Result<Self, Error> {
         let order = graph.order.clone();
@@ -142,6 +145,7 @@ impl PreparedGraph {
                 kept_inputs,
                 width,
                 height,
+                film_pixels,
                 first_iteration,
             }
         };
@@ -429,6 +433,7 @@ impl Standalone {
             kept_inputs: wiring.kept_inputs.iter().copied().collect(),
             width: size.0,
             height: size.1,
+            film_pixels: size.0 as u64 * size.1 as u64,
             first_iteration: wiring.first_iteration,
         };
         let mut cleared = Vec::new();

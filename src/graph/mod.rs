@@ -51,6 +51,8 @@ pub struct ValidNode {
     pub name: String,
     pub kind: &'static PassKind,
     pub pass: Box<dyn Pass>,
+    /// The params text the pass was constructed from (`()` when the file gives none).
+    pub params: String,
     pub location: Location,
 }
 
@@ -79,6 +81,35 @@ pub struct ValidGraph {
 }
 
 impl ValidGraph {
+    /// The same graph with every pass constructed anew from its params: a render that splits
+    /// its image into tiles prepares one per tile.
+    pub fn instance(&self) -> Result<ValidGraph, crate::Error> {
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|n| {
+                let pass = (n.kind.construct)(&n.params).map_err(|e| {
+                    crate::Error::Other(format!("{}: node \"{}\": {e}", n.location, n.name))
+                })?;
+                Ok(ValidNode {
+                    name: n.name.clone(),
+                    kind: n.kind,
+                    pass,
+                    params: n.params.clone(),
+                    location: n.location.clone(),
+                })
+            })
+            .collect::<Result<Vec<_>, crate::Error>>()?;
+        Ok(ValidGraph {
+            file: self.file.clone(),
+            nodes,
+            edges: self.edges.clone(),
+            order: self.order.clone(),
+            output: self.output,
+            warnings: self.warnings.clone(),
+        })
+    }
+
     pub fn inputs_of(&self, node: usize) -> impl Iterator<Item = &Edge> {
         self.edges.iter().filter(move |e| e.to_node == node)
     }

@@ -288,8 +288,12 @@ pub struct PrepareCtx<'a> {
     /// Input slots whose producer keeps them: their layout never changes after the first
     /// iteration (a builder may then only refit).
     pub kept_inputs: HashSet<&'static str>,
+    /// The pixel grid this graph renders: the whole image, or one tile of it.
     pub width: u32,
     pub height: u32,
+    /// Pixels of the whole image (more than `width` x `height` when the graph renders a tile):
+    /// what per-image budgets, such as photons per iteration, follow.
+    pub film_pixels: u64,
     /// Global index of the first iteration the render will run (0, or where a shard or a
     /// resumed render starts): passes with a schedule set their first state from it.
     pub first_iteration: u64,

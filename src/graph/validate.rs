@@ -130,6 +130,7 @@ pub fn parse_graph(
             name: node.name.clone(),
             kind: pass.0,
             pass: pass.1,
+            params: pass.2,
             location: report.at(spans.span.start),
         }));
     }
@@ -199,7 +200,7 @@ fn construct(
     kind: &'static PassKind,
     node: &NodeFile,
     spans: &NodeSpans,
-) -> Option<(&'static PassKind, Box<dyn super::pass::Pass>)> {
+) -> Option<(&'static PassKind, Box<dyn super::pass::Pass>, String)> {
     let params = spans.field("params").map(|f| f.value_span.clone());
     let params_text = params.clone().and_then(|r| text.get(r)).unwrap_or("()");
     let params_text = if params_text.trim() == "None" {
@@ -208,7 +209,7 @@ fn construct(
         params_text
     };
     match (kind.construct)(params_text) {
-        Ok(pass) => Some((kind, pass)),
+        Ok(pass) => Some((kind, pass, params_text.to_string())),
         Err(e) => {
             let base = params.map_or(spans.span.start, |r| r.start);
             let (message, key) = describe_params_error(&e.code);

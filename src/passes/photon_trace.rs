@@ -172,14 +172,21 @@ impl PhotonTrace {
 }
 
 impl PhotonTrace {
-    /// Photons per iteration: the param, else a default per image pixel by mode.
-    fn photons(&self, pixels: u64) -> u32 {
+    /// Photons per iteration: the param, else a default per pixel of the whole image (not of a
+    /// tile: every tile then traces the very photons the whole image would, so a tiled render
+    /// is the untiled one), by mode, cut to what one storage binding of photon hits holds.
+    fn photons(&self, ctx: &PrepareCtx<'_>) -> u32 {
         self.params.photons_per_iteration.unwrap_or_else(|| {
-            let per_pixel = match self.params.mode {
-                PhotonMode::Caustic => DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC,
-                PhotonMode::All => DEFAULT_PHOTONS_PER_PIXEL_ALL,
+            let (per_pixel, hits_per_photon) = match self.params.mode {
+                PhotonMode::Caustic => (DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC, 1),
+                PhotonMode::All => (DEFAULT_PHOTONS_PER_PIXEL_ALL, ALL_MODE_HITS_PER_PHOTON),
             };
-            u32::try_from(pixels * per_pixel as u64).unwrap_or(u32::MAX)
+            let binding = ctx.gpu.limits.max_storage_buffer_binding_size;
+            let fit = binding.saturating_sub(PHOTON_HITS.header_bytes)
+                / PHOTON_HITS.element_bytes
+                / hits_per_photon;
+            let wanted = ctx.film_pixels.saturating_mul(per_pixel as u64);
+            u32::try_from(wanted.min(fit).max(1)).unwrap_or(u32::MAX)
         })
     }
 }
@@ -197,7 +204,7 @@ fn dispatch_grid(device: wgpu::DeviceType, photons: u32) -> (u32, u32, u32) {
 
 impl Pass for PhotonTrace {
     fn output_len(&self, _slot: &str, ctx: &PrepareCtx<'_>) -> Result<u64, Error> {
-        let photons = self.photons(ctx.pixels()) as u64;
+        let photons = self.photons(ctx) as u64;
         Ok(match self.params.mode {
             PhotonMode::Caustic => photons,
             PhotonMode::All => photons * ALL_MODE_HITS_PER_PHOTON,
@@ -208,7 +215,7 @@ impl Pass for PhotonTrace {
         let gpu = ctx.gpu;
         let scene = ctx.shared.get::<SceneResources>()?;
         let photon_hits = ctx.output("photon_hits")?;
-        let photons = self.photons(ctx.pixels());
+        let photons = self.photons(&ctx);
         let params = gpu.create_buffer(
             "photon_trace params",
             std::mem::size_of::<GpuParams>() as u64,

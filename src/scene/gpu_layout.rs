@@ -163,6 +163,7 @@ pub struct GpuSceneUniform {
     pub camera_right: [f32; 3],
     pub tan_half_y: f32,
     pub camera_up: [f32; 3],
+    /// The pixel grid this render's buffers hold: the whole film, or one tile of it.
     pub width: u32,
     pub camera_forward: [f32; 3],
     pub height: u32,
@@ -186,7 +187,13 @@ pub struct GpuSceneUniform {
     pub specular_radius: f32,
     /// The index of the constant or map light that escaping rays see, or `NO_LIGHT`.
     pub environment: u32,
-    pub _pad_environment: [u32; 3],
+    /// The whole image, and where the pixel grid (`width` x `height`) lies in it: rays and
+    /// random streams follow film pixels, so a tile renders exactly its part of the image.
+    pub film_width: u32,
+    pub film_height: u32,
+    pub tile_x: u32,
+    pub tile_y: u32,
+    pub _pad_tile: [u32; 3],
 }
 
 /// Everything the GPU needs to trace rays through a scene. Arrays are never empty (a zeroed
@@ -523,6 +530,8 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
         width,
         camera_forward: forward.to_array(),
         height,
+        film_width: width,
+        film_height: height,
         filter_kind,
         filter_param,
         sample_border: cam.sample_border as u32,
@@ -538,6 +547,16 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
 pub const SPLIT_EXTRA: f32 = 1.0;
 
 impl GpuScene {
+    /// Renders the `width` x `height` pixels at (`x`, `y`) of the film instead of all of it
+    /// (a tile of an image whose buffers would not fit one binding).
+    pub fn set_tile(&mut self, x: u32, y: u32, width: u32, height: u32) {
+        let u = &mut self.uniform;
+        u.tile_x = x;
+        u.tile_y = y;
+        u.width = width;
+        u.height = height;
+    }
+
     /// Lays out `scene` for rendering at `width` x `height`.
     pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
         // The BVH is built over split references (src/scene/split_boxes.rs); its leaves then
