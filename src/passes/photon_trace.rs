@@ -79,7 +79,8 @@ pub enum PhotonMode {
 #[serde(default, deny_unknown_fields)]
 pub struct PhotonTraceParams {
     pub mode: PhotonMode,
-    /// `None`: DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC or _ALL per image pixel.
+    /// `None`: DEFAULT_PHOTONS_PER_PIXEL_CAUSTIC or _ALL per pixel of the whole image, cut to
+    /// the photon hits one storage binding holds.
     pub photons_per_iteration: Option<u32>,
     /// Longest full path (camera segments + photon segments); `None` takes the scene's.
     pub max_depth: Option<u32>,
