@@ -366,6 +366,13 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             uniform_tables.join(" ")
         );
     }
+    let chunked = renderer.placement().chunked_report();
+    if !chunked.is_empty() {
+        eprintln!(
+            "scene tables larger than one binding, in chunks: {}",
+            chunked.join(", ")
+        );
+    }
     if let Some(budget) = renderer.placement().node_budget() {
         eprintln!(
             "scene BVH collapsed to at most {budget} nodes (a few larger leaves) to fit a uniform binding"

@@ -1,6 +1,6 @@
 #define_import_path common::lights
 
-#import common::scene::{scene_info, lights, light_cdf, triangles, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, SurfacePoint, triangle_point}
+#import common::scene::{scene_info, lights, light_cdf, triangle_at, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, SurfacePoint, triangle_point}
 #ifdef SPHERES
 #import common::scene::{spheres, sphere_point}
 #endif
@@ -63,7 +63,7 @@ fn sample_area_light_point(light: Light, u: vec2<f32>) -> SurfacePoint {
         return sphere_point(spheres[light.prim], sample_uniform_sphere(u));
     }
 #endif
-    let tri = triangles[light.prim];
+    let tri = triangle_at(light.prim);
     return triangle_point(tri.vertex, tri.edge_a, tri.edge_b, sample_triangle_barycentrics(u));
 }
 

@@ -229,12 +229,273 @@ const BVH_STACK_SIZE: u32 = 64u;
 @group(0) @binding(11) var<storage, read> textures: array<u32>;
 #endif
 
+// Tables larger than one storage binding (a mesh of millions of triangles on an adapter that
+// binds 128 MiB) are split into chunks of 2^<NAME>_CHUNK_SHIFT entries: chunk 0 at the table's
+// own binding, chunk k at the table's chunk base + k - 1 (src/passes/scene_resources.rs,
+// TablePlacement). <NAME>_CHUNKED is set from two chunks on, <NAME>_CHUNK_<k> for each k >= 2.
+// Every read of such a table goes through its accessor below, which picks the chunk.
+#ifdef BVH_NODES_CHUNKED
+@group(0) @binding(16) var<storage, read> bvh_nodes_1: array<BvhNode>;
+#ifdef BVH_NODES_CHUNK_2
+@group(0) @binding(17) var<storage, read> bvh_nodes_2: array<BvhNode>;
+#endif
+#ifdef BVH_NODES_CHUNK_3
+@group(0) @binding(18) var<storage, read> bvh_nodes_3: array<BvhNode>;
+#endif
+#ifdef BVH_NODES_CHUNK_4
+@group(0) @binding(19) var<storage, read> bvh_nodes_4: array<BvhNode>;
+#endif
+#ifdef BVH_NODES_CHUNK_5
+@group(0) @binding(20) var<storage, read> bvh_nodes_5: array<BvhNode>;
+#endif
+#ifdef BVH_NODES_CHUNK_6
+@group(0) @binding(21) var<storage, read> bvh_nodes_6: array<BvhNode>;
+#endif
+#ifdef BVH_NODES_CHUNK_7
+@group(0) @binding(22) var<storage, read> bvh_nodes_7: array<BvhNode>;
+#endif
+#endif
+#ifdef PRIM_INDICES_CHUNKED
+@group(0) @binding(24) var<storage, read> prim_indices_1: array<u32>;
+#ifdef PRIM_INDICES_CHUNK_2
+@group(0) @binding(25) var<storage, read> prim_indices_2: array<u32>;
+#endif
+#ifdef PRIM_INDICES_CHUNK_3
+@group(0) @binding(26) var<storage, read> prim_indices_3: array<u32>;
+#endif
+#ifdef PRIM_INDICES_CHUNK_4
+@group(0) @binding(27) var<storage, read> prim_indices_4: array<u32>;
+#endif
+#ifdef PRIM_INDICES_CHUNK_5
+@group(0) @binding(28) var<storage, read> prim_indices_5: array<u32>;
+#endif
+#ifdef PRIM_INDICES_CHUNK_6
+@group(0) @binding(29) var<storage, read> prim_indices_6: array<u32>;
+#endif
+#ifdef PRIM_INDICES_CHUNK_7
+@group(0) @binding(30) var<storage, read> prim_indices_7: array<u32>;
+#endif
+#endif
+#ifdef TRIANGLES_CHUNKED
+@group(0) @binding(32) var<storage, read> triangles_1: array<Triangle>;
+#ifdef TRIANGLES_CHUNK_2
+@group(0) @binding(33) var<storage, read> triangles_2: array<Triangle>;
+#endif
+#ifdef TRIANGLES_CHUNK_3
+@group(0) @binding(34) var<storage, read> triangles_3: array<Triangle>;
+#endif
+#ifdef TRIANGLES_CHUNK_4
+@group(0) @binding(35) var<storage, read> triangles_4: array<Triangle>;
+#endif
+#ifdef TRIANGLES_CHUNK_5
+@group(0) @binding(36) var<storage, read> triangles_5: array<Triangle>;
+#endif
+#ifdef TRIANGLES_CHUNK_6
+@group(0) @binding(37) var<storage, read> triangles_6: array<Triangle>;
+#endif
+#ifdef TRIANGLES_CHUNK_7
+@group(0) @binding(38) var<storage, read> triangles_7: array<Triangle>;
+#endif
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNKED
+@group(0) @binding(40) var<storage, read> triangle_normals_1: array<TriangleNormals>;
+#ifdef TRIANGLE_NORMALS_CHUNK_2
+@group(0) @binding(41) var<storage, read> triangle_normals_2: array<TriangleNormals>;
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_3
+@group(0) @binding(42) var<storage, read> triangle_normals_3: array<TriangleNormals>;
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_4
+@group(0) @binding(43) var<storage, read> triangle_normals_4: array<TriangleNormals>;
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_5
+@group(0) @binding(44) var<storage, read> triangle_normals_5: array<TriangleNormals>;
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_6
+@group(0) @binding(45) var<storage, read> triangle_normals_6: array<TriangleNormals>;
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_7
+@group(0) @binding(46) var<storage, read> triangle_normals_7: array<TriangleNormals>;
+#endif
+#endif
+#ifdef TRIANGLE_UVS_CHUNKED
+@group(0) @binding(48) var<storage, read> triangle_uvs_1: array<TriangleUvs>;
+#ifdef TRIANGLE_UVS_CHUNK_2
+@group(0) @binding(49) var<storage, read> triangle_uvs_2: array<TriangleUvs>;
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_3
+@group(0) @binding(50) var<storage, read> triangle_uvs_3: array<TriangleUvs>;
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_4
+@group(0) @binding(51) var<storage, read> triangle_uvs_4: array<TriangleUvs>;
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_5
+@group(0) @binding(52) var<storage, read> triangle_uvs_5: array<TriangleUvs>;
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_6
+@group(0) @binding(53) var<storage, read> triangle_uvs_6: array<TriangleUvs>;
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_7
+@group(0) @binding(54) var<storage, read> triangle_uvs_7: array<TriangleUvs>;
+#endif
+#endif
+
+// Entry `i` of bvh_nodes, whichever way it is bound.
+fn bvh_node(i: u32) -> BvhNode {
+#ifdef BVH_NODES_CHUNKED
+    let j = i & ((1u << #{BVH_NODES_CHUNK_SHIFT}) - 1u);
+    switch i >> #{BVH_NODES_CHUNK_SHIFT} {
+        case 1u: { return bvh_nodes_1[j]; }
+#ifdef BVH_NODES_CHUNK_2
+        case 2u: { return bvh_nodes_2[j]; }
+#endif
+#ifdef BVH_NODES_CHUNK_3
+        case 3u: { return bvh_nodes_3[j]; }
+#endif
+#ifdef BVH_NODES_CHUNK_4
+        case 4u: { return bvh_nodes_4[j]; }
+#endif
+#ifdef BVH_NODES_CHUNK_5
+        case 5u: { return bvh_nodes_5[j]; }
+#endif
+#ifdef BVH_NODES_CHUNK_6
+        case 6u: { return bvh_nodes_6[j]; }
+#endif
+#ifdef BVH_NODES_CHUNK_7
+        case 7u: { return bvh_nodes_7[j]; }
+#endif
+        default: { return bvh_nodes[j]; }
+    }
+#else
+    return bvh_nodes[i];
+#endif
+}
+
+// Triangle `i`, whichever way it is bound.
+fn triangle_at(i: u32) -> Triangle {
+#ifdef TRIANGLES_CHUNKED
+    let j = i & ((1u << #{TRIANGLES_CHUNK_SHIFT}) - 1u);
+    switch i >> #{TRIANGLES_CHUNK_SHIFT} {
+        case 1u: { return triangles_1[j]; }
+#ifdef TRIANGLES_CHUNK_2
+        case 2u: { return triangles_2[j]; }
+#endif
+#ifdef TRIANGLES_CHUNK_3
+        case 3u: { return triangles_3[j]; }
+#endif
+#ifdef TRIANGLES_CHUNK_4
+        case 4u: { return triangles_4[j]; }
+#endif
+#ifdef TRIANGLES_CHUNK_5
+        case 5u: { return triangles_5[j]; }
+#endif
+#ifdef TRIANGLES_CHUNK_6
+        case 6u: { return triangles_6[j]; }
+#endif
+#ifdef TRIANGLES_CHUNK_7
+        case 7u: { return triangles_7[j]; }
+#endif
+        default: { return triangles[j]; }
+    }
+#else
+    return triangles[i];
+#endif
+}
+
+// Entry `i` of triangle_normals.
+fn triangle_normals_at(i: u32) -> TriangleNormals {
+#ifdef TRIANGLE_NORMALS_CHUNKED
+    let j = i & ((1u << #{TRIANGLE_NORMALS_CHUNK_SHIFT}) - 1u);
+    switch i >> #{TRIANGLE_NORMALS_CHUNK_SHIFT} {
+        case 1u: { return triangle_normals_1[j]; }
+#ifdef TRIANGLE_NORMALS_CHUNK_2
+        case 2u: { return triangle_normals_2[j]; }
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_3
+        case 3u: { return triangle_normals_3[j]; }
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_4
+        case 4u: { return triangle_normals_4[j]; }
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_5
+        case 5u: { return triangle_normals_5[j]; }
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_6
+        case 6u: { return triangle_normals_6[j]; }
+#endif
+#ifdef TRIANGLE_NORMALS_CHUNK_7
+        case 7u: { return triangle_normals_7[j]; }
+#endif
+        default: { return triangle_normals[j]; }
+    }
+#else
+    return triangle_normals[i];
+#endif
+}
+
+// Entry `i` of triangle_uvs.
+fn triangle_uvs_at(i: u32) -> TriangleUvs {
+#ifdef TRIANGLE_UVS_CHUNKED
+    let j = i & ((1u << #{TRIANGLE_UVS_CHUNK_SHIFT}) - 1u);
+    switch i >> #{TRIANGLE_UVS_CHUNK_SHIFT} {
+        case 1u: { return triangle_uvs_1[j]; }
+#ifdef TRIANGLE_UVS_CHUNK_2
+        case 2u: { return triangle_uvs_2[j]; }
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_3
+        case 3u: { return triangle_uvs_3[j]; }
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_4
+        case 4u: { return triangle_uvs_4[j]; }
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_5
+        case 5u: { return triangle_uvs_5[j]; }
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_6
+        case 6u: { return triangle_uvs_6[j]; }
+#endif
+#ifdef TRIANGLE_UVS_CHUNK_7
+        case 7u: { return triangle_uvs_7[j]; }
+#endif
+        default: { return triangle_uvs[j]; }
+    }
+#else
+    return triangle_uvs[i];
+#endif
+}
+
 // Entry `i` of prim_indices, whichever way it is bound.
 fn prim_index(i: u32) -> u32 {
 #ifdef PRIM_INDICES_UNIFORM
     return prim_indices[i >> 2u][i & 3u];
 #else
+#ifdef PRIM_INDICES_CHUNKED
+    let j = i & ((1u << #{PRIM_INDICES_CHUNK_SHIFT}) - 1u);
+    switch i >> #{PRIM_INDICES_CHUNK_SHIFT} {
+        case 1u: { return prim_indices_1[j]; }
+#ifdef PRIM_INDICES_CHUNK_2
+        case 2u: { return prim_indices_2[j]; }
+#endif
+#ifdef PRIM_INDICES_CHUNK_3
+        case 3u: { return prim_indices_3[j]; }
+#endif
+#ifdef PRIM_INDICES_CHUNK_4
+        case 4u: { return prim_indices_4[j]; }
+#endif
+#ifdef PRIM_INDICES_CHUNK_5
+        case 5u: { return prim_indices_5[j]; }
+#endif
+#ifdef PRIM_INDICES_CHUNK_6
+        case 6u: { return prim_indices_6[j]; }
+#endif
+#ifdef PRIM_INDICES_CHUNK_7
+        case 7u: { return prim_indices_7[j]; }
+#endif
+        default: { return prim_indices[j]; }
+    }
+#else
     return prim_indices[i];
+#endif
 #endif
 }
 
@@ -276,9 +537,16 @@ struct Surface {
 // degenerate, and the side met. Only the three vectors it needs are loaded: on lavapipe, storage loads dominate
 // traversal time, and loading the whole struct costs about a fifth more.
 fn triangle_crossing(index: u32, origin: vec3<f32>, dir: vec3<f32>) -> Crossing {
+#ifdef TRIANGLES_CHUNKED
+    let tri = triangle_at(index);
+    let vertex = tri.vertex;
+    let edge_a = tri.edge_a;
+    let edge_b = tri.edge_b;
+#else
     let vertex = triangles[index].vertex;
     let edge_a = triangles[index].edge_a;
     let edge_b = triangles[index].edge_b;
+#endif
     let p = cross(dir, edge_b);
     let det = dot(edge_a, p);
     if det == 0.0 {
@@ -435,11 +703,12 @@ fn traverse_bvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, fr
     if scene_info.num_triangles + scene_info.num_spheres == 0u {
         return Hit(T_INFINITE, NO_HIT, false);
     }
-    if intersect_box(bvh_nodes[0].min, bvh_nodes[0].max, origin, inv_dir, t_max) == T_INFINITE {
+    let root = bvh_node(0u);
+    if intersect_box(root.min, root.max, origin, inv_dir, t_max) == T_INFINITE {
         return Hit(T_INFINITE, NO_HIT, false);
     }
     loop {
-        let node = bvh_nodes[node_index];
+        let node = bvh_node(node_index);
         if node.count > 0u {
             for (var i = 0u; i < node.count; i++) {
                 let prim = prim_index(node.left_or_first + i);
@@ -453,8 +722,15 @@ fn traverse_bvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, fr
             let right = left + 1u;
             // A tie may lie in a box a hair beyond the closest hit so far.
             let reach = select(hit.t, hit.t + tie_span(origin, hit.t), front_wins_ties && hit.prim != NO_HIT);
+#ifdef BVH_NODES_CHUNKED
+            let left_node = bvh_node(left);
+            let right_node = bvh_node(right);
+            let t_left = intersect_box(left_node.min, left_node.max, origin, inv_dir, reach);
+            let t_right = intersect_box(right_node.min, right_node.max, origin, inv_dir, reach);
+#else
             let t_left = intersect_box(bvh_nodes[left].min, bvh_nodes[left].max, origin, inv_dir, reach);
             let t_right = intersect_box(bvh_nodes[right].min, bvh_nodes[right].max, origin, inv_dir, reach);
+#endif
             let near_first = t_left <= t_right;
             let near = select(right, left, near_first);
             let far = select(left, right, near_first);
@@ -754,12 +1030,12 @@ fn surface_at(hit: Hit, origin: vec3<f32>, dir: vec3<f32>) -> Surface {
 #endif
     // From the barycentrics, not origin + t dir: the distance carries the error of the whole
     // ray (large when the origin is far from the triangle), the barycentrics only the plane's.
-    let tri = triangles[hit.prim];
+    let tri = triangle_at(hit.prim);
     let b = triangle_barycentrics(tri, origin, dir);
     let point = triangle_point(tri.vertex, tri.edge_a, tri.edge_b, b);
     var shading = point.normal;
     if tri.normals != NO_NORMALS {
-        let n = triangle_normals[tri.normals];
+        let n = triangle_normals_at(tri.normals);
         let interpolated = (1.0 - b.x - b.y) * n.a + b.x * n.b + b.y * n.c;
         let length_squared = dot(interpolated, interpolated);
         // Opposite vertex normals can cancel: such a point shades flat.
@@ -767,7 +1043,7 @@ fn surface_at(hit: Hit, origin: vec3<f32>, dir: vec3<f32>) -> Surface {
             shading = interpolated * inverseSqrt(length_squared);
         }
     }
-    let uvs = triangle_uvs[hit.prim];
+    let uvs = triangle_uvs_at(hit.prim);
     let uv = (1.0 - b.x - b.y) * uvs.a + b.x * uvs.b + b.y * uvs.c;
     return Surface(point.position, point.normal, tri.material, tri.light, point.error, shading, uv);
 }

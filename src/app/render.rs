@@ -147,11 +147,7 @@ impl<'a> Renderer<'a> {
         graph.check_transport(&paths::CLASSES)?;
         let mut gpu_scene = GpuScene::new(scene, width, height);
         let scene_hash = scene_fingerprint(&gpu_scene);
-        let placement = TablePlacement::choose(
-            crate::passes::PlacementRule::for_adapter(gpu)?,
-            &gpu_scene,
-            &gpu.limits,
-        );
+        let placement = TablePlacement::for_adapter(gpu, &gpu_scene)?;
         let shaders = shader_library(gpu.has_float_atomics(), scene, &placement)?;
         let halo = halo_rows(scene);
         let mut prepare = |bands: u32| -> Result<Vec<Tile>, Error> {

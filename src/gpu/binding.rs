@@ -33,10 +33,22 @@ pub fn bind_buffers(
     label: &str,
     entries: &[(Access, &wgpu::Buffer)],
 ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let numbered: Vec<_> = (0u32..)
+        .zip(entries)
+        .map(|(i, (access, buffer))| (i, *access, *buffer))
+        .collect();
+    bind_buffers_at(device, label, &numbered)
+}
+
+/// As [`bind_buffers`], with each entry's binding number given.
+pub fn bind_buffers_at(
+    device: &wgpu::Device,
+    label: &str,
+    entries: &[(u32, Access, &wgpu::Buffer)],
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
     let layout_entries: Vec<_> = entries
         .iter()
-        .enumerate()
-        .map(|(i, (access, _))| layout_entry(i as u32, *access))
+        .map(|(binding, access, _)| layout_entry(*binding, *access))
         .collect();
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
@@ -44,9 +56,8 @@ pub fn bind_buffers(
     });
     let group_entries: Vec<_> = entries
         .iter()
-        .enumerate()
-        .map(|(i, (_, buffer))| wgpu::BindGroupEntry {
-            binding: i as u32,
+        .map(|(binding, _, buffer)| wgpu::BindGroupEntry {
+            binding: *binding,
             resource: buffer.as_entire_binding(),
         })
         .collect();

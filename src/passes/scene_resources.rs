@@ -7,7 +7,7 @@ use naga_oil::compose::ShaderDefValue;
 
 use crate::Error;
 use crate::gpu::GpuContext;
-use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu::binding::{Access, bind_buffers_at};
 use crate::gpu::layout::StructLayout;
 use crate::scene::bvh::{Bvh, BvhNode};
 use crate::scene::gpu_layout::{
@@ -69,7 +69,64 @@ pub struct TablePlacement {
     /// The BVH's nodes collapsed to fit their uniform binding ([`Bvh::collapsed_to`]), uploaded
     /// instead of the scene's; `None` when it is uploaded as built.
     collapsed_nodes: Option<Vec<BvhNode>>,
+    /// Storage tables larger than one binding, split into chunks ([`Chunked`]).
+    chunked: Vec<Chunked>,
 }
+
+/// A storage table split over several bindings because it is larger than the adapter binds at
+/// once (a mesh of millions of triangles on lavapipe's 128 MiB): chunks of 2^`shift` entries,
+/// chunk 0 at the table's binding and chunk k at its [`ChunkableTable::base`] + k - 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Chunked {
+    pub binding: u32,
+    pub shift: u32,
+    pub chunks: u32,
+}
+
+/// A table that grows with the triangles and may be chunked: its binding, the defs' prefix in
+/// shaders/common/scene.wgsl, its entry size and where its chunks past the first are bound.
+struct ChunkableTable {
+    binding: u32,
+    prefix: &'static str,
+    stride: u64,
+    base: u32,
+}
+
+/// Chunks a table may have (the bindings shaders/common/scene.wgsl declares for each).
+pub const MAX_CHUNKS: u32 = 8;
+
+const CHUNKABLE: [ChunkableTable; 5] = [
+    ChunkableTable {
+        binding: 1,
+        prefix: "BVH_NODES",
+        stride: size_of::<BvhNode>() as u64,
+        base: 16,
+    },
+    ChunkableTable {
+        binding: 2,
+        prefix: "PRIM_INDICES",
+        stride: 4,
+        base: 24,
+    },
+    ChunkableTable {
+        binding: 3,
+        prefix: "TRIANGLES",
+        stride: size_of::<GpuTriangle>() as u64,
+        base: 32,
+    },
+    ChunkableTable {
+        binding: 9,
+        prefix: "TRIANGLE_NORMALS",
+        stride: size_of::<GpuTriangleNormals>() as u64,
+        base: 40,
+    },
+    ChunkableTable {
+        binding: 10,
+        prefix: "TRIANGLE_UVS",
+        stride: size_of::<crate::scene::gpu_layout::GpuTriangleUvs>() as u64,
+        base: 48,
+    },
+];
 
 /// How many more primitive tests per ray (by the surface area heuristic) than the tree as built
 /// a BVH collapsed to fit a uniform binding may take. On water_glass, with the nodes uniform,
@@ -178,11 +235,38 @@ impl TablePlacement {
         Self::default()
     }
 
+    /// Where `scene`'s tables go on `gpu`: by [`PlacementRule::for_adapter`], chunked where a
+    /// table exceeds a binding (or `HPPM_TABLE_CHUNK_ENTRIES`).
+    pub fn for_adapter(gpu: &GpuContext, scene: &GpuScene) -> Result<Self, Error> {
+        Ok(Self::choose_chunked(
+            PlacementRule::for_adapter(gpu)?,
+            scene,
+            &gpu.limits,
+            chunk_entries_override()?,
+        ))
+    }
+
     /// Under `rule`, the tables of `scene` that fit `limits`' uniform bindings (by size, and
     /// by count after the scene uniform and the passes' own).
     pub fn choose(rule: PlacementRule, scene: &GpuScene, limits: &wgpu::Limits) -> Self {
+        Self::choose_chunked(rule, scene, limits, None)
+    }
+
+    /// As [`TablePlacement::choose`], with storage tables of more than `chunk_entries` entries
+    /// (a power of two) chunked at that size even where they fit one binding
+    /// ([`chunk_entries_override`]: to test and measure chunked tables on small scenes).
+    pub fn choose_chunked(
+        rule: PlacementRule,
+        scene: &GpuScene,
+        limits: &wgpu::Limits,
+        chunk_entries: Option<u64>,
+    ) -> Self {
+        let chunked = chunked_tables(scene, limits.max_storage_buffer_binding_size, chunk_entries);
         if rule == PlacementRule::Storage {
-            return Self::storage();
+            return Self {
+                chunked,
+                ..Self::storage()
+            };
         }
         let mut free = limits
             .max_uniform_buffers_per_shader_stage
@@ -204,10 +288,15 @@ impl TablePlacement {
         if !uniform.iter().any(|&(binding, _)| binding == 1) {
             collapsed = None;
         }
+        let chunked = chunked
+            .into_iter()
+            .filter(|c| !uniform.iter().any(|&(b, _)| b == c.binding))
+            .collect();
         let mut placement = Self {
             uniform,
             every_prim: None,
             collapsed_nodes: collapsed.map(|(_, nodes)| nodes),
+            chunked,
         };
         // The counts, not the tables' lengths: an empty table holds one zeroed entry.
         let triangles = scene.uniform.num_triangles as usize;
@@ -249,7 +338,32 @@ impl TablePlacement {
             defs.extend(block_defs("TRIANGLES_FROM", &TRIANGLE_BLOCKS, triangles));
             defs.extend(block_defs("SPHERES_FROM", &SPHERE_BLOCKS, spheres));
         }
+        for c in &self.chunked {
+            let Some(table) = CHUNKABLE.iter().find(|t| t.binding == c.binding) else {
+                continue;
+            };
+            let prefix = table.prefix;
+            defs.insert(format!("{prefix}_CHUNKED"), ShaderDefValue::Bool(true));
+            defs.insert(
+                format!("{prefix}_CHUNK_SHIFT"),
+                ShaderDefValue::UInt(c.shift),
+            );
+            for k in 2..c.chunks {
+                defs.insert(format!("{prefix}_CHUNK_{k}"), ShaderDefValue::Bool(true));
+            }
+        }
         defs
+    }
+
+    /// The tables split over several bindings, as `PREFIX chunks x 2^shift` for reports.
+    pub fn chunked_report(&self) -> Vec<String> {
+        self.chunked
+            .iter()
+            .filter_map(|c| {
+                let table = CHUNKABLE.iter().find(|t| t.binding == c.binding)?;
+                Some(format!("{} {}x2^{}", table.prefix, c.chunks, c.shift))
+            })
+            .collect()
     }
 
     /// The scene's (triangles, spheres) when rays test every primitive instead of the BVH.
@@ -386,6 +500,48 @@ fn collapsed_to_fit(scene: &GpuScene, max_bytes: u64) -> Option<(usize, Vec<BvhN
         .then_some((budget, collapsed.nodes))
 }
 
+/// The chunkable tables larger than one binding of `binding_limit` bytes (or than
+/// `chunk_entries` entries), with their chunk size: the largest power of two of entries a
+/// binding holds.
+fn chunked_tables(
+    scene: &GpuScene,
+    binding_limit: u64,
+    chunk_entries: Option<u64>,
+) -> Vec<Chunked> {
+    CHUNKABLE
+        .iter()
+        .filter_map(|t| {
+            let entries = (tables(scene)[t.binding as usize - 1].1.len() as u64).div_ceil(t.stride);
+            let fits = (binding_limit / t.stride).max(1);
+            let per_chunk = chunk_entries.map_or(fits, |n| n.clamp(1, fits));
+            if entries <= per_chunk {
+                return None;
+            }
+            let shift = per_chunk.ilog2();
+            let chunks = entries.div_ceil(1 << shift);
+            Some(Chunked {
+                binding: t.binding,
+                shift,
+                chunks: u32::try_from(chunks).unwrap_or(u32::MAX),
+            })
+        })
+        .collect()
+}
+
+/// `HPPM_TABLE_CHUNK_ENTRIES`: chunk every storage table of more entries than this (rounded
+/// down to a power of two), so that chunked tables can be tested and measured on small scenes.
+pub fn chunk_entries_override() -> Result<Option<u64>, Error> {
+    match std::env::var("HPPM_TABLE_CHUNK_ENTRIES") {
+        Err(_) => Ok(None),
+        Ok(text) => match text.parse::<u64>() {
+            Ok(n) if n >= 1 => Ok(Some(1 << n.ilog2())),
+            _ => Err(Error::Other(format!(
+                "HPPM_TABLE_CHUNK_ENTRIES={text}: expected a positive number of table entries"
+            ))),
+        },
+    }
+}
+
 /// Bindings 1-10 of group 0 in binding order: each table's label and bytes.
 fn tables(scene: &GpuScene) -> [(&'static str, &[u8]); 10] {
     use bytemuck::cast_slice;
@@ -424,12 +580,7 @@ impl SceneResources {
     /// Uploads `scene` with its tables placed as the adapter prefers ([`PlacementRule`]); compose
     /// the shader library with `placement`'s defs.
     pub fn for_adapter(gpu: &GpuContext, scene: &GpuScene) -> Result<Self, Error> {
-        let rule = PlacementRule::for_adapter(gpu)?;
-        Self::upload(
-            gpu,
-            scene,
-            &TablePlacement::choose(rule, scene, &gpu.limits),
-        )
+        Self::upload(gpu, scene, &TablePlacement::for_adapter(gpu, scene)?)
     }
 
     /// Uploads `scene` with its tables where `placement` puts them (the shader library must
@@ -448,6 +599,8 @@ impl SceneResources {
         )?;
         let mut buffers = vec![uniform];
         let mut access = vec![Access::Uniform];
+        // Chunks past the first of the tables too large for one binding: (binding, buffer).
+        let mut chunk_buffers = Vec::new();
         // Testing every primitive, binding 1 holds the boxes of its blocks instead of the BVH.
         let block_boxes = placement.every_prim.map(|(triangles, _)| {
             block_boxes(&scene.triangles[..triangles as usize], &scene.uniform)
@@ -464,10 +617,27 @@ impl SceneResources {
                     buffers.push(uniform_buffer(gpu, label, bytes, size)?);
                     access.push(Access::Uniform);
                 }
-                None => {
-                    buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
-                    access.push(Access::Read);
-                }
+                None => match placement.chunked.iter().find(|c| c.binding == binding) {
+                    Some(c) => {
+                        let mut chunks = chunk_bytes(c, bytes, label)?.into_iter();
+                        let first = chunks.next().unwrap_or(bytes);
+                        buffers.push(gpu.create_buffer_init(label, first, storage)?);
+                        access.push(Access::Read);
+                        let base = CHUNKABLE
+                            .iter()
+                            .find(|t| t.binding == binding)
+                            .map_or(0, |t| t.base);
+                        for (k, chunk) in (1u32..).zip(chunks) {
+                            let label = format!("{label}, chunk {k}");
+                            let buffer = gpu.create_buffer_init(&label, chunk, storage)?;
+                            chunk_buffers.push((base + k - 1, buffer));
+                        }
+                    }
+                    None => {
+                        buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
+                        access.push(Access::Read);
+                    }
+                },
             }
         }
         // Binding 11, only for a scene with textures (whose shaders are composed with
@@ -477,8 +647,17 @@ impl SceneResources {
             buffers.push(gpu.create_buffer_init("scene textures", words, storage)?);
         }
         access.resize(buffers.len(), Access::Read);
-        let entries: Vec<_> = access.iter().copied().zip(&buffers).collect();
-        let (layout, bind_group) = bind_buffers(&gpu.device, "scene", &entries);
+        let mut entries: Vec<_> = (0u32..)
+            .zip(access.iter().copied().zip(&buffers))
+            .map(|(binding, (access, buffer))| (binding, access, buffer))
+            .collect();
+        entries.extend(
+            chunk_buffers
+                .iter()
+                .map(|(binding, buffer)| (*binding, Access::Read, buffer)),
+        );
+        let (layout, bind_group) = bind_buffers_at(&gpu.device, "scene", &entries);
+        buffers.extend(chunk_buffers.into_iter().map(|(_, buffer)| buffer));
         Ok(Self {
             layout,
             bind_group,
@@ -489,6 +668,28 @@ impl SceneResources {
             _buffers: buffers,
         })
     }
+}
+
+/// `bytes` of a chunked table cut into its chunks; refused when it needs more chunks than the
+/// shaders declare, naming the table, its size and what would fit.
+fn chunk_bytes<'b>(c: &Chunked, bytes: &'b [u8], label: &str) -> Result<Vec<&'b [u8]>, Error> {
+    let stride = CHUNKABLE
+        .iter()
+        .find(|t| t.binding == c.binding)
+        .map_or(1, |t| t.stride) as usize;
+    let chunk = stride << c.shift;
+    if c.chunks > MAX_CHUNKS {
+        return Err(Error::Other(format!(
+            "{label} takes {} bytes ({:.0} MiB): {} bindings of {:.0} MiB on this adapter, and a \
+             table may take at most {MAX_CHUNKS} ({:.0} MiB); load fewer triangles",
+            bytes.len(),
+            bytes.len() as f64 / 1048576.0,
+            c.chunks,
+            chunk as f64 / 1048576.0,
+            (chunk as u64 * MAX_CHUNKS as u64) as f64 / 1048576.0,
+        )));
+    }
+    Ok(bytes.chunks(chunk).collect())
 }
 
 /// A uniform buffer holding `bytes` zero-padded to `size`.
