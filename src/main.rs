@@ -308,9 +308,14 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     };
     let graph_text = std::fs::read_to_string(&graph_path)
         .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
+    let loading = std::time::Instant::now();
     let scene = scene::load_with(&scene_path, &args.defines)?;
     let features = scene.features();
-    eprintln!("scene: {features}");
+    eprintln!(
+        "scene: {features} ({} triangles, loaded in {:.2} s)",
+        scene.triangles.len(),
+        loading.elapsed().as_secs_f64()
+    );
     if !features.has_lights() {
         eprintln!(
             "warning: {} has no light (no emitting shape, no point light): the image will be black",
@@ -358,7 +363,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         first: shard,
         stride: shards,
     };
+    let preparing = std::time::Instant::now();
     let mut renderer = Renderer::with_schedule(&gpu, &scene, graph, width, height, seed, schedule)?;
+    eprintln!(
+        "prepared in {:.2} s (scene BVH built and uploaded, graph's buffers and pipelines)",
+        preparing.elapsed().as_secs_f64()
+    );
     let uniform_tables = renderer.placement().uniform_defs();
     if !uniform_tables.is_empty() {
         eprintln!(
@@ -416,7 +426,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         );
     }
     if args.profile {
-        renderer.enable_profiling()?;
+        // The first iteration compiles the pipelines: time the ones after it, when there are.
+        let total = renderer
+            .total_iterations(budget)
+            .map(|t| renderer.schedule().local_count(t));
+        let warm_up = total.is_none_or(|t| t > renderer.iterations() + 1);
+        renderer.profile_from(renderer.iterations() + u64::from(warm_up))?;
     }
     if renderer.bands() > 1 {
         eprintln!(
@@ -509,7 +524,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             "{}",
             hppm::app::compare::profile_table(
                 &renderer.node_times(),
-                summary.iterations,
+                renderer.profiled_iterations(),
                 &gpu.adapter_label()
             )
         );

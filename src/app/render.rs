@@ -86,6 +86,10 @@ pub struct Renderer<'a> {
     scene_hash: u64,
     /// Which scene tables are bound as uniform buffers.
     placement: TablePlacement,
+    /// The local iteration from which nodes are timed ([`Renderer::profile_from`]), until it
+    /// starts; then the iteration it started at.
+    profile_start: Option<u64>,
+    profiling: bool,
 }
 
 /// Rows above and below a band that its pixels' splatted samples come from: the pixel filter's
@@ -221,6 +225,8 @@ impl<'a> Renderer<'a> {
             pruned,
             placement,
             scene_hash,
+            profile_start: None,
+            profiling: false,
         })
     }
 
@@ -346,6 +352,9 @@ impl<'a> Renderer<'a> {
 
     /// Records and submits one iteration of every node, in schedule order.
     pub fn iterate(&mut self) -> Result<(), Error> {
+        if !self.profiling && self.profile_start == Some(self.iteration) {
+            self.enable_profiling()?;
+        }
         for tile in &mut self.tiles {
             tile.graph
                 .iterate(self.gpu, self.schedule, self.iteration, self.seed)?;
@@ -369,7 +378,28 @@ impl<'a> Renderer<'a> {
         for tile in &mut self.tiles {
             tile.graph.enable_profiling(self.gpu)?;
         }
+        self.profiling = true;
+        self.profile_start = Some(self.iteration);
         Ok(())
+    }
+
+    /// Times every node from local iteration `iteration` on (now, if it has passed): a render
+    /// that skips its first iteration, which compiles the pipelines, times what an iteration
+    /// costs from then on.
+    pub fn profile_from(&mut self, iteration: u64) -> Result<(), Error> {
+        if iteration <= self.iteration {
+            return self.enable_profiling();
+        }
+        self.profile_start = Some(iteration);
+        Ok(())
+    }
+
+    /// Iterations timed so far.
+    pub fn profiled_iterations(&self) -> u64 {
+        match self.profile_start {
+            Some(start) if self.profiling => self.iteration - start,
+            _ => 0,
+        }
     }
 
     /// Per-node times summed since profiling began (over every band), in schedule order.

@@ -486,7 +486,9 @@ fn scene_bvh(scene: &GpuScene) -> Bvh {
 /// [`MAX_COLLAPSE_GROWTH`] more primitive tests per ray.
 fn collapsed_to_fit(scene: &GpuScene, max_bytes: u64) -> Option<(usize, Vec<BvhNode>)> {
     let budget = (max_bytes / size_of::<BvhNode>() as u64) as usize;
-    if scene.bvh_nodes.len() <= budget || budget == 0 {
+    // A tree many times the budget cannot lose that many nodes for a few more tests; trying
+    // would copy and walk a large mesh's whole tree (millions of nodes) for nothing.
+    if scene.bvh_nodes.len() <= budget || budget == 0 || scene.bvh_nodes.len() > 16 * budget {
         return None;
     }
     let built = scene_bvh(scene);
