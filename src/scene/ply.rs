@@ -431,7 +431,7 @@ mod binary {
                                         return Some(truncated());
                                     };
                                     let n = count.read(b, little);
-                                    if !(n >= 0.0) {
+                                    if n.is_nan() || n < 0.0 {
                                         return Some(Err(format!("face {f}: a list of {n} items")));
                                     }
                                     at += count.size();
