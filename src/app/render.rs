@@ -154,42 +154,42 @@ impl<'a> Renderer<'a> {
         let placement = TablePlacement::for_adapter(gpu, &gpu_scene)?;
         let shaders = shader_library(gpu.has_float_atomics(), scene, &placement)?;
         let halo = halo_rows(scene);
-        let mut prepare = |bands: u32| -> Result<Vec<Tile>, Error> {
-            let rows = height.div_ceil(bands.max(1));
-            let mut tiles = Vec::new();
-            for keep_y in (0..height).step_by(rows.max(1) as usize) {
-                let keep_rows = rows.min(height - keep_y);
-                let grid_y = keep_y.saturating_sub(halo);
-                let grid_rows = (keep_y + keep_rows + halo).min(height) - grid_y;
-                gpu_scene.set_tile(0, grid_y, width, grid_rows);
-                let graph = prepare_tile(
-                    gpu,
-                    &shaders,
-                    &gpu_scene,
-                    &placement,
-                    graph.instance()?,
-                    (width, grid_rows),
-                    schedule.first,
-                )?;
-                tiles.push(Tile {
-                    output: graph.output()?.clone(),
-                    aovs: image_aovs(&graph),
-                    graph,
-                    grid_y,
-                    grid_rows,
-                    keep_y,
-                    keep_rows,
-                });
-            }
-            Ok(tiles)
+        let table_bytes = gpu_scene.table_bytes();
+        // Band `index` of `bands` bands of rows.
+        let mut prepare_band = |bands: u32, index: u32| -> Result<Tile, Error> {
+            let rows = height.div_ceil(bands.max(1)).max(1);
+            let keep_y = index * rows;
+            let keep_rows = rows.min(height - keep_y);
+            let grid_y = keep_y.saturating_sub(halo);
+            let grid_rows = (keep_y + keep_rows + halo).min(height) - grid_y;
+            gpu_scene.set_tile(0, grid_y, width, grid_rows);
+            let graph = prepare_tile(
+                gpu,
+                &shaders,
+                &gpu_scene,
+                &placement,
+                graph.instance()?,
+                (width, grid_rows),
+                schedule.first,
+            )?;
+            Ok(Tile {
+                output: graph.output()?.clone(),
+                aovs: image_aovs(&graph),
+                graph,
+                grid_y,
+                grid_rows,
+                keep_y,
+                keep_rows,
+            })
         };
-        let tiles = match bands {
-            Some(bands) => prepare(bands)?,
+        // The first band decides: the fewest bands whose buffers fit the adapter's bindings.
+        let (bands, first) = match bands {
+            Some(bands) => (bands.clamp(1, height.max(1)), prepare_band(bands, 0)?),
             None => {
                 let mut bands = 1;
                 loop {
-                    match prepare(bands) {
-                        Ok(tiles) => break tiles,
+                    match prepare_band(bands, 0) {
+                        Ok(first) => break (bands, first),
                         Err(e) if e.is_too_large() && bands < height => {
                             bands = (bands * 2).min(height)
                         }
@@ -206,6 +206,13 @@ impl<'a> Renderer<'a> {
                 }
             }
         };
+        let rows = height.div_ceil(bands);
+        let count = height.div_ceil(rows);
+        check_memory(gpu, &first, table_bytes, count, (width, height))?;
+        let mut tiles = vec![first];
+        for index in 1..count {
+            tiles.push(prepare_band(bands, index)?);
+        }
         let first = tiles
             .first()
             .ok_or_else(|| Error::Other("an image of no rows has nothing to render".into()))?;
@@ -553,6 +560,52 @@ impl<'a> Renderer<'a> {
             cancelled: cancel.load(Ordering::Relaxed),
         })
     }
+}
+
+/// Refuses, before the other bands are allocated, an image whose bands together need more
+/// memory than the machine has free, where the adapter's memory is the machine's (a CPU
+/// adapter: lavapipe), naming what it needs and what would fit. GPUs do not report their
+/// memory through wgpu; there an allocation that fails names its buffer.
+fn check_memory(
+    gpu: &GpuContext,
+    first: &Tile,
+    table_bytes: u64,
+    bands: u32,
+    (width, height): (u32, u32),
+) -> Result<(), Error> {
+    if gpu.info.device_type != wgpu::DeviceType::Cpu {
+        return Ok(());
+    }
+    let Some(available) = available_memory() else {
+        return Ok(());
+    };
+    let per_band = first.graph.allocated_bytes() + table_bytes;
+    let needed = per_band.saturating_mul(bands as u64);
+    if needed <= available {
+        return Ok(());
+    }
+    let gib = |b: u64| b as f64 / (1u64 << 30) as f64;
+    // Pixel buffers dominate: scale both sides by the share that fits.
+    let share = (available as f64 / needed as f64).sqrt();
+    Err(Error::Other(format!(
+        "a {width}x{height} image with this graph needs about {:.1} GiB of buffers ({bands} \
+         bands of {:.2} GiB), but {:.1} GiB of memory is free on this machine (the adapter, {}, \
+         keeps its buffers there); about {}x{} would fit",
+        gib(needed),
+        gib(per_band),
+        gib(available),
+        gpu.adapter_label(),
+        (width as f64 * share) as u32,
+        (height as f64 * share) as u32,
+    )))
+}
+
+/// `MemAvailable` of /proc/meminfo, in bytes; `None` where there is none.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 /// The graph prepared for one band (or the whole image), with its own copy of the scene's

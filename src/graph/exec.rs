@@ -187,6 +187,11 @@ impl PreparedGraph {
         &self.graph
     }
 
+    /// Bytes of every output buffer the graph allocated (pass-internal buffers not counted).
+    pub fn allocated_bytes(&self) -> u64 {
+        self.resources.values().map(|r| r.buffer.size()).sum()
+    }
+
     /// The resource of output `slot` of `node`.
     pub fn resource(&self, node: usize, slot: &'static str) -> Option<&Resource> {
         self.resources.get(&(node, slot))

@@ -547,6 +547,27 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
 pub const SPLIT_EXTRA: f32 = 1.0;
 
 impl GpuScene {
+    /// Bytes of the tables uploaded for the scene.
+    pub fn table_bytes(&self) -> u64 {
+        use std::mem::size_of_val;
+        [
+            size_of_val(self.bvh_nodes.as_slice()),
+            size_of_val(self.prim_indices.as_slice()),
+            size_of_val(self.triangles.as_slice()),
+            size_of_val(self.triangle_normals.as_slice()),
+            size_of_val(self.triangle_uvs.as_slice()),
+            size_of_val(self.spheres.as_slice()),
+            size_of_val(self.materials.as_slice()),
+            size_of_val(self.lights.as_slice()),
+            size_of_val(self.light_cdf.as_slice()),
+            size_of_val(self.bsdf_tables.as_slice()),
+            size_of_val(self.textures.as_slice()),
+        ]
+        .iter()
+        .map(|&b| b as u64)
+        .sum()
+    }
+
     /// Renders the `width` x `height` pixels at (`x`, `y`) of the film instead of all of it
     /// (a tile of an image whose buffers would not fit one binding).
     pub fn set_tile(&mut self, x: u32, y: u32, width: u32, height: u32) {
