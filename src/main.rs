@@ -436,7 +436,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     if renderer.bands() > 1 {
         eprintln!(
             "{width}x{height} does not fit the adapter's bindings whole: rendering it in {} bands \
-             of rows, each tracing the photons of the whole image",
+             of rows (the photons traced once, for the whole image, and read by every band)",
             renderer.bands()
         );
     }

@@ -1,12 +1,13 @@
 //! An image rendered in bands of rows (what a renderer does when the whole image's buffers would
 //! not fit the adapter's bindings, e.g. 3840x2160 on lavapipe) against the same image rendered
-//! whole. Rays and random streams follow film pixels and every band traces the photons the whole
+//! whole. Rays and random streams follow film pixels and the bands read the photons the whole
 //! image would, so the bands must give the very same image: `pt` bit for bit, the hybrid to the
 //! last bits of its atomic sums. Would catch a band that keys its random streams by its own
 //! pixels (a seam of repeated noise), a camera that spans each band with the whole field of view
 //! (each band a squashed copy of the image), a halo too thin for the splatting pixel filter
 //! (rows at the band edges missing their neighbours' samples), a band that traces its own share
-//! of photons (caustic noise up by the band count), or rows copied to the wrong place.
+//! of photons (caustic noise up by the band count), a band that reads the photons before the
+//! first band traced them (or last iteration's), or rows copied to the wrong place.
 
 mod common;
 

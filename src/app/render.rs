@@ -66,8 +66,9 @@ struct Tile {
 
 /// A graph prepared on a device for one scene, ready to iterate. An image whose buffers would
 /// not fit the adapter's bindings is rendered in bands, each its own prepared graph: rays and
-/// random streams follow film pixels and every band traces the photons the whole image would,
-/// so the bands together are the image the untiled render would make.
+/// random streams follow film pixels, and the first band traces the photons the whole image
+/// would and the others read them (the nodes that do not follow the pixels run once), so the
+/// bands together are the image the untiled render would make.
 pub struct Renderer<'a> {
     gpu: &'a GpuContext,
     tiles: Vec<Tile>,
@@ -156,39 +157,41 @@ impl<'a> Renderer<'a> {
         let halo = halo_rows(scene);
         let table_bytes = gpu_scene.table_bytes();
         // Band `index` of `bands` bands of rows.
-        let mut prepare_band = |bands: u32, index: u32| -> Result<Tile, Error> {
-            let rows = height.div_ceil(bands.max(1)).max(1);
-            let keep_y = index * rows;
-            let keep_rows = rows.min(height - keep_y);
-            let grid_y = keep_y.saturating_sub(halo);
-            let grid_rows = (keep_y + keep_rows + halo).min(height) - grid_y;
-            gpu_scene.set_tile(0, grid_y, width, grid_rows);
-            let graph = prepare_tile(
-                gpu,
-                &shaders,
-                &gpu_scene,
-                &placement,
-                graph.instance()?,
-                (width, grid_rows),
-                schedule.first,
-            )?;
-            Ok(Tile {
-                output: graph.output()?.clone(),
-                aovs: image_aovs(&graph),
-                graph,
-                grid_y,
-                grid_rows,
-                keep_y,
-                keep_rows,
-            })
-        };
+        let mut prepare_band =
+            |bands: u32, index: u32, lender: Option<&PreparedGraph>| -> Result<Tile, Error> {
+                let rows = height.div_ceil(bands.max(1)).max(1);
+                let keep_y = index * rows;
+                let keep_rows = rows.min(height - keep_y);
+                let grid_y = keep_y.saturating_sub(halo);
+                let grid_rows = (keep_y + keep_rows + halo).min(height) - grid_y;
+                gpu_scene.set_tile(0, grid_y, width, grid_rows);
+                let graph = prepare_tile(
+                    gpu,
+                    &shaders,
+                    &gpu_scene,
+                    &placement,
+                    graph.instance()?,
+                    (width, grid_rows),
+                    schedule.first,
+                    lender,
+                )?;
+                Ok(Tile {
+                    output: graph.output()?.clone(),
+                    aovs: image_aovs(&graph),
+                    graph,
+                    grid_y,
+                    grid_rows,
+                    keep_y,
+                    keep_rows,
+                })
+            };
         // The first band decides: the fewest bands whose buffers fit the adapter's bindings.
         let (bands, first) = match bands {
-            Some(bands) => (bands.clamp(1, height.max(1)), prepare_band(bands, 0)?),
+            Some(bands) => (bands.clamp(1, height.max(1)), prepare_band(bands, 0, None)?),
             None => {
                 let mut bands = 1;
                 loop {
-                    match prepare_band(bands, 0) {
+                    match prepare_band(bands, 0, None) {
                         Ok(first) => break (bands, first),
                         Err(e) if e.is_too_large() && bands < height => {
                             bands = (bands * 2).min(height)
@@ -209,10 +212,11 @@ impl<'a> Renderer<'a> {
         let rows = height.div_ceil(bands);
         let count = height.div_ceil(rows);
         check_memory(gpu, &first, table_bytes, count, (width, height))?;
-        let mut tiles = vec![first];
+        let mut rest = Vec::new();
         for index in 1..count {
-            tiles.push(prepare_band(bands, index)?);
+            rest.push(prepare_band(bands, index, Some(&first.graph))?);
         }
+        let tiles: Vec<Tile> = std::iter::once(first).chain(rest).collect();
         let first = tiles
             .first()
             .ok_or_else(|| Error::Other("an image of no rows has nothing to render".into()))?;
@@ -579,8 +583,9 @@ fn check_memory(
     let Some(available) = available_memory() else {
         return Ok(());
     };
-    let per_band = first.graph.allocated_bytes() + table_bytes;
-    let needed = per_band.saturating_mul(bands as u64);
+    let (own, shared) = first.graph.allocated_bytes();
+    let per_band = own + table_bytes;
+    let needed = per_band.saturating_mul(bands as u64) + shared;
     if needed <= available {
         return Ok(());
     }
@@ -610,6 +615,7 @@ fn available_memory() -> Option<u64> {
 
 /// The graph prepared for one band (or the whole image), with its own copy of the scene's
 /// uniform (which rows it renders) and tables.
+#[allow(clippy::too_many_arguments)]
 fn prepare_tile(
     gpu: &GpuContext,
     shaders: &crate::gpu::shaders::ShaderLibrary,
@@ -618,20 +624,18 @@ fn prepare_tile(
     graph: ValidGraph,
     grid: (u32, u32),
     first_iteration: u64,
+    lender: Option<&PreparedGraph>,
 ) -> Result<PreparedGraph, Error> {
     let film = &gpu_scene.uniform;
     let film_pixels = film.film_width as u64 * film.film_height as u64;
     let mut shared = Shared::default();
     shared.insert(SceneResources::upload(gpu, gpu_scene, placement)?);
-    PreparedGraph::new(
-        gpu,
-        shaders,
-        &shared,
-        graph,
-        grid,
+    let band = crate::graph::exec::Band {
+        size: grid,
         film_pixels,
-        first_iteration,
-    )
+        lender,
+    };
+    PreparedGraph::new(gpu, shaders, &shared, graph, band, first_iteration)
 }
 
 /// Every image slot of the graph's output node, written or read, by slot name.

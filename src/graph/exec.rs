@@ -42,6 +42,39 @@ pub struct PreparedGraph {
     /// Outputs the graph zeroes before each iteration (those not declared persistent).
     cleared: Vec<Resource>,
     profile: Option<Profile>,
+    /// Nodes another graph runs for this one (a band's [`band_shared_nodes`], run by the first
+    /// band): never prepared or run here, their outputs that graph's resources.
+    borrowed: HashSet<usize>,
+}
+
+/// The part of the image a graph renders: its pixel grid, the whole image's pixel count, and
+/// for a band after the first, the first band's graph, whose nodes that do not follow the pixels
+/// it borrows ([`band_shared_nodes`]).
+#[derive(Clone, Copy)]
+pub struct Band<'a> {
+    pub size: (u32, u32),
+    pub film_pixels: u64,
+    pub lender: Option<&'a PreparedGraph>,
+}
+
+/// Nodes whose outputs are the same for every band of an image: passes that do not follow the
+/// pixel grid ([`Pass::follows_pixels`]), with no pixel-sized output and inputs only from such
+/// nodes. An image rendered in bands runs them once, in the first band.
+pub fn band_shared_nodes(graph: &ValidGraph) -> HashSet<usize> {
+    let mut shared = HashSet::new();
+    for &n in &graph.order {
+        let node = &graph.nodes[n];
+        let pixel_sized = node
+            .kind
+            .slots
+            .iter()
+            .any(|s| s.dir == SlotDir::Out && s.size == Size::Pixels);
+        let inputs_shared = graph.inputs_of(n).all(|e| shared.contains(&e.from_node));
+        if !node.pass.follows_pixels() && !pixel_sized && inputs_shared {
+            shared.insert(n);
+        }
+    }
+    shared
 }
 
 /// Outputs of `node` that some consumer keeps ([`super::pass::SlotDecl::kept`]).
@@ -112,11 +145,20 @@ impl PreparedGraph {
         shaders: &ShaderLibrary,
         shared: &Shared,
         mut graph: ValidGraph,
-        (width, height): (u32, u32),
-        film_pixels: u64,
+        band: Band<'_>,
         first_iteration: u64,
     ) -> Result<Self, Error> {
+        let Band {
+            size: (width, height),
+            film_pixels,
+            lender,
+        } = band;
         let order = graph.order.clone();
+        // A later band borrows the first band's photon nodes and their outputs.
+        let borrowed = match lender {
+            Some(_) => band_shared_nodes(&graph),
+            None => HashSet::new(),
+        };
         let context = |graph: &ValidGraph,
                        node: usize,
                        resources: &HashMap<(usize, &'static str), Resource>| {
@@ -154,6 +196,14 @@ impl PreparedGraph {
         let mut resources = HashMap::new();
         let mut cleared = Vec::new();
         for &node in &order {
+            if let Some(lender) = lender.filter(|_| borrowed.contains(&node)) {
+                for ((n, slot), resource) in &lender.resources {
+                    if *n == node {
+                        resources.insert((node, *slot), resource.clone());
+                    }
+                }
+                continue;
+            }
             let ctx = context(&graph, node, &resources);
             let valid = &graph.nodes[node];
             let outputs =
@@ -163,7 +213,7 @@ impl PreparedGraph {
                 resources.insert((node, slot), resource);
             }
         }
-        for &node in &order {
+        for &node in order.iter().filter(|n| !borrowed.contains(n)) {
             let mut ctx = context(&graph, node, &resources);
             ctx.outputs = resources
                 .iter()
@@ -180,6 +230,7 @@ impl PreparedGraph {
             resources,
             cleared,
             profile: None,
+            borrowed,
         })
     }
 
@@ -187,9 +238,21 @@ impl PreparedGraph {
         &self.graph
     }
 
-    /// Bytes of every output buffer the graph allocated (pass-internal buffers not counted).
-    pub fn allocated_bytes(&self) -> u64 {
-        self.resources.values().map(|r| r.buffer.size()).sum()
+    /// Bytes of the output buffers the graph allocated (pass-internal buffers not counted), as
+    /// (those a later band would allocate again, those it would borrow from this one).
+    pub fn allocated_bytes(&self) -> (u64, u64) {
+        let shared = band_shared_nodes(&self.graph);
+        let mut bytes = (0, 0);
+        for ((node, _), r) in &self.resources {
+            if self.borrowed.contains(node) {
+                continue;
+            }
+            match shared.contains(node) {
+                true => bytes.1 += r.buffer.size(),
+                false => bytes.0 += r.buffer.size(),
+            }
+        }
+        bytes
     }
 
     /// The resource of output `slot` of `node`.
@@ -234,6 +297,9 @@ impl PreparedGraph {
             seed,
         };
         for &node in &self.graph.order {
+            if self.borrowed.contains(&node) {
+                continue;
+            }
             let start = Instant::now();
             let timer = self.profile.as_ref().and_then(|p| p.timer.as_ref());
             if let Some(timer) = timer {
@@ -320,7 +386,12 @@ impl PreparedGraph {
     /// `node.slot`) and every pass's own state (`node#name`).
     pub fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
         let mut out = Vec::new();
-        for &n in &self.graph.order {
+        for &n in self
+            .graph
+            .order
+            .iter()
+            .filter(|n| !self.borrowed.contains(n))
+        {
             let node = &self.graph.nodes[n];
             let persistent = node
                 .kind
@@ -387,8 +458,10 @@ impl PreparedGraph {
     /// Counters summed over every node.
     pub fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
         let mut total = Counters::default();
-        for node in &self.graph.nodes {
-            total.add(&node.pass.counters(gpu)?);
+        for (n, node) in self.graph.nodes.iter().enumerate() {
+            if !self.borrowed.contains(&n) {
+                total.add(&node.pass.counters(gpu)?);
+            }
         }
         Ok(total)
     }

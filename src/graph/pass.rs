@@ -488,6 +488,14 @@ pub trait Pass {
         0
     }
 
+    /// Whether its work follows the pixel grid it renders (the default). A pass whose outputs
+    /// are the same whichever part of the image is rendered (photons, which follow the whole
+    /// image) answers false: an image rendered in bands then runs it once, in the first band,
+    /// and the other bands read its outputs ([`super::exec::PreparedGraph::new`]).
+    fn follows_pixels(&self) -> bool {
+        true
+    }
+
     /// Which light paths output `slot` carries (see graph/transport.rs), given what the inputs
     /// carry; `None`: the union of the inputs. Sources of light (camera and photon passes)
     /// answer; pass-throughs need not.

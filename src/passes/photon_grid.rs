@@ -271,6 +271,10 @@ impl Pass for PhotonGrid {
         Ok(())
     }
 
+    fn follows_pixels(&self) -> bool {
+        false
+    }
+
     /// The photons' caustics, as looked up at diffuse vertices past the camera's hit points.
     fn transport(&self, _slot: &str, ctx: &TransportCtx<'_>) -> Option<Transport> {
         use crate::passes::paths::{CAUSTIC, DEEP_CAUSTIC};

@@ -348,6 +348,10 @@ impl Pass for PhotonTrace {
         })
     }
 
+    fn follows_pixels(&self) -> bool {
+        false
+    }
+
     fn photons_per_iteration(&self) -> u64 {
         self.prepared.as_ref().map_or(0, |p| p.photons as u64)
     }
