@@ -156,6 +156,8 @@ impl<'a> Renderer<'a> {
         let shaders = shader_library(gpu.has_float_atomics(), scene, &placement)?;
         let halo = halo_rows(scene);
         let table_bytes = gpu_scene.table_bytes();
+        // The tables once; every band binds them with its own uniform.
+        let tables = SceneResources::upload(gpu, &gpu_scene, &placement)?;
         // Band `index` of `bands` bands of rows.
         let mut prepare_band =
             |bands: u32, index: u32, lender: Option<&PreparedGraph>| -> Result<Tile, Error> {
@@ -165,15 +167,20 @@ impl<'a> Renderer<'a> {
                 let grid_y = keep_y.saturating_sub(halo);
                 let grid_rows = (keep_y + keep_rows + halo).min(height) - grid_y;
                 gpu_scene.set_tile(0, grid_y, width, grid_rows);
-                let graph = prepare_tile(
+                let band = crate::graph::exec::Band {
+                    size: (width, grid_rows),
+                    film_pixels: width as u64 * height as u64,
+                    lender,
+                };
+                let mut shared = Shared::default();
+                shared.insert(tables.with_uniform(gpu, &gpu_scene.uniform)?);
+                let graph = PreparedGraph::new(
                     gpu,
                     &shaders,
-                    &gpu_scene,
-                    &placement,
+                    &shared,
                     graph.instance()?,
-                    (width, grid_rows),
+                    band,
                     schedule.first,
-                    lender,
                 )?;
                 Ok(Tile {
                     output: graph.output()?.clone(),
@@ -583,9 +590,8 @@ fn check_memory(
     let Some(available) = available_memory() else {
         return Ok(());
     };
-    let (own, shared) = first.graph.allocated_bytes();
-    let per_band = own + table_bytes;
-    let needed = per_band.saturating_mul(bands as u64) + shared;
+    let (per_band, shared) = first.graph.allocated_bytes();
+    let needed = per_band.saturating_mul(bands as u64) + shared + table_bytes;
     if needed <= available {
         return Ok(());
     }
@@ -611,31 +617,6 @@ fn available_memory() -> Option<u64> {
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
-}
-
-/// The graph prepared for one band (or the whole image), with its own copy of the scene's
-/// uniform (which rows it renders) and tables.
-#[allow(clippy::too_many_arguments)]
-fn prepare_tile(
-    gpu: &GpuContext,
-    shaders: &crate::gpu::shaders::ShaderLibrary,
-    gpu_scene: &GpuScene,
-    placement: &TablePlacement,
-    graph: ValidGraph,
-    grid: (u32, u32),
-    first_iteration: u64,
-    lender: Option<&PreparedGraph>,
-) -> Result<PreparedGraph, Error> {
-    let film = &gpu_scene.uniform;
-    let film_pixels = film.film_width as u64 * film.film_height as u64;
-    let mut shared = Shared::default();
-    shared.insert(SceneResources::upload(gpu, gpu_scene, placement)?);
-    let band = crate::graph::exec::Band {
-        size: grid,
-        film_pixels,
-        lender,
-    };
-    PreparedGraph::new(gpu, shaders, &shared, graph, band, first_iteration)
 }
 
 /// Every image slot of the graph's output node, written or read, by slot name.

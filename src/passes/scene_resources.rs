@@ -575,7 +575,9 @@ pub struct SceneResources {
     pub smoothest_microfacet: f32,
     /// Which tables are uniform buffers (the shader library must be composed with its defs).
     pub placement: TablePlacement,
-    _buffers: Vec<wgpu::Buffer>,
+    /// The bound buffers (the uniform first) with their binding and access: a band of the
+    /// image binds the same tables with its own uniform ([`SceneResources::with_uniform`]).
+    bound: Vec<(u32, Access, wgpu::Buffer)>,
 }
 
 impl SceneResources {
@@ -659,7 +661,10 @@ impl SceneResources {
                 .map(|(binding, buffer)| (*binding, Access::Read, buffer)),
         );
         let (layout, bind_group) = bind_buffers_at(&gpu.device, "scene", &entries);
-        buffers.extend(chunk_buffers.into_iter().map(|(_, buffer)| buffer));
+        let bound = entries
+            .into_iter()
+            .map(|(binding, access, buffer)| (binding, access, buffer.clone()))
+            .collect();
         Ok(Self {
             layout,
             bind_group,
@@ -667,7 +672,39 @@ impl SceneResources {
             glossy_sphere: scene.glossy_sphere,
             smoothest_microfacet: scene.smoothest_microfacet,
             placement: placement.clone(),
-            _buffers: buffers,
+            bound,
+        })
+    }
+
+    /// The same tables (the very buffers, not copies) with another scene uniform: each band of
+    /// an image rendered in bands has its own pixel grid, and one copy of a large mesh.
+    pub fn with_uniform(
+        &self,
+        gpu: &GpuContext,
+        uniform: &crate::scene::gpu_layout::GpuSceneUniform,
+    ) -> Result<Self, Error> {
+        let own = gpu.create_buffer_init(
+            "scene uniform",
+            bytemuck::bytes_of(uniform),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let mut bound = self.bound.clone();
+        if let Some(first) = bound.first_mut() {
+            first.2 = own;
+        }
+        let entries: Vec<_> = bound
+            .iter()
+            .map(|(b, a, buffer)| (*b, *a, buffer))
+            .collect();
+        let (layout, bind_group) = bind_buffers_at(&gpu.device, "scene", &entries);
+        Ok(Self {
+            layout,
+            bind_group,
+            uniform: *uniform,
+            glossy_sphere: self.glossy_sphere,
+            smoothest_microfacet: self.smoothest_microfacet,
+            placement: self.placement.clone(),
+            bound,
         })
     }
 }
