@@ -10,7 +10,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use crate::app::bench::{stolen_cell, while_counting_steal};
-use crate::app::render::{Budget, Renderer};
+use crate::app::render::{Budget, NodeTime, Renderer};
 use crate::gpu::GpuContext;
 use crate::graph::{ValidGraph, parse_graph};
 use crate::image::Image;
@@ -76,24 +76,29 @@ fn node_table(gpu: &GpuContext, locate: fn(&str) -> PathBuf) -> Result<String, E
                 .map(|t| t.wall_seconds)
                 .sum();
             let segments = after.get("photon_segments") - before.get("photon_segments");
-            let nodes: Vec<String> = times
-                .iter()
-                .map(|t| {
-                    let ms = t.wall_seconds / iterations as f64 * 1e3;
-                    format!("{} {ms:.1}", t.name)
-                })
-                .collect();
+            let nodes = node_ms(&times, iterations, 1);
             out.push_str(&format!(
                 "| {} | {} | {} | {} | {:.2} |\n",
                 short(scene_path),
                 graph_path,
                 r.photons_per_iteration(),
-                nodes.join(", "),
+                nodes,
                 segments as f64 / photon_seconds.max(1e-9) / 1e6
             ));
         }
     }
     Ok(out)
+}
+
+/// "node ms, node ms, ...": each node's wall milliseconds per iteration over `iterations`, with
+/// `decimals` decimals, in schedule order.
+pub(crate) fn node_ms(times: &[NodeTime], iterations: u64, decimals: usize) -> String {
+    let per_iteration = |t: &NodeTime| t.wall_seconds / iterations.max(1) as f64 * 1e3;
+    times
+        .iter()
+        .map(|t| format!("{} {:.decimals$}", t.name, per_iteration(t)))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn short(scene_path: &str) -> &str {

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use crate::Error;
 use crate::app::bench::{stolen_cell, while_counting_steal};
-use crate::app::bench_hybrid::{GLASS, graph_with, run_iterations};
+use crate::app::bench_hybrid::{GLASS, graph_with, node_ms, run_iterations};
 use crate::app::render::Renderer;
 use crate::gpu::GpuContext;
 use crate::scene;
@@ -92,19 +92,12 @@ pub fn table(
         let rays = cast(&r)? - rays_before;
         r.enable_profiling()?;
         run_iterations(&mut r, PROFILED_ITERATIONS)?;
-        let nodes: Vec<String> = r
-            .node_times()
-            .iter()
-            .map(|t| {
-                let ms = t.wall_seconds / PROFILED_ITERATIONS as f64 * 1e3;
-                format!("{} {ms:.0}", t.name)
-            })
-            .collect();
+        let nodes = node_ms(&r.node_times(), PROFILED_ITERATIONS, 0);
         out.push_str(&format!(
             "| {graph_path} | {seconds:.1} | {:.3} | {:.2} | {} | {} |\n",
             seconds / iterations as f64,
             rays as f64 / seconds.max(1e-9) / 1e6,
-            nodes.join(", "),
+            nodes,
             stolen_cell(stolen)
         ));
     }

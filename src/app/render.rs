@@ -87,10 +87,17 @@ pub struct Renderer<'a> {
     scene_hash: u64,
     /// Which scene tables are bound as uniform buffers.
     placement: TablePlacement,
-    /// The local iteration from which nodes are timed ([`Renderer::profile_from`]), until it
-    /// starts; then the iteration it started at.
-    profile_start: Option<u64>,
-    profiling: bool,
+    profiling: Profiling,
+}
+
+/// When the nodes are timed ([`Renderer::profile_from`]).
+#[derive(Clone, Copy, PartialEq)]
+enum Profiling {
+    Off,
+    /// From this local iteration on, which has not started yet.
+    From(u64),
+    /// Since this local iteration.
+    Since(u64),
 }
 
 /// Rows above and below a band that its pixels' splatted samples come from: the pixel filter's
@@ -194,7 +201,10 @@ impl<'a> Renderer<'a> {
             };
         // The first band decides: the fewest bands whose buffers fit the adapter's bindings.
         let (bands, first) = match bands {
-            Some(bands) => (bands.clamp(1, height.max(1)), prepare_band(bands, 0, None)?),
+            Some(bands) => {
+                let bands = bands.clamp(1, height.max(1));
+                (bands, prepare_band(bands, 0, None)?)
+            }
             None => {
                 let mut bands = 1;
                 loop {
@@ -219,17 +229,14 @@ impl<'a> Renderer<'a> {
         let rows = height.div_ceil(bands);
         let count = height.div_ceil(rows);
         check_memory(gpu, &first, table_bytes, count, (width, height))?;
+        let spp_per_iteration = first.graph.spp_per_iteration();
+        // The first band traces the photons for every band: the image counts them once.
+        let photons_per_iteration = first.graph.photons_per_iteration();
         let mut rest = Vec::new();
         for index in 1..count {
             rest.push(prepare_band(bands, index, Some(&first.graph))?);
         }
         let tiles: Vec<Tile> = std::iter::once(first).chain(rest).collect();
-        let first = tiles
-            .first()
-            .ok_or_else(|| Error::Other("an image of no rows has nothing to render".into()))?;
-        let spp_per_iteration = first.graph.spp_per_iteration();
-        // Every band traces the same photons: the image counts them once.
-        let photons_per_iteration = first.graph.photons_per_iteration();
         Ok(Self {
             gpu,
             tiles,
@@ -243,8 +250,7 @@ impl<'a> Renderer<'a> {
             pruned,
             placement,
             scene_hash,
-            profile_start: None,
-            profiling: false,
+            profiling: Profiling::Off,
         })
     }
 
@@ -370,7 +376,7 @@ impl<'a> Renderer<'a> {
 
     /// Records and submits one iteration of every node, in schedule order.
     pub fn iterate(&mut self) -> Result<(), Error> {
-        if !self.profiling && self.profile_start == Some(self.iteration) {
+        if self.profiling == Profiling::From(self.iteration) {
             self.enable_profiling()?;
         }
         for tile in &mut self.tiles {
@@ -396,8 +402,7 @@ impl<'a> Renderer<'a> {
         for tile in &mut self.tiles {
             tile.graph.enable_profiling(self.gpu)?;
         }
-        self.profiling = true;
-        self.profile_start = Some(self.iteration);
+        self.profiling = Profiling::Since(self.iteration);
         Ok(())
     }
 
@@ -408,15 +413,15 @@ impl<'a> Renderer<'a> {
         if iteration <= self.iteration {
             return self.enable_profiling();
         }
-        self.profile_start = Some(iteration);
+        self.profiling = Profiling::From(iteration);
         Ok(())
     }
 
     /// Iterations timed so far.
     pub fn profiled_iterations(&self) -> u64 {
-        match self.profile_start {
-            Some(start) if self.profiling => self.iteration - start,
-            _ => 0,
+        match self.profiling {
+            Profiling::Since(start) => self.iteration - start,
+            Profiling::Off | Profiling::From(_) => 0,
         }
     }
 

@@ -78,13 +78,14 @@ pub struct TablePlacement {
 /// chunk 0 at the table's binding and chunk k at its [`ChunkableTable::base`] + k - 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Chunked {
-    pub binding: u32,
-    pub shift: u32,
-    pub chunks: u32,
+    table: &'static ChunkableTable,
+    shift: u32,
+    chunks: u32,
 }
 
 /// A table that grows with the triangles and may be chunked: its binding, the defs' prefix in
 /// shaders/common/scene.wgsl, its entry size and where its chunks past the first are bound.
+#[derive(Debug, PartialEq, Eq)]
 struct ChunkableTable {
     binding: u32,
     prefix: &'static str,
@@ -290,7 +291,7 @@ impl TablePlacement {
         }
         let chunked = chunked
             .into_iter()
-            .filter(|c| !uniform.iter().any(|&(b, _)| b == c.binding))
+            .filter(|c| !uniform.iter().any(|&(b, _)| b == c.table.binding))
             .collect();
         let mut placement = Self {
             uniform,
@@ -339,10 +340,7 @@ impl TablePlacement {
             defs.extend(block_defs("SPHERES_FROM", &SPHERE_BLOCKS, spheres));
         }
         for c in &self.chunked {
-            let Some(table) = CHUNKABLE.iter().find(|t| t.binding == c.binding) else {
-                continue;
-            };
-            let prefix = table.prefix;
+            let prefix = c.table.prefix;
             defs.insert(format!("{prefix}_CHUNKED"), ShaderDefValue::Bool(true));
             defs.insert(
                 format!("{prefix}_CHUNK_SHIFT"),
@@ -359,10 +357,7 @@ impl TablePlacement {
     pub fn chunked_report(&self) -> Vec<String> {
         self.chunked
             .iter()
-            .filter_map(|c| {
-                let table = CHUNKABLE.iter().find(|t| t.binding == c.binding)?;
-                Some(format!("{} {}x2^{}", table.prefix, c.chunks, c.shift))
-            })
+            .map(|c| format!("{} {}x2^{}", c.table.prefix, c.chunks, c.shift))
             .collect()
     }
 
@@ -522,7 +517,7 @@ fn chunked_tables(
             let shift = per_chunk.ilog2();
             let chunks = entries.div_ceil(1 << shift);
             Some(Chunked {
-                binding: t.binding,
+                table: t,
                 shift,
                 chunks: u32::try_from(chunks).unwrap_or(u32::MAX),
             })
@@ -621,20 +616,20 @@ impl SceneResources {
                     buffers.push(uniform_buffer(gpu, label, bytes, size)?);
                     access.push(Access::Uniform);
                 }
-                None => match placement.chunked.iter().find(|c| c.binding == binding) {
+                None => match placement
+                    .chunked
+                    .iter()
+                    .find(|c| c.table.binding == binding)
+                {
                     Some(c) => {
                         let mut chunks = chunk_bytes(c, bytes, label)?.into_iter();
                         let first = chunks.next().unwrap_or(bytes);
                         buffers.push(gpu.create_buffer_init(label, first, storage)?);
                         access.push(Access::Read);
-                        let base = CHUNKABLE
-                            .iter()
-                            .find(|t| t.binding == binding)
-                            .map_or(0, |t| t.base);
                         for (k, chunk) in (1u32..).zip(chunks) {
                             let label = format!("{label}, chunk {k}");
                             let buffer = gpu.create_buffer_init(&label, chunk, storage)?;
-                            chunk_buffers.push((base + k - 1, buffer));
+                            chunk_buffers.push((c.table.base + k - 1, buffer));
                         }
                     }
                     None => {
@@ -712,11 +707,7 @@ impl SceneResources {
 /// `bytes` of a chunked table cut into its chunks; refused when it needs more chunks than the
 /// shaders declare, naming the table, its size and what would fit.
 fn chunk_bytes<'b>(c: &Chunked, bytes: &'b [u8], label: &str) -> Result<Vec<&'b [u8]>, Error> {
-    let stride = CHUNKABLE
-        .iter()
-        .find(|t| t.binding == c.binding)
-        .map_or(1, |t| t.stride) as usize;
-    let chunk = stride << c.shift;
+    let chunk = (c.table.stride as usize) << c.shift;
     if c.chunks > MAX_CHUNKS {
         return Err(Error::Other(format!(
             "{label} takes {} bytes ({:.0} MiB): {} bindings of {:.0} MiB on this adapter, and a \

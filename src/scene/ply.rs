@@ -298,6 +298,19 @@ mod binary {
         properties: Vec<Property>,
     }
 
+    impl Element {
+        /// Bytes of one record of its scalar properties (all of a vertex's, which has no lists).
+        fn record_size(&self) -> usize {
+            self.properties
+                .iter()
+                .map(|p| match p {
+                    Property::Scalar(_, s) => s.size(),
+                    Property::List(..) => 0,
+                })
+                .sum()
+        }
+    }
+
     /// The header's elements, the byte order and where the data starts; `None` unless binary.
     fn header(bytes: &[u8]) -> Option<(Vec<Element>, bool, usize)> {
         let end = bytes.windows(11).position(|w| w == b"end_header\n")? + 11;
@@ -352,14 +365,7 @@ mod binary {
         for element in &elements {
             match element.name.as_str() {
                 "vertex" => {
-                    let record: usize = element
-                        .properties
-                        .iter()
-                        .map(|p| match p {
-                            Property::Scalar(_, s) => s.size(),
-                            Property::List(..) => 0,
-                        })
-                        .sum();
+                    let record = element.record_size();
                     let Some(data) =
                         bytes.get(at..at.saturating_add(record.saturating_mul(element.count)))
                     else {
@@ -470,14 +476,7 @@ mod binary {
                     }
                 }
                 _ => {
-                    let record: usize = element
-                        .properties
-                        .iter()
-                        .map(|p| match p {
-                            Property::Scalar(_, s) => s.size(),
-                            Property::List(..) => 0,
-                        })
-                        .sum();
+                    let record = element.record_size();
                     at = at.saturating_add(record.saturating_mul(element.count));
                 }
             }
