@@ -166,8 +166,8 @@ fn smooth_sphere_mesh_renders_like_the_analytic_sphere() {
 
 /// A furnace: inside a closed, inward-facing sphere mesh of albedo 0.8 emitting 0.5, radiance
 /// is 0.5 / (1 - 0.8) = 2.5 everywhere with the true normals. Its vertex normals are tilted at
-/// random by up to about 20 degrees, so shading and geometry disagree everywhere: directions the
-/// guards refuse are lost, but nothing may add energy, so the image mean stays at or below 2.5
+/// random by up to about 20 degrees, so shading and geometry disagree everywhere: directions that
+/// leave through the wall are lost, but nothing may add energy, so the image mean stays at or below 2.5
 /// (within 1%, the noise at 256 spp) and, with most of the light still there (2.25 measured),
 /// above 2.0. A diffuse weight of albedo times the shading over the geometric cosine (a
 /// common mistake) renders 5.4 here and fails.

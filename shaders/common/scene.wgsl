@@ -525,8 +525,9 @@ struct Surface {
     // offset_ray_origin).
     error: vec3<f32>,
     // The normal BSDFs shade with: the interpolated vertex normal of a smooth mesh (on the
-    // front side), else `normal`. Which side a direction is on is still decided by `normal`
-    // (see shading_agrees).
+    // front side), else `normal`. As in Mitsuba, BSDFs judge directions by it: a sampled or
+    // light direction it puts above the surface counts even where `normal` puts it below. Which
+    // side a ray arrives from (and so a twosided material's face) is still `normal`'s to say.
     shading_normal: vec3<f32>,
     // Texture coordinates: interpolated from a triangle's corners; a sphere's Mitsuba
     // parameterisation (phi / 2 pi, theta / pi about +z).
@@ -1061,14 +1062,6 @@ fn sphere_uv(local: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(phi * 0.15915494, acos(clamp(d.z, -1.0, 1.0)) * 0.31830989);
 }
 #endif
-
-// Whether the shading normal puts `dir` on the same side of the surface as the geometric normal
-// does. Where they disagree (near the silhouette of a smooth-shaded coarse mesh) a BSDF sample
-// or light direction would cross the real surface: such directions carry nothing, so light
-// never leaks through a mesh and a path never continues inside it.
-fn shading_agrees(surface: Surface, dir: vec3<f32>) -> bool {
-    return dot(surface.shading_normal, dir) * dot(surface.normal, dir) > 0.0;
-}
 
 // Veach's correction (thesis, section 5.3) of a photon's weight for the asymmetry shading
 // normals add to a BSDF: |wi.ns| |wo.ng| / (|wi.ng| |wo.ns|) for a photon arriving from `wi`

@@ -25,7 +25,7 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
-#import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin, shading_agrees}
+#import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
@@ -161,7 +161,7 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, vec4<u32
         return vec3<f32>(0.0);
     }
     let cos_i = dot(surface.shading_normal, ls.dir);
-    if cos_i <= 0.0 || !shading_agrees(surface, ls.dir) {
+    if cos_i <= 0.0 {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
@@ -233,9 +233,6 @@ fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, w
     let u = rng_next_vec2(rng);
     let ls = sample_light(surface.position, u_pick, u);
     if !ls.valid {
-        return vec3<f32>(0.0);
-    }
-    if !shading_agrees(surface, ls.dir) {
         return vec3<f32>(0.0);
     }
     let e = material_eval(material, wi, ls.dir * frame, true);
@@ -367,8 +364,9 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     }
 
     if material.kind == MATERIAL_DIFFUSE {
-        // One-sided, as Mitsuba's diffuse: black from behind.
-        if cos_o <= 0.0 || !shading_agrees(surface, wo) {
+        // One-sided, as Mitsuba's diffuse: black from behind, and where the shading normal
+        // turns away from the viewer.
+        if cos_o <= 0.0 || dot(surface.shading_normal, wo) <= 0.0 {
             return false;
         }
         (*path).diffuse_vertices += 1u;
@@ -395,7 +393,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         (*path).radiance += (*path).throughput * direct_light(surface, material.albedo, rng, rays);
         let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
         let cos_i = dot(dir, surface.shading_normal);
-        if cos_i <= 0.0 || !shading_agrees(surface, dir) {
+        if cos_i <= 0.0 {
             return false;
         }
         (*path).throughput *= material.albedo;
@@ -403,7 +401,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         (*path).after_delta = false;
         (*path).dir = dir;
     } else if material.kind == MATERIAL_MIRROR {
-        if cos_o <= 0.0 || !shading_agrees(surface, wo) {
+        if cos_o <= 0.0 || dot(surface.shading_normal, wo) <= 0.0 {
             return false;
         }
         (*path).dir = reflect_about(wo, surface.shading_normal);
@@ -411,18 +409,9 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
 #ifdef GLOSSY
         (*path).after_specular = true;
 #endif
-        if !shading_agrees(surface, (*path).dir) {
-            return false;
-        }
     } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
-        if !shading_agrees(surface, wo) {
-            return false;
-        }
         let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
-        if !shading_agrees(surface, s.dir) {
-            return false;
-        }
         (*path).throughput *= s.weight;
         (*path).dir = s.dir;
         (*path).after_delta = true;
@@ -433,11 +422,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         return false;
 #endif
     } else {
-        // Every other BSDF, in the shading frame of the side it is seen from; which side a
-        // direction is on is the geometric normal's to say (shading_agrees).
-        if !shading_agrees(surface, wo) {
-            return false;
-        }
+        // Every other BSDF, in the shading frame of the side it is seen from.
         let frame = basis_from_normal(surface.shading_normal);
         let wi = wo * frame;
         if material_has_continuous_lobe(material.kind) {
@@ -449,9 +434,6 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
             return false;
         }
         (*path).dir = normalize(frame * s.wo);
-        if !shading_agrees(surface, (*path).dir) {
-            return false;
-        }
         (*path).throughput *= s.weight;
         (*path).after_delta = s.delta;
         if !s.delta {

@@ -21,7 +21,7 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, shading_agrees, photon_shading_correction}
+#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
 #import common::material::material_sample
 #ifdef GLOSSY
 #import common::material::material_specular_share
@@ -328,7 +328,7 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
 #endif
     if material.kind == MATERIAL_DIFFUSE {
         // One-sided, as the camera pass: the back of a diffuse surface absorbs.
-        if cos_i <= 0.0 || !shading_agrees(surface, wi) {
+        if cos_i <= 0.0 || dot(wi, surface.shading_normal) <= 0.0 {
             return false;
         }
         // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
@@ -343,32 +343,20 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         }
         deposit(surface.position, wi, deposited, segments);
         photon.dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
-        if !shading_agrees(surface, photon.dir) {
-            return false;
-        }
         // Cosine sampling: f cos / pdf = albedo.
         photon.flux *= material.albedo * photon_shading_correction(surface, wi, photon.dir);
         after_specular = false;
     } else if material.kind == MATERIAL_MIRROR {
-        if cos_i <= 0.0 || !shading_agrees(surface, wi) {
+        if cos_i <= 0.0 || dot(wi, surface.shading_normal) <= 0.0 {
             return false;
         }
         photon.dir = reflect_about(wi, surface.shading_normal);
-        if !shading_agrees(surface, photon.dir) {
-            return false;
-        }
         photon.flux *= photon_shading_correction(surface, wi, photon.dir);
         after_specular = true;
     } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
         // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
-        if !shading_agrees(surface, wi) {
-            return false;
-        }
         let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
-        if !shading_agrees(surface, s.dir) {
-            return false;
-        }
         photon.flux *= s.weight * photon_shading_correction(surface, wi, s.dir);
         photon.dir = s.dir;
         after_specular = true;
@@ -376,9 +364,6 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         return false;
 #endif
     } else {
-        if !shading_agrees(surface, wi) {
-            return false;
-        }
         let frame = basis_from_normal(surface.shading_normal);
         let u1 = rng_next_f32(rng);
         let s = material_sample(material, wi * frame, u1, rng_next_vec2(rng), false);
@@ -399,9 +384,6 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         }
 #endif
         photon.dir = normalize(frame * s.wo);
-        if !shading_agrees(surface, photon.dir) {
-            return false;
-        }
         photon.flux *= s.weight * photon_shading_correction(surface, wi, photon.dir);
 #ifdef GLOSSY
         photon.flux *= share;
