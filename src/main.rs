@@ -28,6 +28,14 @@ enum Command {
     Render(RenderArgs),
     /// List GPU adapters and the features hppm uses.
     Info,
+    /// Check a scene file: every problem in it at once, each with file:line:col, as errors
+    /// (it cannot render) and warnings (it renders without that); exits 0 when it renders.
+    Check {
+        scene: PathBuf,
+        /// Set a scene parameter (see `render -D`).
+        #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+        defines: Vec<(String, String)>,
+    },
     /// Validate a graph file and print its schedule.
     Graph {
         file: PathBuf,
@@ -309,7 +317,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     let graph_text = std::fs::read_to_string(&graph_path)
         .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
     let loading = std::time::Instant::now();
-    let scene = scene::load_with(&scene_path, &args.defines)?;
+    let scene = load_scene(&scene_path, &args.defines)?;
     let features = scene.features();
     eprintln!(
         "scene: {features} ({} triangles, loaded in {:.2} s)",
@@ -619,6 +627,44 @@ fn info() -> Result<(), Error> {
     Ok(())
 }
 
+fn check_scene(path: &Path, defines: &[(String, String)]) -> Result<(), Error> {
+    let report = scene::check_with(path, defines);
+    for warning in &report.warnings {
+        println!("warning: {warning}");
+    }
+    for error in report.errors.iter().flat_map(|e| e.problems()) {
+        println!("error: {error}");
+    }
+    let (errors, warnings) = (
+        report
+            .errors
+            .iter()
+            .map(|e| e.problems().len())
+            .sum::<usize>(),
+        report.warnings.len(),
+    );
+    match report.scene {
+        Some(scene) if errors == 0 => {
+            println!(
+                "{}: renders ({}; {warnings} warnings)",
+                path.display(),
+                scene.features()
+            );
+            Ok(())
+        }
+        _ => Err(Error::Other(format!(
+            "{}: does not render ({errors} errors, {warnings} warnings)",
+            path.display()
+        ))),
+    }
+}
+
+/// The scene at `path`, its warnings printed.
+fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<scene::Scene, Error> {
+    let scene = scene::load_reporting(path, defines, |w| eprintln!("warning: {w}"))?;
+    Ok(scene)
+}
+
 fn show_graph(
     file: &Path,
     dot: bool,
@@ -630,7 +676,7 @@ fn show_graph(
         eprintln!("warning: {warning}");
     }
     if let Some(scene_path) = scene_path {
-        let scene = scene::load_with(scene_path, defines)?;
+        let scene = load_scene(scene_path, defines)?;
         let features = scene.features();
         println!("scene: {features}");
         for pruned in graph.prune(|need| passes::scene_meets(&features, need))? {
@@ -757,6 +803,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => compare(args),
         Command::Merge(args) => merge(args),
         Command::Info => info(),
+        Command::Check { scene, defines } => check_scene(&scene, &defines),
         Command::Graph {
             file,
             dot,

@@ -200,7 +200,9 @@ pub fn compare(
     if options.graphs.is_empty() {
         return Err(Error::Other("give at least one --graph".into()));
     }
-    let scene = scene::load_with(&options.scene, &options.defines)?;
+    let scene = scene::load_reporting(&options.scene, &options.defines, |w| {
+        eprintln!("warning: {w}")
+    })?;
     let reference = Image::read_exr(&options.reference)?;
     let (width, height) = options
         .size

@@ -27,7 +27,7 @@ use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
     Bsdf, Camera, Distribution, Integrator, Material, MaterialTextures, Microfacet, PointLight,
-    Scene, SceneError, SideTextures, Sphere, bsdf, mesh,
+    Report, Scene, SceneError, SideTextures, Sphere, bsdf, mesh,
 };
 use crate::error::Location;
 
@@ -50,8 +50,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
 /// `<default name=...>` of the same name and may give `$name`s the scene declares no default
 /// for. As in Mitsuba 3, a parameter no attribute uses is an error.
 pub fn load_with(path: &Path, defines: &[(String, String)]) -> Result<Scene, SceneError> {
-    let text = super::read_text(path)?;
-    parse_with(path, &text, defines)
+    check_with(path, defines).into_result()
 }
 
 /// Parses Mitsuba XML `text`; `path` names the file in errors and anchors relative OBJ paths.
@@ -65,13 +64,31 @@ pub fn parse_with(
     text: &str,
     defines: &[(String, String)],
 ) -> Result<Scene, SceneError> {
-    let doc = Document::parse(text).map_err(|e| {
-        let pos = e.pos();
-        SceneError::at(
-            Location::new(path, pos.row as usize, pos.col as usize),
-            format!("XML syntax error: {e}"),
-        )
-    })?;
+    check_text(path, text, defines).into_result()
+}
+
+/// Reads the whole file and reports every problem in it, not only the first: a shape, emitter
+/// or declaration that cannot be read is reported and skipped, and reading goes on with the
+/// next.
+pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
+    match super::read_text(path) {
+        Ok(text) => check_text(path, &text, defines),
+        Err(e) => Report::failed(e),
+    }
+}
+
+/// [`check_with`] on `text` (`path` names it in messages and anchors relative paths).
+pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Report {
+    let doc = match Document::parse(text) {
+        Ok(doc) => doc,
+        Err(e) => {
+            let pos = e.pos();
+            return Report::failed(SceneError::at(
+                Location::new(path, pos.row as usize, pos.col as usize),
+                format!("XML syntax error: {e}"),
+            ));
+        }
+    };
     let mut reader = Reader {
         path,
         doc: &doc,
@@ -80,21 +97,46 @@ pub fn parse_with(
         used: RefCell::new(HashSet::new()),
         declared: Vec::new(),
         named_bsdfs: HashMap::new(),
+        failed_ids: HashMap::new(),
         named_textures: HashMap::new(),
         textures: RefCell::new(Vec::new()),
         scene: empty_scene(path),
         has_integrator: false,
         has_sensor: false,
+        before_v2: false,
+        errors: RefCell::new(Vec::new()),
+        warnings: RefCell::new(Vec::new()),
     };
-    reader.check_attributes()?;
-    reader.read_scene(doc.root_element())?;
-    reader.check_defines_used(defines)?;
+    reader.check_attributes();
+    let read = reader.read_scene(doc.root_element());
+    reader.keep(read);
+    let unused = reader.check_defines_used(defines);
+    reader.keep(unused);
     reader.scene.textures = reader.textures.take();
     if !reader.has_sensor {
-        return Err(reader.error(doc.root_element(), "the scene has no <sensor>"));
+        reader.report(reader.error(doc.root_element(), "the scene has no <sensor>"));
     }
-    reader.scene.validate()?;
-    Ok(reader.scene)
+    // In file order, whichever recovery point recorded them.
+    let by_place = |e: &SceneError| match e {
+        SceneError::At { location, .. } => (location.line, location.col),
+        _ => (usize::MAX, 0),
+    };
+    let mut errors = reader.errors.take();
+    errors.sort_by_key(by_place);
+    let mut warnings = reader.warnings.take();
+    warnings.sort_by_key(by_place);
+    // Validation judges the scene as a whole: with parts of it missing it would only repeat
+    // what is reported already.
+    if errors.is_empty()
+        && let Err(e) = reader.scene.validate()
+    {
+        errors.push(e);
+    }
+    Report {
+        scene: errors.is_empty().then_some(reader.scene),
+        errors,
+        warnings,
+    }
 }
 
 /// What a scene is before its elements are read: Mitsuba's defaults where it has them.
@@ -105,6 +147,7 @@ fn empty_scene(path: &Path) -> Scene {
             origin: Vec3::ZERO,
             target: Vec3::Z,
             up: Vec3::Y,
+            // Replaced once the sensor is read (Mitsuba's default is a 50 mm lens).
             fov_x_deg: 39.3077,
             width: 768,
             height: 576,
@@ -175,9 +218,17 @@ struct Reader<'a, 'input> {
     named_textures: HashMap<String, (Texture, RefCell<Option<u32>>)>,
     /// The textures the scene's materials use, in the order first used.
     textures: RefCell<Vec<Texture>>,
+    /// The ids of top-level BSDFs and textures that could not be read, and where they were:
+    /// a reference to one is reported as such, not as an undeclared id.
+    failed_ids: HashMap<String, usize>,
     scene: Scene,
     has_integrator: bool,
     has_sensor: bool,
+    /// The file declares a Mitsuba version before 2.0: property names are upgraded as Mitsuba 3
+    /// upgrades them (camelCase to snake_case, ...).
+    before_v2: bool,
+    errors: RefCell<Vec<SceneError>>,
+    warnings: RefCell<Vec<SceneError>>,
 }
 
 /// The properties of one object (`<float name=...>` and friends), consumed by name; whatever is
@@ -185,13 +236,72 @@ struct Reader<'a, 'input> {
 #[derive(Default)]
 struct Props<'a, 'input> {
     entries: Vec<(String, Node<'a, 'input>)>,
+    /// Every name asked for, present or not: what the plugin reads, for did-you-mean.
+    asked: Vec<String>,
 }
 
 impl<'a, 'input> Props<'a, 'input> {
     fn take(&mut self, name: &str) -> Option<Node<'a, 'input>> {
+        if !self.asked.iter().any(|a| a == name) {
+            self.asked.push(name.to_string());
+        }
         let i = self.entries.iter().position(|(n, _)| n == name)?;
         Some(self.entries.remove(i).1)
     }
+
+    /// The asked-for name closest to `unknown`, if close enough to be a typo of it.
+    fn suggestion(&self, unknown: &str) -> Option<&str> {
+        self.asked
+            .iter()
+            .map(|a| (edit_distance(a, unknown), a))
+            .filter(|(d, a)| *d <= (a.len().max(unknown.len()) / 3).max(1))
+            .min_by_key(|(d, _)| *d)
+            .map(|(_, a)| a.as_str())
+    }
+}
+
+/// Levenshtein distance between two names.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let substituted = diagonal + usize::from(ca != *cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substituted.min(row[j] + 1).min(diagonal + 1);
+        }
+    }
+    row[b.len()]
+}
+
+/// Properties that Mitsuba 0.5/0.6 plugins read and Mitsuba 3's do not (after the version
+/// upgrade renames them): a scene written for those versions renders without them, so they are
+/// warnings, not errors.
+const LEGACY_PROPERTIES: &[&str] = &[
+    "high_quality_edges",
+    "strict_normals",
+    "banner",
+    "attach_log",
+    "max_smooth_angle",
+    "generate_normals",
+    "sample_count_per_pass",
+];
+
+/// A property name as Mitsuba 3 upgrades it from a file older than version 2.0: camelCase
+/// words joined by underscores (`maxDepth` -> `max_depth`, `fovAxis` -> `fov_axis`).
+fn snake_case(name: &str) -> String {
+    let mut out = String::with_capacity(name.len() + 4);
+    let mut previous_lower = false;
+    for c in name.chars() {
+        if c.is_ascii_uppercase() && previous_lower {
+            out.push('_');
+        }
+        out.push(c.to_ascii_lowercase());
+        previous_lower = c.is_ascii_lowercase() || c.is_ascii_digit();
+    }
+    out
 }
 
 /// A `<bsdf>` as a shape uses it: the front BSDF and, for `twosided`, the back's, with the
@@ -301,8 +411,25 @@ impl<'a, 'input> Reader<'a, 'input> {
         SceneError::at(self.location_of(offset), message)
     }
 
+    /// Records a problem that keeps the scene from rendering; reading goes on.
+    fn report(&self, error: SceneError) {
+        self.errors.borrow_mut().push(error);
+    }
+
+    /// Records `result`'s error, if any.
+    fn keep(&self, result: Result<(), SceneError>) {
+        if let Err(e) = result {
+            self.report(e);
+        }
+    }
+
+    /// Records something the scene renders without, at `node`.
+    fn warn(&self, node: Node, message: impl Into<String>) {
+        self.warnings.borrow_mut().push(self.error(node, message));
+    }
+
     /// Every attribute of every known tag must be one it takes.
-    fn check_attributes(&self) -> Result<(), SceneError> {
+    fn check_attributes(&self) {
         for node in self.doc.descendants().filter(Node::is_element) {
             let tag = node.tag_name().name();
             let Some(allowed) = allowed_attributes(tag) else {
@@ -310,7 +437,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             };
             for a in node.attributes() {
                 if a.namespace().is_none() && !allowed.contains(&a.name()) {
-                    return Err(self.attr_error(
+                    self.report(self.attr_error(
                         node,
                         a.name(),
                         format!(
@@ -323,7 +450,6 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
             }
         }
-        Ok(())
     }
 
     /// An attribute with `$name` defaults substituted.
@@ -403,25 +529,52 @@ impl<'a, 'input> Reader<'a, 'input> {
         if root.tag_name().name() != "scene" {
             return Err(self.error(root, "the root element must be <scene>"));
         }
+        self.read_version(root)?;
+        // Each element is read on its own: one that fails is reported and the next is read, so
+        // that a check lists every problem in the file.
         for child in root.children().filter(Node::is_element) {
-            match child.tag_name().name() {
-                "default" => {
-                    let name = self.required_attr(child, "name")?;
-                    let value = self.required_attr(child, "value")?;
-                    if !self.defined.contains(&name) {
-                        self.defaults.insert(name.clone(), value);
-                    }
-                    self.declared.push(name);
-                }
-                "integrator" => self.read_integrator(child)?,
-                "sensor" => self.read_sensor(child)?,
-                "shape" => self.read_shape(child)?,
-                "emitter" => self.read_emitter(child)?,
-                "bsdf" => self.read_named_bsdf(child)?,
-                "texture" => self.read_named_texture(child)?,
-                other => return Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
-            }
+            let read = match child.tag_name().name() {
+                "default" => self.read_default(child),
+                "integrator" => self.read_integrator(child),
+                "sensor" => self.read_sensor(child),
+                "shape" => self.read_shape(child),
+                "emitter" => self.read_emitter(child),
+                "bsdf" => self.read_named_bsdf(child),
+                "texture" => self.read_named_texture(child),
+                other => Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
+            };
+            self.keep(read);
         }
+        Ok(())
+    }
+
+    fn read_default(&mut self, node: Node) -> Result<(), SceneError> {
+        let name = self.required_attr(node, "name")?;
+        let value = self.required_attr(node, "value")?;
+        if !self.defined.contains(&name) {
+            self.defaults.insert(name.clone(), value);
+        }
+        self.declared.push(name);
+        Ok(())
+    }
+
+    /// `<scene version="...">`: files older than 2.0 have their property names upgraded.
+    fn read_version(&mut self, root: Node) -> Result<(), SceneError> {
+        let Some(version) = self.attr(root, "version")? else {
+            return Ok(());
+        };
+        let major = version
+            .split('.')
+            .next()
+            .and_then(|m| m.trim().parse::<u32>().ok());
+        let Some(major) = major else {
+            return Err(self.attr_error(
+                root,
+                "version",
+                format!("<scene version=\"{version}\">: expected a version such as 3.0.0"),
+            ));
+        };
+        self.before_v2 = major < 2;
         Ok(())
     }
 
@@ -444,7 +597,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                     format!("unknown tag <{tag}> in {}", describe_object(node)),
                 ));
             }
-            let name = self.required_attr(child, "name")?;
+            let mut name = self.required_attr(child, "name")?;
+            if self.before_v2 {
+                name = self.upgraded_name(node, &name);
+            }
             if let Some((_, first)) = entries.iter().find(|(n, _)| *n == name) {
                 return Err(self.attr_error(
                     child,
@@ -459,23 +615,69 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
             entries.push((name, child));
         }
-        Ok(Props { entries })
+        Ok(Props {
+            entries,
+            asked: Vec::new(),
+        })
     }
 
-    /// Fails on the first property nobody took.
-    fn finish(&self, props: Props, owner: Node) -> Result<(), SceneError> {
-        if let Some((name, node)) = props.entries.first() {
-            return Err(self.attr_error(
-                *node,
-                "name",
-                format!(
-                    "{}: unknown property \"{name}\" for {}",
-                    describe(*node),
-                    describe_object(owner)
-                ),
-            ));
+    /// Property `name` of `owner` in a file older than Mitsuba 2.0, renamed as Mitsuba 3's
+    /// loader renames it.
+    fn upgraded_name(&self, owner: Node, name: &str) -> String {
+        let name = snake_case(name);
+        let diffuse = owner.has_tag_name("bsdf") && owner.attribute("type") == Some("diffuse");
+        if diffuse && name == "diffuse_reflectance" {
+            return "reflectance".into();
         }
-        Ok(())
+        name
+    }
+
+    /// Reports every property nobody took (the first is returned, the others recorded); a
+    /// property only old Mitsuba versions read is a warning.
+    fn finish(&self, props: Props, owner: Node) -> Result<(), SceneError> {
+        self.finish_with(props, owner, None)
+    }
+
+    /// [`Self::finish`], saying what the plugin takes (`takes`) in each message.
+    fn finish_with(
+        &self,
+        props: Props,
+        owner: Node,
+        takes: Option<&str>,
+    ) -> Result<(), SceneError> {
+        let mut unknown = Vec::new();
+        for (name, node) in &props.entries {
+            if LEGACY_PROPERTIES.contains(&name.as_str()) {
+                self.warn(
+                    *node,
+                    format!(
+                        "{}: \"{name}\" was read by Mitsuba 0.x only; ignored",
+                        describe(*node)
+                    ),
+                );
+                continue;
+            }
+            let mut message = format!(
+                "{}: unknown property \"{name}\" for {}",
+                describe(*node),
+                describe_object(owner)
+            );
+            if let Some(takes) = takes {
+                message.push_str(&format!(" (it takes {takes})"));
+            }
+            if let Some(near) = props.suggestion(name) {
+                message.push_str(&format!("; did you mean \"{near}\"?"));
+            }
+            unknown.push(self.attr_error(*node, "name", message));
+        }
+        let mut unknown = unknown.into_iter();
+        match unknown.next() {
+            None => Ok(()),
+            Some(first) => {
+                unknown.for_each(|e| self.report(e));
+                Err(first)
+            }
+        }
     }
 
     /// Properties whose value is read but does not affect our rendering (clip planes, pixel
@@ -683,7 +885,16 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "lookat" => {
                     let origin = self.vec3_attr(child, "origin")?;
                     let target = self.vec3_attr(child, "target")?;
-                    let up = self.vec3_attr(child, "up")?;
+                    // Mitsuba picks an up vector itself when none (or zero) is given.
+                    let up = match self.attr(child, "up")? {
+                        Some(_) => self.vec3_attr(child, "up")?,
+                        None => Vec3::ZERO,
+                    };
+                    let up = if up == Vec3::ZERO {
+                        orthogonal_to((target - origin).normalize_or_zero())
+                    } else {
+                        up
+                    };
                     look_at(origin, target, up).ok_or_else(|| {
                         self.error(
                             child,
@@ -737,20 +948,25 @@ impl<'a, 'input> Reader<'a, 'input> {
         if std::mem::replace(&mut self.has_integrator, true) {
             return Err(self.error(node, "a second <integrator>: only one is allowed"));
         }
+        self.read_integrator_settings(node)
+    }
+
+    /// The integrator's settings. In hppm the render graph chooses the algorithm, so any
+    /// integrator is advice: its path depths and `hide_emitters` are taken, the rest of another
+    /// integrator's properties belong to its algorithm and are left with one warning. One that
+    /// wraps another (`aov`, `moment`) gives the wrapped one's settings.
+    fn read_integrator_settings(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if kind != "path" {
-            return Err(self.attr_error(
-                node,
-                "type",
-                format!("integrator type \"{kind}\" is not supported (only \"path\")"),
-            ));
-        }
-        let mut props = self.props(node, &[])?;
+        let nested = self.single_child(node, "integrator")?;
+        let mut props = self.props(node, &["integrator"])?;
         if let Some(n) = props.take("max_depth") {
             self.scene.integrator.max_depth = match self.integer(n)? {
                 -1 => None,
                 d => Some(self.depth(n, d, "max_depth")?),
             };
+        } else if kind == "direct" {
+            // Emitters seen directly and lit directly: paths of at most two segments.
+            self.scene.integrator.max_depth = Some(2);
         }
         if let Some(n) = props.take("rr_depth") {
             let d = self.integer(n)?;
@@ -769,7 +985,25 @@ impl<'a, 'input> Reader<'a, 'input> {
         {
             return Err(self.attr_error(n, "value", "hide_emitters=true is not supported"));
         }
-        self.finish(props, node)
+        if kind == "path" {
+            return self.finish(props, node);
+        }
+        let mut message = format!(
+            "integrator \"{kind}\": the render graph chooses the algorithm; rendering with \
+             its path depths"
+        );
+        if kind == "direct" {
+            message.push_str(" (direct lighting only: max_depth 2)");
+        }
+        if !props.entries.is_empty() {
+            let rest: Vec<&str> = props.entries.iter().map(|(n, _)| n.as_str()).collect();
+            message.push_str(&format!(", without {}", rest.join(", ")));
+        }
+        self.warn(node, message);
+        match nested {
+            Some(inner) => self.read_integrator_settings(inner),
+            None => Ok(()),
+        }
     }
 
     /// A path depth: at least 1 (-1 for "unbounded" is handled by the caller).
@@ -816,17 +1050,82 @@ impl<'a, 'input> Reader<'a, 'input> {
             .take("fov_axis")
             .map(|n| self.string(n).map(|v| (n, v)))
             .transpose()?;
-        self.ignore(&mut props, &["near_clip", "far_clip"], |r, n| {
-            r.float(n).map(drop)
-        })?;
+        let focal_length = props.take("focal_length");
+        // A pinhole renders everything in focus, so the focal distance changes nothing; clip
+        // planes cut no geometry here, and nothing moves while the shutter is open.
+        self.ignore(
+            &mut props,
+            &[
+                "near_clip",
+                "far_clip",
+                "focus_distance",
+                "shutter_open",
+                "shutter_close",
+            ],
+            |r, n| r.float(n).map(drop),
+        )?;
+        for name in ["principal_point_offset_x", "principal_point_offset_y"] {
+            if let Some(n) = props.take(name)
+                && self.float(n)? != 0.0
+            {
+                return Err(self.attr_error(
+                    n,
+                    "value",
+                    format!("{name}: an off-centre principal point is not supported"),
+                ));
+            }
+        }
+        if let Some(n) = props.take("srf") {
+            self.warn(
+                n,
+                "sensor srf: a spectral response applies to spectral rendering only; hppm \
+                 renders RGB, as Mitsuba's RGB variants do, without it",
+            );
+        }
         if let Some(n) = props.take("to_world") {
             self.read_camera_transform(n)?;
         }
         self.finish(props, node)?;
-        if let Some((n, fov)) = fov {
-            self.scene.camera.fov_x_deg = self.horizontal_fov(n, fov, fov_axis)?;
-        }
+        let aspect = self.scene.camera.width as f64 / self.scene.camera.height as f64;
+        let (fov, axis) = match (fov, focal_length) {
+            (Some((n, _)), Some(_)) => {
+                return Err(self.error(
+                    n,
+                    "give either fov or focal_length, not both (Mitsuba refuses both too)",
+                ));
+            }
+            (Some((n, fov)), None) => {
+                let axis = match fov_axis {
+                    Some((axis_node, axis)) => (axis_node, axis.to_ascii_lowercase()),
+                    None => (n, "x".to_string()),
+                };
+                (fov as f64, axis)
+            }
+            (None, focal) => {
+                let fov = match focal {
+                    Some(n) => self.focal_length_fov(n)?,
+                    None => focal_length_to_fov(50.0),
+                };
+                (fov, (node, "diagonal".to_string()))
+            }
+        };
+        self.scene.camera.fov_x_deg = self.horizontal_fov(axis.0, fov, &axis.1, aspect)?;
         Ok(())
+    }
+
+    /// `focal_length` ("50mm", or a bare number of millimetres) as the diagonal field of view
+    /// of a 36 x 24 mm frame.
+    fn focal_length_fov(&self, node: Node) -> Result<f64, SceneError> {
+        let text = self.string(node)?;
+        let millimetres = text.trim().strip_suffix("mm").unwrap_or(text.trim());
+        match millimetres.trim().parse::<f64>() {
+            Ok(f) if f > 0.0 => Ok(focal_length_to_fov(f)),
+            _ => Err(self.attr_error(
+                node,
+                "value",
+                format!("focal_length \"{text}\": expected millimetres, such as 50mm"),
+            )),
+        }
     }
 
     /// The child of `node` with tag `tag`, if any; two are an error.
@@ -875,52 +1174,49 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(())
     }
 
-    /// The horizontal fov for a `fov` given along `fov_axis`: tan(fx/2) = tan(fy/2) * w/h.
+    /// The horizontal fov for a `fov` given along `axis` (x, y, diagonal, smaller or larger)
+    /// of a film of `aspect` (width / height), as Mitsuba's projective cameras convert it.
     fn horizontal_fov(
         &self,
-        fov_node: Node,
-        fov: f32,
-        fov_axis: Option<(Node, String)>,
+        node: Node,
+        fov: f64,
+        axis: &str,
+        aspect: f64,
     ) -> Result<f32, SceneError> {
         if !(fov > 0.0 && fov < 180.0) {
             return Err(self.attr_error(
-                fov_node,
+                node,
                 "value",
                 format!("fov {fov}: expected degrees between 0 and 180"),
             ));
         }
-        let (w, h) = (
-            self.scene.camera.width as f32,
-            self.scene.camera.height as f32,
-        );
-        let from_y = || 2.0 * ((fov.to_radians() * 0.5).tan() * w / h).atan().to_degrees();
-        let Some((axis_node, axis)) = fov_axis else {
-            return Ok(fov);
+        let half_tan = (fov.to_radians() * 0.5).tan();
+        let axis = match axis {
+            "smaller" if aspect > 1.0 => "y",
+            "smaller" => "x",
+            "larger" if aspect > 1.0 => "x",
+            "larger" => "y",
+            other => other,
         };
-        match axis.as_str() {
-            "x" => Ok(fov),
-            "y" => Ok(from_y()),
-            "smaller" if w <= h => Ok(fov),
-            "smaller" => Ok(from_y()),
-            "larger" if w >= h => Ok(fov),
-            "larger" => Ok(from_y()),
-            other => Err(self.attr_error(
-                axis_node,
-                "value",
-                format!("fov_axis \"{other}\": expected x, y, smaller or larger"),
-            )),
-        }
+        let x_half_tan = match axis {
+            "x" => half_tan,
+            "y" => half_tan * aspect,
+            "diagonal" => half_tan / (1.0 + 1.0 / (aspect * aspect)).sqrt(),
+            other => {
+                return Err(self.attr_error(
+                    node,
+                    "value",
+                    format!("fov_axis \"{other}\": expected x, y, diagonal, smaller or larger"),
+                ));
+            }
+        };
+        Ok((2.0 * x_half_tan.atan()).to_degrees() as f32)
     }
 
+    /// Any sampler gives the sample count; hppm draws independent random numbers, so another
+    /// sampler's pattern (stratified, low-discrepancy) is left with a warning.
     fn read_sampler(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if kind != "independent" {
-            return Err(self.attr_error(
-                node,
-                "type",
-                format!("sampler type \"{kind}\" is not supported (only \"independent\")"),
-            ));
-        }
         let mut props = self.props(node, &[])?;
         if let Some(n) = props.take("sample_count") {
             let spp = self.integer(n)?;
@@ -934,7 +1230,17 @@ impl<'a, 'input> Reader<'a, 'input> {
             self.scene.spp_hint = Some(spp);
         }
         self.ignore(&mut props, &["seed"], |r, n| r.integer(n).map(drop))?;
-        self.finish(props, node)
+        if kind == "independent" {
+            return self.finish(props, node);
+        }
+        self.warn(
+            node,
+            format!(
+                "sampler \"{kind}\": hppm draws independent samples; its sample_count is taken, \
+                 its pattern is not"
+            ),
+        );
+        Ok(())
     }
 
     fn read_film(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
@@ -1026,7 +1332,10 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     fn read_named_bsdf(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
-        let id = self.required_attr(node, "id")?;
+        // Mitsuba allows a top-level BSDF without an id; nothing can use it, but it is checked.
+        let Some(id) = self.attr(node, "id")? else {
+            return self.read_bsdf(node).map(drop);
+        };
         if self.named_bsdfs.contains_key(&id) {
             return Err(self.attr_error(
                 node,
@@ -1034,7 +1343,9 @@ impl<'a, 'input> Reader<'a, 'input> {
                 format!("a second <bsdf id=\"{id}\">: ids must be unique"),
             ));
         }
-        let bsdf = self.read_bsdf(node)?;
+        let bsdf = self.read_bsdf(node).inspect_err(|_| {
+            self.failed_ids.insert(id.clone(), self.location(node).line);
+        })?;
         self.named_bsdfs.insert(id, bsdf);
         Ok(())
     }
@@ -1109,6 +1420,13 @@ impl<'a, 'input> Reader<'a, 'input> {
         node: Node<'a, 'input>,
         kind: &str,
     ) -> Result<(Bsdf, SideTextures), SceneError> {
+        if !SUPPORTED_BSDFS.split(", ").any(|k| k == kind) {
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!("bsdf type \"{kind}\" is not supported ({SUPPORTED_BSDFS})"),
+            ));
+        }
         let mut props = self.props(node, &[])?;
         let props = &mut props;
         let mut textures = SideTextures::default();
@@ -1199,18 +1517,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 ));
             }
         };
-        if let Some((name, unknown)) = props.entries.first() {
-            return Err(self.attr_error(
-                *unknown,
-                "name",
-                format!(
-                    "{}: unknown property \"{name}\" for {} (it takes {})",
-                    describe(*unknown),
-                    describe_object(node),
-                    bsdf_parameters(kind)
-                ),
-            ));
-        }
+        self.finish_with(std::mem::take(props), node, Some(bsdf_parameters(kind)))?;
         Ok((bsdf, textures))
     }
 
@@ -1254,14 +1561,8 @@ impl<'a, 'input> Reader<'a, 'input> {
             "ref" => {
                 let id = self.required_attr(node, "id")?;
                 let Some((texture, index)) = self.named_textures.get(&id) else {
-                    return Err(self.attr_error(
-                        node,
-                        "id",
-                        format!(
-                            "<ref name=\"{name}\" id=\"{id}\">: no <texture id=\"{id}\"> is declared \
-                             before this"
-                        ),
-                    ));
+                    let what = format!("<ref name=\"{name}\" id=\"{id}\">");
+                    return Err(self.missing_ref(node, &id, "texture", &what));
                 };
                 let mut index = index.borrow_mut();
                 let i = *index.get_or_insert_with(|| add(texture.clone()));
@@ -1280,7 +1581,9 @@ impl<'a, 'input> Reader<'a, 'input> {
                 format!("a second <texture id=\"{id}\">: ids must be unique"),
             ));
         }
-        let texture = self.read_texture(node)?;
+        let texture = self.read_texture(node).inspect_err(|_| {
+            self.failed_ids.insert(id.clone(), self.location(node).line);
+        })?;
         self.named_textures
             .insert(id, (texture, RefCell::new(None)));
         Ok(())
@@ -1598,13 +1901,19 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn bsdf_ref(&self, node: Node) -> Result<Sides, SceneError> {
         let id = self.required_attr(node, "id")?;
-        self.named_bsdfs.get(&id).copied().ok_or_else(|| {
-            self.attr_error(
-                node,
-                "id",
-                format!("<ref id=\"{id}\">: no <bsdf id=\"{id}\"> is declared before this"),
-            )
-        })
+        self.named_bsdfs
+            .get(&id)
+            .copied()
+            .ok_or_else(|| self.missing_ref(node, &id, "bsdf", &format!("<ref id=\"{id}\">")))
+    }
+
+    /// A `<ref>` to an id no `<tag id=...>` before it declares, or to one that failed.
+    fn missing_ref(&self, node: Node, id: &str, tag: &str, what: &str) -> SceneError {
+        let why = match self.failed_ids.get(id) {
+            Some(line) => format!("the <{tag} id=\"{id}\"> at line {line} could not be read"),
+            None => format!("no <{tag} id=\"{id}\"> is declared before this"),
+        };
+        self.attr_error(node, "id", format!("{what}: {why}"))
     }
 
     fn read_shape(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
@@ -1741,20 +2050,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             MeshFormat::Obj => super::obj::load_mesh_data(&mesh_path),
             MeshFormat::Ply => super::ply::load(&mesh_path),
         };
-        let mut mesh = loaded.map_err(|e| match e {
-            SceneError::Io { file, source } => self.error(
-                node,
-                format!("cannot read {name} file {}: {source}", file.display()),
-            ),
-            SceneError::At { location, message } => SceneError::At {
-                location,
-                message: format!("{message} ({name} used at {})", self.location(node)),
-            },
-            SceneError::File { file, message } => SceneError::File {
-                file,
-                message: format!("{message} ({name} used at {})", self.location(node)),
-            },
-        })?;
+        let mut mesh = loaded.map_err(|e| e.referenced_from(name, &self.location(node)))?;
         if face_normals {
             mesh.normals = None;
         }
@@ -2030,6 +2326,24 @@ impl<'a, 'input> Reader<'a, 'input> {
 
 /// Whether `m` is a rotation (or reflection) times a uniform scale: its columns orthogonal
 /// and of one length.
+/// The diagonal field of view, in degrees, of a lens of `millimetres` focal length on a 36 x 24
+/// mm frame (Mitsuba's rule for `focal_length`).
+fn focal_length_to_fov(millimetres: f64) -> f64 {
+    2.0 * ((36.0f64 * 36.0 + 24.0 * 24.0).sqrt() / (2.0 * millimetres))
+        .atan()
+        .to_degrees()
+}
+
+/// A unit vector orthogonal to the unit vector `n`: the first of the frame Mitsuba's
+/// `coordinate_system` builds (Duff et al., "Building an Orthonormal Basis, Revisited", JCGT
+/// 2017), so that a `<lookat>` without `up` turns the camera as Mitsuba does.
+fn orthogonal_to(n: Vec3) -> Vec3 {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x)
+}
+
 fn is_similarity(m: Mat3) -> bool {
     let g = m.transpose() * m;
     let s = g.x_axis.x;

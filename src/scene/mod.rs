@@ -868,6 +868,17 @@ pub enum SceneError {
     At { location: Location, message: String },
     #[error("{file}: {message}")]
     File { file: PathBuf, message: String },
+    /// Every problem a scene file has, when there is more than one, in file order.
+    #[error("{} problems:\n{}", .0.len(), list_problems(.0))]
+    Several(Vec<SceneError>),
+}
+
+fn list_problems(problems: &[SceneError]) -> String {
+    problems
+        .iter()
+        .map(|p| format!("  {p}"))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 impl SceneError {
@@ -877,6 +888,109 @@ impl SceneError {
             message: message.into(),
         }
     }
+
+    /// One error for `problems`: the problem itself when there is one.
+    pub fn from_problems(mut problems: Vec<SceneError>) -> Self {
+        if problems.len() == 1 {
+            problems.remove(0)
+        } else {
+            SceneError::Several(problems)
+        }
+    }
+
+    /// This error, met reading a `what` file (an OBJ, a PLY) that the scene refers to at
+    /// `used_at`: the message says where it was used; an unreadable file is reported there.
+    pub fn referenced_from(self, what: &str, used_at: &Location) -> SceneError {
+        match self {
+            SceneError::Io { file, source } => SceneError::at(
+                used_at.clone(),
+                format!("cannot read {what} file {}: {source}", file.display()),
+            ),
+            SceneError::At { location, message } => SceneError::At {
+                location,
+                message: format!("{message} ({what} used at {used_at})"),
+            },
+            SceneError::File { file, message } => SceneError::File {
+                file,
+                message: format!("{message} ({what} used at {used_at})"),
+            },
+            SceneError::Several(all) => SceneError::Several(
+                all.into_iter()
+                    .map(|e| e.referenced_from(what, used_at))
+                    .collect(),
+            ),
+        }
+    }
+
+    /// The problems this error stands for, one per entry.
+    pub fn problems(&self) -> Vec<&SceneError> {
+        match self {
+            SceneError::Several(all) => all.iter().collect(),
+            one => vec![one],
+        }
+    }
+}
+
+/// Everything a scene file's check finds: the problems that keep it from rendering (`errors`),
+/// those it renders without (`warnings`: an integrator whose algorithm the graph replaces, a
+/// property only old Mitsuba versions read), and the scene when there are no errors. Each
+/// problem names its file, line and column.
+#[derive(Debug)]
+pub struct Report {
+    pub scene: Option<Scene>,
+    pub errors: Vec<SceneError>,
+    pub warnings: Vec<SceneError>,
+}
+
+impl Report {
+    /// The scene, or every error as one.
+    pub fn into_result(self) -> Result<Scene, SceneError> {
+        match self.scene {
+            Some(scene) if self.errors.is_empty() => Ok(scene),
+            _ => Err(SceneError::from_problems(self.errors)),
+        }
+    }
+
+    pub(crate) fn failed(error: SceneError) -> Self {
+        Report {
+            scene: None,
+            errors: vec![error],
+            warnings: Vec::new(),
+        }
+    }
+}
+
+/// Checks a scene file: every problem a Mitsuba XML file has, at once (see
+/// [`mitsuba::check_with`]); other formats stop at their first.
+pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
+    if is_mitsuba(path) {
+        return mitsuba::check_with(path, defines);
+    }
+    match load_with(path, defines) {
+        Ok(scene) => Report {
+            scene: Some(scene),
+            errors: Vec::new(),
+            warnings: Vec::new(),
+        },
+        Err(e) => Report::failed(e),
+    }
+}
+
+/// [`load_with`], handing each warning (what the scene renders without) to `warn`.
+pub fn load_reporting(
+    path: &Path,
+    defines: &[(String, String)],
+    mut warn: impl FnMut(&SceneError),
+) -> Result<Scene, SceneError> {
+    let report = check_with(path, defines);
+    report.warnings.iter().for_each(&mut warn);
+    report.into_result()
+}
+
+fn is_mitsuba(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"))
 }
 
 /// Loads a scene by extension: `.xml` (Mitsuba 3), `.ron` (ours) or `.obj` / `.ply` (a bare mesh,

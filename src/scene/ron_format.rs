@@ -490,21 +490,8 @@ impl<'a> Builder<'a> {
     fn obj_triangles(&self, index: usize, obj: &str) -> Result<Vec<[Vec3; 3]>, SceneError> {
         let here = self.word_in_element("shapes", index, "path");
         let obj_path = self.path.parent().unwrap_or(Path::new(".")).join(obj);
-        let used_at = || Location::from_offset(self.path, self.text, here);
-        super::obj::load_triangles(&obj_path).map_err(|e| match e {
-            SceneError::Io { file, source } => self.at(
-                here,
-                format!("cannot read OBJ file {}: {source}", file.display()),
-            ),
-            SceneError::At { location, message } => SceneError::At {
-                location,
-                message: format!("{message} (OBJ used at {})", used_at()),
-            },
-            SceneError::File { file, message } => SceneError::File {
-                file,
-                message: format!("{message} (OBJ used at {})", used_at()),
-            },
-        })
+        let used_at = Location::from_offset(self.path, self.text, here);
+        super::obj::load_triangles(&obj_path).map_err(|e| e.referenced_from("OBJ", &used_at))
     }
 }
 
