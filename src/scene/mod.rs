@@ -13,6 +13,7 @@ pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 pub mod ron_format;
+pub mod serialized;
 pub mod split_boxes;
 pub mod texture;
 
