@@ -259,3 +259,30 @@ fn every_problem_is_reported_at_once() {
     assert_eq!(warnings(&report).len(), 1, "bdpt's warning");
     assert!(report.scene.is_none());
 }
+
+/// `<shape type="serialized">` picks the file's shape by `shape_index` (the reader itself is
+/// checked against Mitsuba's in src/scene/serialized.rs): the v4 file's cube (12 triangles,
+/// its normals kept, so it shades smoothly unless `face_normals`) and tetrahedron (4); an index
+/// past the file's shapes is an error at the shape's line that says how many there are.
+#[test]
+fn serialized_shapes_load_by_index() {
+    let shape = |index: i32, extra: &str| {
+        format!(
+            r#"<shape type="serialized"><string name="filename" value="tests/data/serialized/two_shapes_v4.serialized"/><integer name="shape_index" value="{index}"/>{extra}</shape>"#
+        )
+    };
+    let scene = scene_of(check(&format!(
+        "{}{}{}{LIGHT}",
+        shape(0, ""),
+        shape(1, r#"<boolean name="face_normals" value="true"/>"#),
+        sensor("", 8, 8)
+    )));
+    // 12 + 4 triangles, then the light's 2.
+    assert_eq!(scene.triangles.len(), 18);
+    let missing = check(&format!("{}{}{LIGHT}", shape(2, ""), sensor("", 8, 8)));
+    let error = missing.errors[0].to_string();
+    assert!(
+        error.contains("2 shapes") && error.contains("shipped.xml:2:"),
+        "{error}"
+    );
+}

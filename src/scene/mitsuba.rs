@@ -1918,24 +1918,16 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn read_shape(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if kind == "serialized" {
-            return Err(self.attr_error(
-                node,
-                "type",
-                "shape type \"serialized\" (Mitsuba's compressed mesh format) is not supported \
-                 yet: convert the mesh to PLY or OBJ (rectangle, cube, sphere, obj, ply)",
-            ));
-        }
         if !matches!(
             kind.as_str(),
-            "rectangle" | "cube" | "disk" | "sphere" | "obj" | "ply"
+            "rectangle" | "cube" | "disk" | "sphere" | "obj" | "ply" | "serialized"
         ) {
             return Err(self.attr_error(
                 node,
                 "type",
                 format!(
                     "shape type \"{kind}\" is not supported (rectangle, cube, disk, sphere, obj, \
-                     ply)"
+                     ply, serialized)"
                 ),
             ));
         }
@@ -1962,6 +1954,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             "disk" => self.push_mesh_data(mesh::disk_mesh(), &common),
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
             "ply" => self.read_mesh_file(&mut props, &common, node, MeshFormat::Ply)?,
+            "serialized" => {
+                self.read_mesh_file(&mut props, &common, node, MeshFormat::Serialized)?
+            }
             _ => self.read_mesh_file(&mut props, &common, node, MeshFormat::Obj)?,
         }
         let reach = self.scene.reach_since(triangles, spheres);
@@ -2027,7 +2022,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 node,
                 format!(
                     "<shape type=\"{}\"> needs <string name=\"filename\" value=\"...\"/>",
-                    name.to_ascii_lowercase()
+                    node.attribute("type").unwrap_or_default()
                 ),
             ));
         };
@@ -2039,16 +2034,26 @@ impl<'a, 'input> Reader<'a, 'input> {
             .map(|n| self.boolean(n))
             .transpose()?
             .unwrap_or(false);
-        // Mitsuba flips v (v -> 1 - v) by default for OBJ files, not for PLY.
-        let flip_tex_coords = props
-            .take("flip_tex_coords")
-            .map(|n| self.boolean(n))
-            .transpose()?
-            .unwrap_or(format == MeshFormat::Obj);
+        // Mitsuba flips v (v -> 1 - v) by default for OBJ files, not for PLY; its serialized
+        // shape keeps the stored uvs and has no such property.
+        let flip_tex_coords = match format {
+            MeshFormat::Serialized => false,
+            _ => props
+                .take("flip_tex_coords")
+                .map(|n| self.boolean(n))
+                .transpose()?
+                .unwrap_or(format == MeshFormat::Obj),
+        };
         let mesh_path = self.relative(&file);
         let loaded = match format {
             MeshFormat::Obj => super::obj::load_mesh_data(&mesh_path),
             MeshFormat::Ply => super::ply::load(&mesh_path),
+            // The file's own face-normals flag is not read: Mitsuba 3 shades a serialized mesh
+            // flat only when the face_normals property says so.
+            MeshFormat::Serialized => {
+                let index = self.shape_index(props)?;
+                super::serialized::load(&mesh_path, index).map(|s| s.mesh)
+            }
         };
         let mut mesh = loaded.map_err(|e| e.referenced_from(name, &self.location(node)))?;
         if face_normals {
@@ -2062,6 +2067,21 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.scene
             .push_mesh_data(mesh, common.to_world, common.material, common.flip_normals);
         Ok(())
+    }
+
+    /// A serialized file's `shape_index`: which of its shapes (default the first).
+    fn shape_index(&self, props: &mut Props) -> Result<u32, SceneError> {
+        let Some(n) = props.take("shape_index") else {
+            return Ok(0);
+        };
+        let index = self.integer(n)?;
+        u32::try_from(index).map_err(|_| {
+            self.attr_error(
+                n,
+                "value",
+                format!("shape_index {index}: expected 0 or more"),
+            )
+        })
     }
 
     fn push_mesh_data(&mut self, mesh: mesh::MeshData, common: &ShapeCommon) {
@@ -2361,6 +2381,7 @@ fn is_similarity(m: Mat3) -> bool {
 enum MeshFormat {
     Obj,
     Ply,
+    Serialized,
 }
 
 impl MeshFormat {
@@ -2368,6 +2389,7 @@ impl MeshFormat {
         match self {
             MeshFormat::Obj => "OBJ",
             MeshFormat::Ply => "PLY",
+            MeshFormat::Serialized => "serialized mesh",
         }
     }
 }
