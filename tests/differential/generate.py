@@ -266,6 +266,7 @@ def generate(index):
                           f'{bsdf_xml(r, "dielectric")}</shape>')
 
     # Emitters: one or two, of every kind.
+    environment = False
     for _ in range(r.choice([1, 1, 2])):
         kind = r.choice(["area_rect", "area_rect", "area_sphere", "point", "spot", "directional",
                          "constant"])
@@ -314,7 +315,12 @@ def generate(index):
             shapes.append(f'<emitter type="directional"><vector name="direction" value="{fmt(d)}"/>'
                           f'<rgb name="irradiance" value="{fmt([power * 2.0] * 3)}"/></emitter>')
         else:
-            shapes.append(f'<emitter type="constant"><rgb name="radiance" value="{fmt(rgb(r, 0.1, 0.6))}"/></emitter>')
+            radiance = rgb(r, 0.1, 0.6)
+            # A scene has at most one environment (Mitsuba refuses two): a second draw of one
+            # adds nothing, and the draws after it stay those of the scenes before this fix.
+            if not environment:
+                environment = True
+                shapes.append(f'<emitter type="constant"><rgb name="radiance" value="{fmt(radiance)}"/></emitter>')
 
     # Camera: from a random direction, a little above the floor when there is one.
     az = r.uniform(0, 2 * math.pi)
