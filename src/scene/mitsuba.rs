@@ -79,19 +79,33 @@ pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
 
 /// [`check_with`] on `text` (`path` names it in messages and anchors relative paths).
 pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Report {
-    let doc = match Document::parse(text) {
-        Ok(doc) => doc,
-        Err(e) => {
-            let pos = e.pos();
-            return Report::failed(SceneError::at(
-                Location::new(path, pos.row as usize, pos.col as usize),
-                format!("XML syntax error: {e}"),
-            ));
+    let texts = with_includes(path, text);
+    let mut docs = Vec::with_capacity(texts.len());
+    for (file, text) in &texts {
+        match Document::parse(text) {
+            Ok(doc) => docs.push((file.clone(), doc)),
+            Err(e) => {
+                let pos = e.pos();
+                return Report::failed(SceneError::at(
+                    Location::new(file, pos.row as usize, pos.col as usize),
+                    format!("XML syntax error: {e}"),
+                ));
+            }
         }
-    };
+    }
+    let files = docs
+        .iter()
+        .map(|(file, doc)| SourceFile {
+            path: file.clone(),
+            doc,
+            before_v2: false,
+        })
+        .collect();
+    let doc = &docs[0].1;
     let mut reader = Reader {
         path,
-        doc: &doc,
+        files,
+        search_dirs: Vec::new(),
         defaults: defines.iter().cloned().collect(),
         defined: defines.iter().map(|(k, _)| k.clone()).collect(),
         used: RefCell::new(HashSet::new()),
@@ -103,7 +117,6 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
         scene: empty_scene(path),
         has_integrator: false,
         has_sensor: false,
-        before_v2: false,
         errors: RefCell::new(Vec::new()),
         warnings: RefCell::new(Vec::new()),
     };
@@ -137,6 +150,43 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
         errors,
         warnings,
     }
+}
+
+/// Deepest nesting of `<include>`s followed (Mitsuba's limit is similar); deeper ones, and
+/// cycles, are reported where they are included.
+const MAX_INCLUDE_DEPTH: usize = 16;
+
+/// The scene's text and every file it `<include>`s, directly or not, that can be read, each once.
+/// An include that cannot be read is left out here and reported where the scene includes it.
+fn with_includes(path: &Path, text: &str) -> Vec<(PathBuf, String)> {
+    let mut files = vec![(path.to_path_buf(), text.to_string())];
+    let mut next = 0;
+    while next < files.len() && files.len() <= MAX_INCLUDE_DEPTH * 4 {
+        let found: Vec<PathBuf> = match Document::parse(&files[next].1) {
+            Ok(doc) => doc
+                .descendants()
+                .filter(|n| n.has_tag_name("include"))
+                .filter_map(|n| n.attribute("filename"))
+                .map(|f| relative_to(&files[next].0, f))
+                .collect(),
+            Err(_) => Vec::new(),
+        };
+        for file in found {
+            if files.iter().any(|(known, _)| *known == file) {
+                continue;
+            }
+            if let Ok(text) = std::fs::read_to_string(&file) {
+                files.push((file, text));
+            }
+        }
+        next += 1;
+    }
+    files
+}
+
+/// `file` as named in `from`: relative to `from`'s folder unless absolute.
+fn relative_to(from: &Path, file: &str) -> PathBuf {
+    from.parent().unwrap_or(Path::new(".")).join(file)
 }
 
 /// What a scene is before its elements are read: Mitsuba's defaults where it has them.
@@ -183,6 +233,9 @@ fn allowed_attributes(tag: &str) -> Option<&'static [&'static str]> {
         "translate" | "scale" => &["value", "x", "y", "z"],
         "rotate" => &["value", "x", "y", "z", "angle"],
         "lookat" => &["origin", "target", "up"],
+        "include" => &["filename", "name"],
+        "path" => &["value"],
+        "alias" => &["id", "as"],
         "ref" => &["id", "name"],
         _ => return None,
     })
@@ -203,9 +256,21 @@ const PROPERTY_TAGS: &[&str] = &[
     "ref",
 ];
 
+/// One XML file of the scene: the scene's own, or one it includes.
+struct SourceFile<'a, 'input> {
+    path: PathBuf,
+    doc: &'a Document<'input>,
+    /// The file declares a Mitsuba version before 2.0: property names are upgraded as Mitsuba
+    /// 3 upgrades them (camelCase to snake_case, ...).
+    before_v2: bool,
+}
+
 struct Reader<'a, 'input> {
     path: &'a Path,
-    doc: &'a Document<'input>,
+    /// The scene's file first, then those it includes.
+    files: Vec<SourceFile<'a, 'input>>,
+    /// Folders added by `<path value=...>`, searched after a file's own folder.
+    search_dirs: Vec<PathBuf>,
     defaults: HashMap<String, String>,
     /// The names given on the command line (`-D`), which `<default>` does not replace, and
     /// which of all names an attribute has used.
@@ -224,9 +289,6 @@ struct Reader<'a, 'input> {
     scene: Scene,
     has_integrator: bool,
     has_sensor: bool,
-    /// The file declares a Mitsuba version before 2.0: property names are upgraded as Mitsuba 3
-    /// upgrades them (camelCase to snake_case, ...).
-    before_v2: bool,
     errors: RefCell<Vec<SceneError>>,
     warnings: RefCell<Vec<SceneError>>,
 }
@@ -390,13 +452,23 @@ struct ShapeCommon {
 }
 
 impl<'a, 'input> Reader<'a, 'input> {
-    fn location_of(&self, offset: usize) -> Location {
-        let pos = self.doc.text_pos_at(offset);
-        Location::new(self.path, pos.row as usize, pos.col as usize)
+    /// The file `node` is in.
+    fn file_of(&self, node: Node) -> &SourceFile<'a, 'input> {
+        self.files
+            .iter()
+            .find(|f| std::ptr::eq(f.doc, node.document()))
+            .unwrap_or(&self.files[0])
+    }
+
+    /// Where byte `offset` of `node`'s file is.
+    fn location_of(&self, node: Node, offset: usize) -> Location {
+        let file = self.file_of(node);
+        let pos = file.doc.text_pos_at(offset);
+        Location::new(&file.path, pos.row as usize, pos.col as usize)
     }
 
     fn location(&self, node: Node) -> Location {
-        self.location_of(node.range().start)
+        self.location_of(node, node.range().start)
     }
 
     fn error(&self, node: Node, message: impl Into<String>) -> SceneError {
@@ -408,7 +480,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let offset = node
             .attribute_node(attr)
             .map_or(node.range().start, |a| a.range().start);
-        SceneError::at(self.location_of(offset), message)
+        SceneError::at(self.location_of(node, offset), message)
     }
 
     /// Records a problem that keeps the scene from rendering; reading goes on.
@@ -430,7 +502,8 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// Every attribute of every known tag must be one it takes.
     fn check_attributes(&self) {
-        for node in self.doc.descendants().filter(Node::is_element) {
+        let all = self.files.iter().flat_map(|f| f.doc.descendants());
+        for node in all.filter(Node::is_element) {
             let tag = node.tag_name().name();
             let Some(allowed) = allowed_attributes(tag) else {
                 continue;
@@ -530,10 +603,91 @@ impl<'a, 'input> Reader<'a, 'input> {
             return Err(self.error(root, "the root element must be <scene>"));
         }
         self.read_version(root)?;
-        // Each element is read on its own: one that fails is reported and the next is read, so
-        // that a check lists every problem in the file.
+        self.read_children(root, 0);
+        Ok(())
+    }
+
+    /// The top-level elements of `root` (the scene's, or an included file's). Each is read on
+    /// its own: one that fails is reported and the next is read, so that a check lists every
+    /// problem in the file.
+    fn read_children(&mut self, root: Node<'a, 'input>, depth: usize) {
         for child in root.children().filter(Node::is_element) {
-            let read = match child.tag_name().name() {
+            let read = self.read_top_level(child, depth);
+            self.keep(read);
+        }
+    }
+
+    fn read_top_level(&mut self, child: Node<'a, 'input>, depth: usize) -> Result<(), SceneError> {
+        match child.tag_name().name() {
+            "include" => self.read_include(child, depth),
+            "path" => {
+                let dir = self.required_attr(child, "value")?;
+                let dir = relative_to(&self.file_of(child).path, &dir);
+                self.search_dirs.insert(0, dir);
+                Ok(())
+            }
+            "alias" => self.read_alias(child),
+            _ => self.read_element(child),
+        }
+    }
+
+    /// `<include filename=...>`: an included `<scene>`'s elements are read as if they stood
+    /// here; a file holding one object (a `<bsdf>`, a `<shape>`) adds that object.
+    fn read_include(&mut self, node: Node<'a, 'input>, depth: usize) -> Result<(), SceneError> {
+        let name = self.required_attr(node, "filename")?;
+        let file = relative_to(&self.file_of(node).path, &name);
+        let Some(index) = self.files.iter().position(|f| f.path == file) else {
+            return Err(self.attr_error(
+                node,
+                "filename",
+                format!("<include>: cannot read {}", file.display()),
+            ));
+        };
+        if depth >= MAX_INCLUDE_DEPTH {
+            return Err(self.error(
+                node,
+                format!("<include>: includes nested deeper than {MAX_INCLUDE_DEPTH} (a cycle?)"),
+            ));
+        }
+        let root = self.files[index].doc.root_element();
+        if root.has_tag_name("scene") {
+            self.read_version(root)?;
+            self.read_children(root, depth + 1);
+            Ok(())
+        } else {
+            self.read_top_level(root, depth + 1)
+        }
+    }
+
+    /// `<alias id=... as=...>`: a second name for a BSDF or texture.
+    fn read_alias(&mut self, node: Node) -> Result<(), SceneError> {
+        let id = self.required_attr(node, "id")?;
+        let alias = self.required_attr(node, "as")?;
+        if self.named_bsdfs.contains_key(&alias) || self.named_textures.contains_key(&alias) {
+            return Err(self.attr_error(
+                node,
+                "as",
+                format!("<alias>: the id \"{alias}\" is taken already"),
+            ));
+        }
+        if let Some(bsdf) = self.named_bsdfs.get(&id).copied() {
+            self.named_bsdfs.insert(alias, bsdf);
+        } else if let Some((texture, _)) = self.named_textures.get(&id) {
+            let copy = (texture.clone(), RefCell::new(None));
+            self.named_textures.insert(alias, copy);
+        } else {
+            return Err(self.attr_error(
+                node,
+                "id",
+                format!("<alias>: no <bsdf> or <texture> with id \"{id}\" is declared before this"),
+            ));
+        }
+        Ok(())
+    }
+
+    fn read_element(&mut self, child: Node<'a, 'input>) -> Result<(), SceneError> {
+        {
+            match child.tag_name().name() {
                 "default" => self.read_default(child),
                 "integrator" => self.read_integrator(child),
                 "sensor" => self.read_sensor(child),
@@ -542,10 +696,8 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "bsdf" => self.read_named_bsdf(child),
                 "texture" => self.read_named_texture(child),
                 other => Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
-            };
-            self.keep(read);
+            }
         }
-        Ok(())
     }
 
     fn read_default(&mut self, node: Node) -> Result<(), SceneError> {
@@ -574,7 +726,12 @@ impl<'a, 'input> Reader<'a, 'input> {
                 format!("<scene version=\"{version}\">: expected a version such as 3.0.0"),
             ));
         };
-        self.before_v2 = major < 2;
+        let index = self
+            .files
+            .iter()
+            .position(|f| std::ptr::eq(f.doc, root.document()))
+            .unwrap_or(0);
+        self.files[index].before_v2 = major < 2;
         Ok(())
     }
 
@@ -598,7 +755,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 ));
             }
             let mut name = self.required_attr(child, "name")?;
-            if self.before_v2 {
+            if self.file_of(child).before_v2 {
                 name = self.upgraded_name(node, &name);
             }
             if let Some((_, first)) = entries.iter().find(|(n, _)| *n == name) {
@@ -2089,9 +2246,19 @@ impl<'a, 'input> Reader<'a, 'input> {
             .push_mesh_data(mesh, common.to_world, common.material, common.flip_normals);
     }
 
+    /// A file named in the scene: beside the scene's file, else in a `<path>` folder, else
+    /// beside an included file (the first that exists; the scene's folder when none does).
     fn relative(&self, file: &str) -> PathBuf {
-        let dir = self.path.parent().unwrap_or(Path::new("."));
-        dir.join(file)
+        let beside_scene = relative_to(self.path, file);
+        let candidates = self
+            .search_dirs
+            .iter()
+            .map(|dir| dir.join(file))
+            .chain(self.files[1..].iter().map(|f| relative_to(&f.path, file)));
+        std::iter::once(beside_scene.clone())
+            .chain(candidates)
+            .find(|p| p.exists())
+            .unwrap_or(beside_scene)
     }
 
     fn read_area_emitter(&self, node: Node<'a, 'input>) -> Result<Vec3, SceneError> {
