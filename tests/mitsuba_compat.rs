@@ -358,3 +358,26 @@ fn includes_paths_and_aliases_load() {
         "{errors:#?}"
     );
 }
+
+/// A texture is decoded by what its bytes are: a progressive JPEG saved under a .png name (as
+/// downloaded scenes have) reads as the same picture as the lossless PNG it was made from, to
+/// within JPEG's loss (its halved chroma: under 6% per channel; swapped channels or a wrong
+/// decode are off by up to 100%). Decoding by the name's format refuses it.
+#[test]
+fn textures_are_decoded_by_their_content() {
+    let read = |name: &str| {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/textures")
+            .join(name);
+        hppm::scene::texture::read_image(&path, true).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (w, h, jpeg) = read("gradient_progressive_named.png");
+    let (pw, ph, png) = read("gradient.png");
+    assert_eq!((w, h), (pw, ph));
+    let worst = jpeg
+        .iter()
+        .zip(&png)
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 0.06, "worst channel difference {worst}");
+}

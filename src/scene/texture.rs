@@ -247,6 +247,17 @@ impl Bitmap {
 /// they are, PNG, JPEG and BMP (8 or 16 bits, grey or colour; alpha dropped) decoded from sRGB
 /// unless `raw`. Refuses empty images, images over [`MAX_SIDE`] a side and non-finite texels;
 /// the error begins with the file's name.
+/// Decodes an image by what its bytes are, not what its name says: downloaded scenes have JPEGs
+/// named .png and the other way round, which Mitsuba reads all the same.
+fn decode_image(path: &Path) -> Result<::image::DynamicImage, String> {
+    ::image::io::Reader::open(path)
+        .map_err(|e| e.to_string())?
+        .with_guessed_format()
+        .map_err(|e| e.to_string())?
+        .decode()
+        .map_err(|e| e.to_string())
+}
+
 pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {
     let ext = path
         .extension()
@@ -261,13 +272,13 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
             (image.width, image.height, texels)
         }
         "hdr" => {
-            let image = ::image::open(path).map_err(|e| fail(e.to_string()))?;
+            let image = decode_image(path).map_err(fail)?;
             let rgb = image.to_rgb32f();
             let texels = rgb.pixels().map(|p| Vec3::from_array(p.0)).collect();
             (rgb.width(), rgb.height(), texels)
         }
         "png" | "jpg" | "jpeg" | "bmp" => {
-            let image = ::image::open(path).map_err(|e| fail(e.to_string()))?;
+            let image = decode_image(path).map_err(fail)?;
             let rgb = image.to_rgb32f();
             let decode = |x: f32| if raw { x } else { srgb_to_linear(x) };
             let texels = rgb
