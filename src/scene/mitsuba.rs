@@ -2077,14 +2077,14 @@ impl<'a, 'input> Reader<'a, 'input> {
         let kind = self.required_attr(node, "type")?;
         if !matches!(
             kind.as_str(),
-            "rectangle" | "cube" | "disk" | "sphere" | "obj" | "ply" | "serialized"
+            "rectangle" | "cube" | "disk" | "cylinder" | "sphere" | "obj" | "ply" | "serialized"
         ) {
             return Err(self.attr_error(
                 node,
                 "type",
                 format!(
-                    "shape type \"{kind}\" is not supported (rectangle, cube, disk, sphere, obj, \
-                     ply, serialized)"
+                    "shape type \"{kind}\" is not supported (rectangle, cube, disk, cylinder, \
+                     sphere, obj, ply, serialized)"
                 ),
             ));
         }
@@ -2109,6 +2109,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             "rectangle" => self.push_mesh_data(mesh::rectangle_mesh(), &common),
             "cube" => self.push_mesh_data(mesh::cube_mesh(), &common),
             "disk" => self.push_mesh_data(mesh::disk_mesh(), &common),
+            "cylinder" => self.read_cylinder(&mut props, &common, node)?,
             "sphere" => self.read_sphere(&mut props, &common, to_world, node)?,
             "ply" => self.read_mesh_file(&mut props, &common, node, MeshFormat::Ply)?,
             "serialized" => {
@@ -2121,6 +2122,52 @@ impl<'a, 'input> Reader<'a, 'input> {
             return Err(self.error(node, message));
         }
         self.finish(props, node)
+    }
+
+    /// Mitsuba's `cylinder`: the unit tube placed between `p0` and `p1` with `radius`, its
+    /// axis turned into place by the frame Mitsuba builds around it (which fixes where its
+    /// texture's u starts), then by `to_world`.
+    fn read_cylinder(
+        &mut self,
+        props: &mut Props,
+        common: &ShapeCommon,
+        node: Node,
+    ) -> Result<(), SceneError> {
+        let point = |props: &mut Props, name: &str, default: Vec3| match props.take(name) {
+            Some(n) => self.point(n),
+            None => Ok(default),
+        };
+        let p0 = point(props, "p0", Vec3::ZERO)?;
+        let p1 = point(props, "p1", Vec3::Z)?;
+        let radius = match props.take("radius") {
+            Some(n) => self.float(n)?,
+            None => 1.0,
+        };
+        let axis = p1 - p0;
+        let length = axis.length();
+        if !(radius > 0.0 && length > 0.0) {
+            return Err(self.error(
+                node,
+                format!("cylinder: radius {radius} and length {length} must be positive"),
+            ));
+        }
+        let n = axis / length;
+        let s = orthogonal_to(n);
+        let frame = Mat4::from_cols(
+            s.extend(0.0),
+            n.cross(s).extend(0.0),
+            n.extend(0.0),
+            Vec4::W,
+        );
+        let placed = ShapeCommon {
+            to_world: common.to_world
+                * Mat4::from_translation(p0)
+                * frame
+                * Mat4::from_scale(Vec3::new(radius, radius, length)),
+            ..*common
+        };
+        self.push_mesh_data(mesh::cylinder_mesh(), &placed);
+        Ok(())
     }
 
     fn read_sphere(
