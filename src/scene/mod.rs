@@ -13,6 +13,7 @@ pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 pub mod ron_format;
+pub mod spectrum;
 pub mod split_boxes;
 pub mod texture;
 
