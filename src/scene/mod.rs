@@ -14,6 +14,7 @@ pub mod obj;
 pub mod ply;
 pub mod ron_format;
 pub mod serialized;
+pub mod spectrum;
 pub mod split_boxes;
 pub mod texture;
 
