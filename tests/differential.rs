@@ -105,7 +105,8 @@ fn found_by_long_runs() {
 /// `cylinder` (placed by p0, p1, radius and to_world; diffuse, rough metal, emitting),
 /// `serialized` meshes, colours given as spectra (wavelength lists as reflectance, emission and
 /// conductor indices, a constant spectrum on an emitter, a .spd file; converted as Mitsuba's RGB
-/// variants convert them), and a camera given as the tutorials give it (Mitsuba's default 50 mm
+/// variants convert them), `hide_emitters` (camera rays through a rectangle and a sphere light,
+/// no environment seen, both still lighting), and a camera given as the tutorials give it (Mitsuba's default 50 mm
 /// lens on a film that is not square, a lookat without up). An up vector or cylinder frame
 /// turned the wrong way moves whole blocks and fails; a default lens of 45 mm instead of 50
 /// fails at 1.04x the bound (finer fov errors are left to tests/mitsuba_compat.rs, which

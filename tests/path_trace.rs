@@ -65,6 +65,7 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
         integrator: Integrator {
             max_depth: None,
             rr_depth: Some(3),
+            hide_emitters: false,
         },
         spp_hint: None,
         materials: vec![Material {

@@ -74,6 +74,7 @@ fn lit_sphere(mesh: Option<MeshData>) -> Scene {
         integrator: Integrator {
             max_depth: Some(2),
             rr_depth: None,
+            hide_emitters: false,
         },
         spp_hint: None,
         materials: vec![Material {
@@ -202,6 +203,7 @@ fn shading_normals_create_no_energy_in_a_furnace() {
         integrator: Integrator {
             max_depth: None,
             rr_depth: Some(3),
+            hide_emitters: false,
         },
         spp_hint: None,
         materials: vec![Material {

@@ -42,7 +42,8 @@ struct SceneUniform {
     film_height: u32,
     tile_x: u32,
     tile_y: u32,
-    pad_tile_a: u32,
+    // 1: camera rays pass through emitting shapes and see no environment (hide_emitters).
+    hide_emitters: u32,
     pad_tile_b: u32,
     pad_tile_c: u32,
 }

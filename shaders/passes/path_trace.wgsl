@@ -25,7 +25,7 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
-#import common::scene::{scene_info, materials, Material, Surface, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::scene::{scene_info, materials, Material, Surface, Hit, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
@@ -299,6 +299,26 @@ fn start_path(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -
     return PathState(scene_info.camera_origin, dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, vec3<f32>(0.0), 1u);
 }
 
+// Emitting shapes a camera ray steps through under hide_emitters before it counts as hidden.
+const MAX_EMITTER_SKIPS: u32 = 16u;
+
+// The first surface along a camera ray that does not emit, as Mitsuba's hide_emitters skips
+// emitting shapes: each one met is stepped through along the same direction.
+fn past_emitters(first: Hit, path: ptr<function, PathState>, rays: ptr<function, u32>) -> Hit {
+    var hit = first;
+    for (var skips = 0u; skips < MAX_EMITTER_SKIPS && hit.prim != NO_HIT; skips++) {
+        let surface = surface_at(hit, (*path).origin, (*path).dir);
+        if surface.light == NO_LIGHT {
+            break;
+        }
+        (*path).origin = spawn_origin(surface, (*path).dir);
+        (*path).travelled += hit.t;
+        *rays += 1u;
+        hit = intersect_scene((*path).origin, (*path).dir);
+    }
+    return hit;
+}
+
 // Traces the next segment of `path`, adds the light it reaches to its radiance and samples the
 // direction after it. Returns whether the path goes on.
 fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> bool {
@@ -308,10 +328,17 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         return false;
     }
     *rays += 1u;
-    let hit = intersect_scene((*path).origin, (*path).dir);
+    var hit = intersect_scene((*path).origin, (*path).dir);
+    // Mitsuba's hide_emitters: what the camera sees directly leaves out every emitter.
+    let hidden = depth == 1u && scene_info.hide_emitters != 0u;
+    if hidden {
+        hit = past_emitters(hit, path, rays);
+    }
     if hit.prim == NO_HIT {
 #ifdef ENVIRONMENT
-        (*path).radiance += (*path).throughput * environment_emission(*path);
+        if !hidden {
+            (*path).radiance += (*path).throughput * environment_emission(*path);
+        }
 #endif
         return false;
     }
@@ -322,7 +349,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     (*path).travelled += hit.t;
 
 #ifdef GLOSSY
-    if surface.light != NO_LIGHT && cos_o > 0.0 {
+    if surface.light != NO_LIGHT && cos_o > 0.0 && !hidden {
         // Reached through specular lobes only from a photon-mapped vertex, the `mapped` share
         // is the photons'; the rest keeps its MIS weight (a glossy lobe's pdf, not delta's).
         let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - (*path).mapped, (*path).after_specular);
@@ -333,7 +360,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         (*path).radiance += (*path).throughput * kept * material.emission * weight;
     }
 #else
-    if surface.light != NO_LIGHT && cos_o > 0.0 && !((*path).after_delta && (*path).after_merge) {
+    if surface.light != NO_LIGHT && cos_o > 0.0 && !hidden && !((*path).after_delta && (*path).after_merge) {
         var weight = 1.0;
         if !(*path).after_delta {
             weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));

@@ -193,7 +193,10 @@ pub struct GpuSceneUniform {
     pub film_height: u32,
     pub tile_x: u32,
     pub tile_y: u32,
-    pub _pad_tile: [u32; 3],
+    /// 1 when camera rays pass through emitting shapes and see no environment (Mitsuba's
+    /// `hide_emitters`).
+    pub hide_emitters: u32,
+    pub _pad_tile: [u32; 2],
 }
 
 /// Everything the GPU needs to trace rays through a scene. Arrays are never empty (a zeroed
@@ -670,6 +673,7 @@ impl GpuScene {
             .map_or(NO_LIGHT, |i| i as u32);
         uniform.max_depth = scene.integrator.max_depth.unwrap_or(UNBOUNDED);
         uniform.rr_depth = scene.integrator.rr_depth.unwrap_or(UNBOUNDED);
+        uniform.hide_emitters = scene.integrator.hide_emitters as u32;
         let [x, y, z, radius] = padded_sphere(bounding_sphere(scene, Bsdf::is_delta));
         uniform.specular_center = [x, y, z];
         uniform.specular_radius = radius;

@@ -207,6 +207,7 @@ fn empty_scene(path: &Path) -> Scene {
         integrator: Integrator {
             max_depth: None,
             rr_depth: Some(DEFAULT_RR_DEPTH),
+            hide_emitters: false,
         },
         spp_hint: None,
         materials: Vec::new(),
@@ -1254,10 +1255,8 @@ impl<'a, 'input> Reader<'a, 'input> {
         {
             self.scene.integrator.rr_depth = None;
         }
-        if let Some(n) = props.take("hide_emitters")
-            && self.boolean(n)?
-        {
-            return Err(self.attr_error(n, "value", "hide_emitters=true is not supported"));
+        if let Some(n) = props.take("hide_emitters") {
+            self.scene.integrator.hide_emitters = self.boolean(n)?;
         }
         if kind == "path" {
             return self.finish(props, node);

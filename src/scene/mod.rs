@@ -290,6 +290,9 @@ pub struct Integrator {
     pub max_depth: Option<u32>,
     /// Depth (in segments) from which Russian roulette starts. `None` = never.
     pub rr_depth: Option<u32>,
+    /// Mitsuba's `hide_emitters`: camera rays pass through emitting shapes and see no
+    /// environment; light still reaches the scene from them.
+    pub hide_emitters: bool,
 }
 
 impl Default for Integrator {
@@ -297,6 +300,7 @@ impl Default for Integrator {
         Self {
             max_depth: Some(12),
             rr_depth: None,
+            hide_emitters: false,
         }
     }
 }

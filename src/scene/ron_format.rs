@@ -89,6 +89,7 @@ impl Default for IntegratorFile {
         let Integrator {
             max_depth,
             rr_depth,
+            ..
         } = Integrator::default();
         Self {
             max_depth,
@@ -371,6 +372,7 @@ impl<'a> Builder<'a> {
         Ok(Integrator {
             max_depth: i.max_depth,
             rr_depth: i.rr_depth,
+            hide_emitters: false,
         })
     }
 
