@@ -103,7 +103,7 @@ fn found_by_long_runs() {
 /// Hand-written scenes for plugins and scene forms the generator does not draw
 /// (tests/differential/plugins, references by tests/differential/references.py): the analytic
 /// `cylinder` (placed by p0, p1, radius and to_world; diffuse, rough metal, emitting),
-/// `serialized` meshes, colours given as spectra (wavelength lists as reflectance, emission and
+/// `serialized` meshes, a shapegroup placed by three instances, colours given as spectra (wavelength lists as reflectance, emission and
 /// conductor indices, a constant spectrum on an emitter, a .spd file; converted as Mitsuba's RGB
 /// variants convert them), `hide_emitters` (camera rays through a rectangle and a sphere light,
 /// no environment seen, both still lighting), and a camera given as the tutorials give it (Mitsuba's default 50 mm

@@ -112,6 +112,9 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
         declared: Vec::new(),
         named_bsdfs: HashMap::new(),
         failed_ids: HashMap::new(),
+        shape_groups: HashMap::new(),
+        meshes: RefCell::new(HashMap::new()),
+        in_group: false,
         named_textures: HashMap::new(),
         textures: RefCell::new(Vec::new()),
         scene: empty_scene(path),
@@ -288,6 +291,13 @@ struct Reader<'a, 'input> {
     /// The ids of top-level BSDFs and textures that could not be read, and where they were:
     /// a reference to one is reported as such, not as an undeclared id.
     failed_ids: HashMap<String, usize>,
+    /// Mesh files read for shapegroups (by path and serialized shape index), read once for
+    /// all their instances. Others are not kept: a large mesh would be held twice.
+    meshes: RefCell<HashMap<(PathBuf, u32), mesh::MeshData>>,
+    /// A shapegroup or an instance is being read.
+    in_group: bool,
+    /// Shapegroups by id: their shapes, read again for each instance.
+    shape_groups: HashMap<String, Vec<Node<'a, 'input>>>,
     scene: Scene,
     has_integrator: bool,
     has_sensor: bool,
@@ -2190,6 +2200,101 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     fn read_shape(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        match node.attribute("type") {
+            Some("shapegroup") => self.read_shapegroup(node),
+            Some("instance") => self.read_instance(node),
+            _ => self.read_placed_shape(node, Mat4::IDENTITY),
+        }
+    }
+
+    /// `<shape type="shapegroup" id=...>`: shapes to be placed by instances. It draws nothing
+    /// itself; its shapes are checked here, once.
+    fn read_shapegroup(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let id = self.required_attr(node, "id")?;
+        if self.shape_groups.contains_key(&id) {
+            return Err(self.attr_error(
+                node,
+                "id",
+                format!("a second <shape id=\"{id}\">: ids must be unique"),
+            ));
+        }
+        let shapes = self.group_shapes(node).inspect_err(|_| {
+            self.failed_ids.insert(id.clone(), self.location(node).line);
+        })?;
+        self.shape_groups.insert(id, shapes);
+        Ok(())
+    }
+
+    /// A shapegroup's shapes, each checked by reading it once (its geometry then dropped).
+    fn group_shapes(
+        &mut self,
+        node: Node<'a, 'input>,
+    ) -> Result<Vec<Node<'a, 'input>>, SceneError> {
+        let props = self.props(node, &["shape"])?;
+        self.finish(props, node)?;
+        let shapes: Vec<Node<'a, 'input>> = node
+            .children()
+            .filter(|c| c.has_tag_name("shape"))
+            .collect();
+        for shape in &shapes {
+            if matches!(shape.attribute("type"), Some("shapegroup" | "instance")) {
+                return Err(self.error(*shape, "a shapegroup holds plain shapes only"));
+            }
+            if shape.children().any(|c| c.has_tag_name("emitter")) {
+                return Err(
+                    self.error(*shape, "shapes in a shapegroup cannot emit (as in Mitsuba)")
+                );
+            }
+        }
+        let (triangles, spheres, materials) = (
+            self.scene.triangles.len(),
+            self.scene.spheres.len(),
+            self.scene.materials.len(),
+        );
+        self.in_group = true;
+        let checked = shapes
+            .iter()
+            .try_for_each(|shape| self.read_placed_shape(*shape, Mat4::IDENTITY));
+        self.in_group = false;
+        self.scene.triangles.truncate(triangles);
+        self.scene.spheres.truncate(spheres);
+        self.scene.materials.truncate(materials);
+        checked.map(|()| shapes)
+    }
+
+    /// `<shape type="instance">`: a shapegroup's shapes placed by the instance's `to_world`
+    /// after their own. Each instance adds its own copy of the triangles (the BVH has no
+    /// instancing), which costs memory as the copies add up.
+    fn read_instance(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let reference = self.single_child(node, "ref")?;
+        let mut props = self.props(node, &["ref"])?;
+        let to_world = match props.take("to_world") {
+            Some(n) => self.transform(n)?,
+            None => Mat4::IDENTITY,
+        };
+        self.finish(props, node)?;
+        let Some(reference) = reference else {
+            return Err(self.error(node, "an instance needs a <ref id=...> to a shapegroup"));
+        };
+        let id = self.required_attr(reference, "id")?;
+        let Some(shapes) = self.shape_groups.get(&id).cloned() else {
+            return Err(self.missing_ref(
+                reference,
+                &id,
+                "shape type=\"shapegroup\"",
+                &format!("<ref id=\"{id}\">"),
+            ));
+        };
+        self.in_group = true;
+        let placed = shapes
+            .into_iter()
+            .try_for_each(|shape| self.read_placed_shape(shape, to_world));
+        self.in_group = false;
+        placed
+    }
+
+    /// A shape, placed by `outer` after its own `to_world`.
+    fn read_placed_shape(&mut self, node: Node<'a, 'input>, outer: Mat4) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
         if !matches!(
             kind.as_str(),
@@ -2200,7 +2305,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "type",
                 format!(
                     "shape type \"{kind}\" is not supported (rectangle, cube, disk, cylinder, \
-                     sphere, obj, ply, serialized)"
+                     sphere, obj, ply, serialized, shapegroup, instance)"
                 ),
             ));
         }
@@ -2208,10 +2313,11 @@ impl<'a, 'input> Reader<'a, 'input> {
         let mut props = self.props(node, &["bsdf", "ref", "emitter"])?;
         let to_world = props.take("to_world");
         let common = ShapeCommon {
-            to_world: to_world
-                .map(|n| self.transform(n))
-                .transpose()?
-                .unwrap_or(Mat4::IDENTITY),
+            to_world: outer
+                * to_world
+                    .map(|n| self.transform(n))
+                    .transpose()?
+                    .unwrap_or(Mat4::IDENTITY),
             material: self.scene.materials.len() as u32,
             flip_normals: props
                 .take("flip_normals")
@@ -2365,17 +2471,31 @@ impl<'a, 'input> Reader<'a, 'input> {
                 .unwrap_or(format == MeshFormat::Obj),
         };
         let mesh_path = self.relative(&file);
-        let loaded = match format {
-            MeshFormat::Obj => super::obj::load_mesh_data(&mesh_path),
-            MeshFormat::Ply => super::ply::load(&mesh_path),
-            // The file's own face-normals flag is not read: Mitsuba 3 shades a serialized mesh
-            // flat only when the face_normals property says so.
-            MeshFormat::Serialized => {
-                let index = self.shape_index(props)?;
-                super::serialized::load(&mesh_path, index).map(|s| s.mesh)
+        let index = match format {
+            MeshFormat::Serialized => self.shape_index(props)?,
+            _ => 0,
+        };
+        let key = (mesh_path.clone(), index);
+        let cached = self.meshes.borrow().get(&key).cloned();
+        let mut mesh = match cached {
+            Some(mesh) => mesh,
+            None => {
+                let loaded = match format {
+                    MeshFormat::Obj => super::obj::load_mesh_data(&mesh_path),
+                    MeshFormat::Ply => super::ply::load(&mesh_path),
+                    // The file's own face-normals flag is not read: Mitsuba 3 shades a
+                    // serialized mesh flat only when the face_normals property says so.
+                    MeshFormat::Serialized => {
+                        super::serialized::load(&mesh_path, index).map(|s| s.mesh)
+                    }
+                };
+                let mesh = loaded.map_err(|e| e.referenced_from(name, &self.location(node)))?;
+                if self.in_group {
+                    self.meshes.borrow_mut().insert(key, mesh.clone());
+                }
+                mesh
             }
         };
-        let mut mesh = loaded.map_err(|e| e.referenced_from(name, &self.location(node)))?;
         if face_normals {
             mesh.normals = None;
         }
