@@ -498,3 +498,66 @@ fn unused_or_malformed_defines_are_errors() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `hppm check` lists every problem of a scene at once, errors and warnings apart, each with
+/// file:line:col, and exits 0 only when the scene renders; `render` prints the warnings of a
+/// scene it renders (an integrator taken as advice) before rendering.
+#[test]
+fn check_lists_every_problem_and_render_prints_warnings() {
+    let dir = std::env::temp_dir().join(format!("hppm_check_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let sensor = r#"<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>"#;
+    let light = r#"<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#;
+    let good = dir.join("good.xml");
+    std::fs::write(
+        &good,
+        format!(r#"<scene version="3.0.0"><integrator type="volpath"/>{sensor}{light}</scene>"#),
+    )
+    .expect("write");
+    let bad = dir.join("bad.xml");
+    std::fs::write(
+        &bad,
+        format!(
+            "<scene version=\"3.0.0\">\n<integrator type=\"bdpt\"/>\n{sensor}\n<shape type=\"sphere\"><float name=\"radios\" value=\"1\"/></shape>\n<shape type=\"teapot\"/>\n{light}\n</scene>"
+        ),
+    )
+    .expect("write");
+
+    let out = hppm(&["check", good.to_str().expect("path")]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(out.status.success(), "{text}{}", stderr(&out));
+    assert!(text.contains("warning:") && text.contains("volpath") && text.contains("renders"));
+
+    let out = hppm(&["check", bad.to_str().expect("path")]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(!out.status.success(), "{text}");
+    for expected in [
+        "bad.xml:2:",
+        "bad.xml:4:",
+        "did you mean \"radius\"",
+        "bad.xml:5:",
+        "teapot",
+    ] {
+        assert!(text.contains(expected), "{expected:?} missing in:\n{text}");
+    }
+    assert_eq!(text.matches("error:").count(), 2, "{text}");
+
+    let png = dir.join("good.png");
+    let out = hppm(&[
+        "render",
+        good.to_str().expect("path"),
+        "--graph",
+        "graphs/pt.ron",
+        "--spp",
+        "1",
+        "--out",
+        png.to_str().expect("path"),
+    ]);
+    let printed = stderr(&out);
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(out.status.success(), "{printed}");
+    assert!(
+        printed.contains("warning:") && printed.contains("volpath"),
+        "{printed}"
+    );
+}
