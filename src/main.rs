@@ -28,6 +28,9 @@ enum Command {
     Render(RenderArgs),
     /// List GPU adapters and the features hppm uses.
     Info,
+    /// Print the Mitsuba 3 plugins and properties the scene loader reads, with Mitsuba's
+    /// defaults and what hppm does with each (the README's table, in Markdown).
+    Plugins,
     /// Check a scene file: every problem in it at once, each with file:line:col, as errors
     /// (it cannot render) and warnings (it renders without that); exits 0 when it renders.
     Check {
@@ -804,6 +807,10 @@ fn main() -> ExitCode {
         Command::Merge(args) => merge(args),
         Command::Info => info(),
         Command::Check { scene, defines } => check_scene(&scene, &defines),
+        Command::Plugins => {
+            print!("{}", scene::plugins::markdown());
+            Ok(())
+        }
         Command::Graph {
             file,
             dot,

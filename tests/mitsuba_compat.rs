@@ -421,3 +421,162 @@ fn instances_place_shapegroups() {
         "{errors:#?}"
     );
 }
+
+/// A scene holding one object of `object` type `kind`, with `property` (XML) inside it and
+/// whatever else that plugin needs to load.
+fn host(object: &str, kind: &str, property: &str) -> String {
+    let film = r#"<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>"#;
+    let plain = format!(r#"<sensor type="perspective">{film}</sensor>"#);
+    let on_cube = |inner: String| format!(r#"<shape type="cube">{inner}</shape>{plain}{LIGHT}"#);
+    match object {
+        "integrator" => {
+            format!(r#"<integrator type="{kind}">{property}</integrator>{plain}{LIGHT}"#)
+        }
+        "sensor" => format!(r#"<sensor type="{kind}">{property}{film}</sensor>{LIGHT}"#),
+        "sampler" => format!(
+            r#"<sensor type="perspective"><sampler type="{kind}">{property}</sampler>{film}</sensor>{LIGHT}"#
+        ),
+        "film" => format!(
+            r#"<sensor type="perspective"><film type="{kind}">{property}</film></sensor>{LIGHT}"#
+        ),
+        "rfilter" => format!(
+            r#"<sensor type="perspective"><film type="hdrfilm"><rfilter type="{kind}">{property}</rfilter></film></sensor>{LIGHT}"#
+        ),
+        "shape" => {
+            let file = |path: &str| format!(r#"<string name="filename" value="{path}"/>"#);
+            let shape = match kind {
+                "shapegroup" => {
+                    format!(
+                        r#"<shape type="shapegroup" id="g">{property}<shape type="cube"/></shape>"#
+                    )
+                }
+                "instance" => format!(
+                    r#"<shape type="shapegroup" id="g"><shape type="cube"/></shape><shape type="instance"><ref id="g"/>{property}</shape>"#
+                ),
+                _ => {
+                    let needs = match kind {
+                        "obj" => file("tests/differential/plugins/instances/ring0.obj"),
+                        "ply" => file("tests/data/mitsuba/smooth_sphere.ply"),
+                        "serialized" => file("tests/data/serialized/two_shapes_v4.serialized"),
+                        _ => String::new(),
+                    };
+                    format!(r#"<shape type="{kind}">{needs}{property}</shape>"#)
+                }
+            };
+            format!("{shape}{plain}{LIGHT}")
+        }
+        "bsdf" if kind == "twosided" => on_cube(format!(
+            r#"<bsdf type="twosided">{property}<bsdf type="diffuse"/></bsdf>"#
+        )),
+        "bsdf" => on_cube(format!(r#"<bsdf type="{kind}">{property}</bsdf>"#)),
+        "texture" => {
+            let needs = match kind {
+                "bitmap" => r#"<string name="filename" value="tests/data/textures/grid4.png"/>"#,
+                _ => "",
+            };
+            on_cube(format!(
+                r#"<bsdf type="diffuse"><texture name="reflectance" type="{kind}">{needs}{property}</texture></bsdf>"#
+            ))
+        }
+        "emitter" if kind == "area" => format!(
+            r#"<shape type="cube"><emitter type="area">{property}</emitter></shape>{plain}"#
+        ),
+        "emitter" => {
+            let needs = match kind {
+                "envmap" => r#"<string name="filename" value="tests/data/textures/grid4.png"/>"#,
+                _ => "",
+            };
+            format!(
+                r#"<emitter type="{kind}">{needs}{property}</emitter><shape type="cube"/>{plain}"#
+            )
+        }
+        "spectrum" => {
+            let needs = match kind {
+                "blackbody" => r#"<float name="temperature" value="3000"/>"#,
+                "regular" => r#"<string name="values" value="0.2, 0.4"/>"#,
+                "irregular" => {
+                    r#"<string name="wavelengths" value="400, 700"/><string name="values" value="0.2, 0.4"/>"#
+                }
+                "srgb" => r#"<rgb name="color" value="0.5"/>"#,
+                _ => "",
+            };
+            on_cube(format!(
+                r#"<bsdf type="diffuse"><spectrum name="reflectance" type="{kind}">{needs}{property}</spectrum></bsdf>"#
+            ))
+        }
+        other => panic!("no host for {other}"),
+    }
+}
+
+/// The plugin table (src/scene/plugins.rs, which the README's table and the loader's messages
+/// come from) and the loader agree both ways: each listed plugin loads with what it needs; a
+/// listed property is read (given a value of the wrong type, the loader says so rather than
+/// calling it unknown); and every property the loader looks for is listed. A property added to
+/// the loader but not to the table, or listed but never read, fails here.
+#[test]
+fn the_plugin_table_is_what_the_loader_reads() {
+    use hppm::scene::plugins::PLUGINS;
+    let mut failures = Vec::new();
+    for plugin in PLUGINS {
+        for kind in plugin.kinds {
+            let kind = if *kind == "any other" {
+                "made_up"
+            } else {
+                kind
+            };
+            let base = check(&host(plugin.object, kind, ""));
+            if !base.errors.is_empty() {
+                failures.push(format!(
+                    "{} {kind} does not load: {:?}",
+                    plugin.object,
+                    base.errors
+                        .iter()
+                        .map(|e| e.to_string())
+                        .collect::<Vec<_>>()
+                ));
+                continue;
+            }
+            let key = format!("{} {kind}", plugin.object);
+            for read in base.properties_read.get(&key).into_iter().flatten() {
+                if !plugin.properties.iter().any(|p| p.name == read) {
+                    failures.push(format!(
+                        "{key} reads \"{read}\", which the table leaves out"
+                    ));
+                }
+            }
+            for property in plugin.properties {
+                let given = format!(r#"<boolean name="{}" value="true"/>"#, property.name);
+                let report = check(&host(plugin.object, kind, &given));
+                let unknown = report
+                    .errors
+                    .iter()
+                    .map(|e| e.to_string())
+                    .find(|e| e.contains("unknown property"));
+                if let Some(e) = unknown {
+                    failures.push(format!(
+                        "{key}: listed \"{}\" is not read: {e}",
+                        property.name
+                    ));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The README's plugin table is the code's (`hppm plugins`): edit src/scene/plugins.rs, then
+/// paste `hppm plugins` between the README's `plugins:begin` and `plugins:end` markers.
+#[test]
+fn the_readme_table_is_generated_from_the_code() {
+    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+        .expect("README.md");
+    let begin = "<!-- plugins:begin -->\n";
+    let start = readme.find(begin).expect("plugins:begin marker") + begin.len();
+    let end = readme
+        .find("<!-- plugins:end -->")
+        .expect("plugins:end marker");
+    assert!(
+        readme[start..end] == hppm::scene::plugins::markdown(),
+        "README.md's plugin table differs from `hppm plugins`: regenerate it"
+    );
+}

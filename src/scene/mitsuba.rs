@@ -1,22 +1,17 @@
-//! The subset of Mitsuba 3 XML used by the reference scenes (see `tests/refs/README.md`).
-//! Like Mitsuba, an unknown tag, attribute or property is an error with its line and column, so
-//! a typo never silently renders a different scene; so is anything this renderer would have to
-//! ignore to load the file (a texture, a mirroring camera).
+//! Mitsuba 3 XML scenes, read as Mitsuba 3 reads them. The plugins and properties read are
+//! listed in `plugins.rs` (the README's table); `<default>` and `$name`, `<include>`, `<path>`,
+//! `<alias>`, `<ref>` and top-level declarations with an `id` work as in Mitsuba, and a file older
+//! than version 2.0 has its property names upgraded as Mitsuba 3 upgrades them.
 //!
-//! Supported: `<default>` with `$name` substitution in attribute values; integrator `path`
-//! (`max_depth`, `rr_depth`); sensor `perspective` (`fov`, `fov_axis`, clip planes, `to_world`)
-//! with sampler `independent` and film `hdrfilm` (`width`, `height`, `sample_border`; rfilter
-//! `box`, `tent`, `gaussian`, the default); shapes `rectangle`, `cube`, `sphere`, `obj`, `ply`
-//! with `to_world` and `flip_normals` (`serialized` is named as not supported); BSDFs `diffuse`,
-//! `dielectric`, `thindielectric`, `roughdielectric`, `conductor`, `roughconductor`, `plastic`,
-//! `roughplastic` and `twosided` (README's table lists their parameters), inline or declared
-//! at top level with an `id` and used through `<ref id>`; textures `checkerboard` and `bitmap`
-//! on the colour parameters (`reflectance`, `diffuse_reflectance`, `specular_reflectance`),
-//! inline or declared at top level with an `id` and used through `<ref name=... id=...>`;
-//! `area` emitters inside shapes and top-level `point` emitters.
+//! Like Mitsuba, an unknown tag, attribute or property is an error with its line and column (and
+//! a did-you-mean), so a typo never silently renders a different scene; so is anything this
+//! renderer would have to ignore to load the file (a projected spot texture, a mirroring
+//! camera). What only changes the algorithm (another integrator or sampler) or only old
+//! versions read is a warning. A check reports every problem in the file at once: an element
+//! that fails is reported and reading goes on with the next (see [`check_with`]).
 
 use std::cell::RefCell;
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Mat4, Vec3, Vec4};
@@ -27,7 +22,7 @@ use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
     Bsdf, Camera, Distribution, Integrator, Material, MaterialTextures, Microfacet, PointLight,
-    Report, Scene, SceneError, SideTextures, Sphere, bsdf, mesh, spectrum,
+    Report, Scene, SceneError, SideTextures, Sphere, bsdf, mesh, plugins, spectrum,
 };
 use crate::error::Location;
 
@@ -122,6 +117,7 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
         has_sensor: false,
         errors: RefCell::new(Vec::new()),
         warnings: RefCell::new(Vec::new()),
+        properties_read: RefCell::new(BTreeMap::new()),
     };
     reader.check_attributes();
     let read = reader.read_scene(doc.root_element());
@@ -152,6 +148,7 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
         scene: errors.is_empty().then_some(reader.scene),
         errors,
         warnings,
+        properties_read: reader.properties_read.take(),
     }
 }
 
@@ -303,6 +300,8 @@ struct Reader<'a, 'input> {
     has_sensor: bool,
     errors: RefCell<Vec<SceneError>>,
     warnings: RefCell<Vec<SceneError>>,
+    /// See [`Report::properties_read`].
+    properties_read: RefCell<BTreeMap<String, BTreeSet<String>>>,
 }
 
 /// The properties of one object (`<float name=...>` and friends), consumed by name; whatever is
@@ -387,47 +386,10 @@ struct Sides {
     textures: MaterialTextures,
 }
 
-/// The texture plugins this loader reads, and the parameters that take a texture, for
-/// messages.
-const SUPPORTED_TEXTURES: &str = "checkerboard, bitmap";
+/// The parameters that take a texture, for messages.
 const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
     roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic), \
     alpha, alpha_u, alpha_v (roughconductor, roughdielectric)";
-
-/// The parameters texture `kind` reads, for messages.
-fn texture_parameters(kind: &str) -> &'static str {
-    match kind {
-        "checkerboard" => "color0, color1, to_uv",
-        "bitmap" => "filename, raw, wrap_mode, filter_type, to_uv, accel",
-        _ => "no parameters",
-    }
-}
-
-/// The BSDF plugins this loader reads, for messages.
-const SUPPORTED_BSDFS: &str = "diffuse, dielectric, thindielectric, roughdielectric, conductor, \
-    roughconductor, plastic, roughplastic, twosided";
-
-/// The parameters `kind` reads, for messages.
-fn bsdf_parameters(kind: &str) -> &'static str {
-    match kind {
-        "diffuse" => "reflectance",
-        "dielectric" | "thindielectric" => "int_ior, ext_ior",
-        "roughdielectric" => {
-            "int_ior, ext_ior, distribution, alpha or alpha_u and alpha_v, sample_visible"
-        }
-        "conductor" => "material or eta and k, specular_reflectance",
-        "roughconductor" => {
-            "material or eta and k, specular_reflectance, distribution, alpha or alpha_u and \
-             alpha_v, sample_visible"
-        }
-        "plastic" => "int_ior, ext_ior, diffuse_reflectance, specular_reflectance, nonlinear",
-        "roughplastic" => {
-            "int_ior, ext_ior, diffuse_reflectance, specular_reflectance, nonlinear, \
-             distribution, alpha, sample_visible"
-        }
-        _ => "no parameters",
-    }
-}
 
 /// Mitsuba's named indices of refraction (include/mitsuba/render/ior.h).
 const NAMED_IORS: &[(&str, f32)] = &[
@@ -801,6 +763,20 @@ impl<'a, 'input> Reader<'a, 'input> {
         name
     }
 
+    /// Records what `owner`'s plugin looked for (see [`Report::properties_read`]).
+    fn note_read(&self, props: &Props, owner: Node) {
+        let plugin = format!(
+            "{} {}",
+            owner.tag_name().name(),
+            owner.attribute("type").unwrap_or_default()
+        );
+        self.properties_read
+            .borrow_mut()
+            .entry(plugin)
+            .or_default()
+            .extend(props.asked.iter().cloned());
+    }
+
     /// Reports every property nobody took (the first is returned, the others recorded); a
     /// property only old Mitsuba versions read is a warning.
     fn finish(&self, props: Props, owner: Node) -> Result<(), SceneError> {
@@ -814,6 +790,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         owner: Node,
         takes: Option<&str>,
     ) -> Result<(), SceneError> {
+        self.note_read(&props, owner);
         let mut unknown = Vec::new();
         for (name, node) in &props.entries {
             if LEGACY_PROPERTIES.contains(&name.as_str()) {
@@ -1271,6 +1248,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         if kind == "path" {
             return self.finish(props, node);
         }
+        self.note_read(&props, node);
         let mut message = format!(
             "integrator \"{kind}\": the render graph chooses the algorithm; rendering with \
              its path depths"
@@ -1516,6 +1494,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         if kind == "independent" {
             return self.finish(props, node);
         }
+        self.note_read(&props, node);
         self.warn(
             node,
             format!(
@@ -1703,11 +1682,14 @@ impl<'a, 'input> Reader<'a, 'input> {
         node: Node<'a, 'input>,
         kind: &str,
     ) -> Result<(Bsdf, SideTextures), SceneError> {
-        if !SUPPORTED_BSDFS.split(", ").any(|k| k == kind) {
+        if plugins::find("bsdf", kind).is_none() {
             return Err(self.attr_error(
                 node,
                 "type",
-                format!("bsdf type \"{kind}\" is not supported ({SUPPORTED_BSDFS})"),
+                format!(
+                    "bsdf type \"{kind}\" is not supported ({})",
+                    plugins::kinds_of("bsdf")
+                ),
             ));
         }
         let mut props = self.props(node, &[])?;
@@ -1796,11 +1778,15 @@ impl<'a, 'input> Reader<'a, 'input> {
                 return Err(self.attr_error(
                     node,
                     "type",
-                    format!("bsdf type \"{other}\" is not supported ({SUPPORTED_BSDFS})"),
+                    format!(
+                        "bsdf type \"{other}\" is not supported ({})",
+                        plugins::kinds_of("bsdf")
+                    ),
                 ));
             }
         };
-        self.finish_with(std::mem::take(props), node, Some(bsdf_parameters(kind)))?;
+        let takes = plugins::properties_of("bsdf", kind);
+        self.finish_with(std::mem::take(props), node, Some(&takes))?;
         Ok((bsdf, textures))
     }
 
@@ -1950,22 +1936,15 @@ impl<'a, 'input> Reader<'a, 'input> {
                 return Err(self.attr_error(
                     node,
                     "type",
-                    format!("texture type \"{other}\" is not supported ({SUPPORTED_TEXTURES})"),
+                    format!(
+                        "texture type \"{other}\" is not supported ({})",
+                        plugins::kinds_of("texture")
+                    ),
                 ));
             }
         };
-        if let Some((name, unknown)) = props.entries.first() {
-            return Err(self.attr_error(
-                *unknown,
-                "name",
-                format!(
-                    "{}: unknown property \"{name}\" for {} (it takes {})",
-                    describe(*unknown),
-                    describe_object(node),
-                    texture_parameters(&kind)
-                ),
-            ));
-        }
+        let takes = plugins::properties_of("texture", &kind);
+        self.finish_with(props, node, Some(&takes))?;
         Ok(texture)
     }
 
@@ -2296,16 +2275,13 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// A shape, placed by `outer` after its own `to_world`.
     fn read_placed_shape(&mut self, node: Node<'a, 'input>, outer: Mat4) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if !matches!(
-            kind.as_str(),
-            "rectangle" | "cube" | "disk" | "cylinder" | "sphere" | "obj" | "ply" | "serialized"
-        ) {
+        if plugins::find("shape", &kind).is_none() {
             return Err(self.attr_error(
                 node,
                 "type",
                 format!(
-                    "shape type \"{kind}\" is not supported (rectangle, cube, disk, cylinder, \
-                     sphere, obj, ply, serialized, shapegroup, instance)"
+                    "shape type \"{kind}\" is not supported ({})",
+                    plugins::kinds_of("shape")
                 ),
             ));
         }
@@ -2554,14 +2530,10 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         let mut props = self.props(node, &[])?;
+        // Mitsuba's default radiance is 1.
         let radiance = match props.take("radiance") {
             Some(n) => self.non_negative_color(n)?,
-            None => {
-                return Err(self.error(
-                    node,
-                    "<emitter type=\"area\"> needs <rgb name=\"radiance\" value=\"...\"/>",
-                ));
-            }
+            None => Vec3::ONE,
         };
         self.finish(props, node)?;
         Ok(radiance)
@@ -2604,8 +2576,8 @@ impl<'a, 'input> Reader<'a, 'input> {
                     node,
                     "type",
                     format!(
-                        "emitter type \"{kind}\" is not supported (point, spot, directional, \
-                         constant, envmap; area inside a shape)"
+                        "emitter type \"{kind}\" is not supported ({}; area inside a shape)",
+                        plugins::kinds_of("emitter").replace("area, ", "")
                     ),
                 ));
             }

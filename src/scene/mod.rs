@@ -11,6 +11,7 @@ pub mod gpu_layout;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj;
+pub mod plugins;
 pub mod ply;
 pub mod ron_format;
 pub mod serialized;
@@ -946,6 +947,9 @@ pub struct Report {
     pub scene: Option<Scene>,
     pub errors: Vec<SceneError>,
     pub warnings: Vec<SceneError>,
+    /// Each plugin met (`"bsdf diffuse"`) and every property name its reader looked for,
+    /// given or not: what the loader reads, to hold the plugin table to it.
+    pub properties_read: std::collections::BTreeMap<String, std::collections::BTreeSet<String>>,
 }
 
 impl Report {
@@ -962,6 +966,7 @@ impl Report {
             scene: None,
             errors: vec![error],
             warnings: Vec::new(),
+            properties_read: Default::default(),
         }
     }
 }
@@ -977,6 +982,7 @@ pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
             scene: Some(scene),
             errors: Vec::new(),
             warnings: Vec::new(),
+            properties_read: Default::default(),
         },
         Err(e) => Report::failed(e),
     }

@@ -1,0 +1,471 @@
+//! The Mitsuba 3 plugins the XML loader reads, with every property each one reads, its default
+//! and what hppm does with it: the one list the loader's messages, `hppm plugins` and the
+//! README's table come from. Tests hold it to the loader: every property listed is one the
+//! loader reads, and every property the loader reads is listed (tests/mitsuba_compat.rs).
+
+/// One plugin (or several that read the same properties): its object tag, its `type`s, the
+/// properties it reads and notes on what hppm does with it.
+#[derive(Debug, Clone, Copy)]
+pub struct Plugin {
+    /// `integrator`, `sensor`, `sampler`, `film`, `rfilter`, `shape`, `bsdf`, `texture`,
+    /// `emitter` or `spectrum`.
+    pub object: &'static str,
+    pub kinds: &'static [&'static str],
+    pub properties: &'static [Property],
+    pub notes: &'static str,
+}
+
+/// A property and its default as Mitsuba gives it ("" when it has none or the plugin needs it).
+#[derive(Debug, Clone, Copy)]
+pub struct Property {
+    pub name: &'static str,
+    pub default: &'static str,
+}
+
+const fn p(name: &'static str, default: &'static str) -> Property {
+    Property { name, default }
+}
+
+const IORS: &[Property] = &[p("int_ior", "bk7"), p("ext_ior", "air")];
+
+const MICROFACET: &[Property] = &[
+    p("int_ior", "bk7"),
+    p("ext_ior", "air"),
+    p("distribution", "beckmann"),
+    p("alpha", "0.1"),
+    p("alpha_u", ""),
+    p("alpha_v", ""),
+    p("sample_visible", "true"),
+];
+
+const CONDUCTOR: &[Property] = &[
+    p("material", "none"),
+    p("eta", ""),
+    p("k", ""),
+    p("specular_reflectance", "1"),
+];
+
+const ROUGH_CONDUCTOR: &[Property] = &[
+    p("material", "none"),
+    p("eta", ""),
+    p("k", ""),
+    p("specular_reflectance", "1"),
+    p("distribution", "beckmann"),
+    p("alpha", "0.1"),
+    p("alpha_u", ""),
+    p("alpha_v", ""),
+    p("sample_visible", "true"),
+];
+
+const PLASTIC: &[Property] = &[
+    p("int_ior", "polypropylene"),
+    p("ext_ior", "air"),
+    p("diffuse_reflectance", "0.5"),
+    p("specular_reflectance", "1"),
+    p("nonlinear", "false"),
+];
+
+const ROUGH_PLASTIC: &[Property] = &[
+    p("int_ior", "polypropylene"),
+    p("ext_ior", "air"),
+    p("diffuse_reflectance", "0.5"),
+    p("specular_reflectance", "1"),
+    p("nonlinear", "false"),
+    p("distribution", "beckmann"),
+    p("alpha", "0.1"),
+    p("alpha_u", "refused: isotropic only"),
+    p("alpha_v", "refused: isotropic only"),
+    p("sample_visible", "true"),
+];
+
+const MESH_FILE: &[Property] = &[
+    p("filename", ""),
+    p("face_normals", "false"),
+    p("flip_tex_coords", "true for OBJ, false for PLY"),
+    p("to_world", "identity"),
+    p("flip_normals", "false"),
+];
+
+/// Every plugin the loader reads, in the order the README lists them.
+pub const PLUGINS: &[Plugin] = &[
+    Plugin {
+        object: "integrator",
+        kinds: &["path", "any other"],
+        properties: &[
+            p("max_depth", "-1"),
+            p("rr_depth", "5"),
+            p("hide_emitters", "false"),
+        ],
+        notes: "The render graph chooses the algorithm: another integrator (`volpath`, `bdpt`, \
+                `direct`: max_depth 2, a plugin of a research project) is rendered with its path \
+                depths and a warning naming it and what it leaves out; one that wraps another \
+                (`aov`) gives the wrapped one's. `hide_emitters`: camera rays pass through \
+                emitting shapes and see no environment.",
+    },
+    Plugin {
+        object: "sensor",
+        kinds: &["perspective"],
+        properties: &[
+            p("fov", ""),
+            p("fov_axis", "x"),
+            p("focal_length", "50mm"),
+            p("near_clip", "0.01"),
+            p("far_clip", "10000"),
+            p("focus_distance", "far_clip"),
+            p("principal_point_offset_x", "0"),
+            p("principal_point_offset_y", "0"),
+            p("shutter_open", "0"),
+            p("shutter_close", "0"),
+            p("srf", ""),
+            p("to_world", "identity"),
+        ],
+        notes: "`fov_axis` x, y, diagonal, smaller or larger; without `fov`, the `focal_length` \
+                of a 36 x 24 mm frame gives the diagonal fov, as in Mitsuba. A pinhole: clip \
+                planes, focus distance and shutter times change nothing; an off-centre principal \
+                point is refused; `srf` (spectral rendering only) is a warning. No mirroring \
+                `to_world`.",
+    },
+    Plugin {
+        object: "sampler",
+        kinds: &["independent", "any other"],
+        properties: &[p("sample_count", "4"), p("seed", "0")],
+        notes: "`sample_count` is the default budget. hppm draws independent samples: another \
+                sampler (`stratified`, `multijitter`, `ldsampler`) is a warning.",
+    },
+    Plugin {
+        object: "film",
+        kinds: &["hdrfilm"],
+        properties: &[
+            p("width", "768"),
+            p("height", "576"),
+            p("sample_border", "false"),
+            p("pixel_format", "rgb"),
+            p("component_format", "float16"),
+            p("file_format", "openexr"),
+        ],
+        notes: "Output is RGB: the last three are read and ignored.",
+    },
+    Plugin {
+        object: "rfilter",
+        kinds: &["box"],
+        properties: &[],
+        notes: "",
+    },
+    Plugin {
+        object: "rfilter",
+        kinds: &["tent"],
+        properties: &[p("radius", "1")],
+        notes: "Splats as Mitsuba's film does.",
+    },
+    Plugin {
+        object: "rfilter",
+        kinds: &["gaussian"],
+        properties: &[p("stddev", "0.5")],
+        notes: "The filter when none is given, as in Mitsuba; its radius is 4 stddev; splats as \
+                Mitsuba's film does.",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["rectangle", "cube", "disk"],
+        properties: &[p("to_world", "identity"), p("flip_normals", "false")],
+        notes: "A disk is a fan of 256 triangles whose area (and an emitting disk's power) is \
+                exactly Mitsuba's, its outline within 0.01% of the radius. Every shape may \
+                carry a `bsdf` and an `area` emitter.",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["sphere"],
+        properties: &[
+            p("center", "0, 0, 0"),
+            p("radius", "1"),
+            p("to_world", "identity"),
+            p("flip_normals", "false"),
+        ],
+        notes: "Analytic. Its `to_world` may only scale uniformly, rotate and translate.",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["cylinder"],
+        properties: &[
+            p("p0", "0, 0, 0"),
+            p("p1", "0, 0, 1"),
+            p("radius", "1"),
+            p("to_world", "identity"),
+            p("flip_normals", "false"),
+        ],
+        notes: "An open tube of 256 quads with radial vertex normals, its area exactly \
+                Mitsuba's, in the frame Mitsuba builds about its axis (so its uvs match).",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["obj", "ply"],
+        properties: MESH_FILE,
+        notes: "PLY ASCII and binary. Vertex normals from the file, or computed angle-weighted \
+                as Mitsuba does when it has none, shade smoothly unless `face_normals`.",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["serialized"],
+        properties: &[
+            p("filename", ""),
+            p("shape_index", "0"),
+            p("face_normals", "false"),
+            p("to_world", "identity"),
+            p("flip_normals", "false"),
+        ],
+        notes: "Mitsuba's zlib-compressed mesh format, versions 3 and 4; the file's own \
+                face-normal flag is ignored, as Mitsuba 3 does.",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["shapegroup"],
+        properties: &[],
+        notes: "Holds shapes (not emitters) that instances place.",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["instance"],
+        properties: &[p("to_world", "identity")],
+        notes: "A `<ref>` to a shapegroup, placed after each shape's own `to_world`; each \
+                instance adds its own copy of the triangles.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["diffuse"],
+        properties: &[p("reflectance", "0.5")],
+        notes: "Lambertian, one-sided. `reflectance` may be a texture.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["dielectric", "thindielectric"],
+        properties: IORS,
+        notes: "Smooth. An index is a number or one of Mitsuba's named media (`water`, \
+                `acrylic glass`, `diamond`, ...).",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["roughdielectric"],
+        properties: MICROFACET,
+        notes: "`distribution` beckmann or ggx; `alpha` or `alpha_u` + `alpha_v` (numbers or \
+                textures); `sample_visible` true only.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["conductor"],
+        properties: CONDUCTOR,
+        notes: "`material` one of the 71 measured metals of Mitsuba's data (`Au`, `Ag`, `Cu`, \
+                ...) or `none` (a perfect mirror), or `eta` + `k`; `specular_reflectance` may \
+                be a texture.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["roughconductor"],
+        properties: ROUGH_CONDUCTOR,
+        notes: "As `conductor`, rough; anisotropic along the tangent of the frame built from \
+                the normal (Mitsuba orients it along dp/du).",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["plastic"],
+        properties: PLASTIC,
+        notes: "Smooth coating over a diffuse base; both reflectances may be textures.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["roughplastic"],
+        properties: ROUGH_PLASTIC,
+        notes: "Isotropic `alpha` only, a number, as in Mitsuba; the coating's transmittance \
+                table is computed at load.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["twosided"],
+        properties: &[],
+        notes: "One nested BSDF (both sides) or two (front, back); they must not transmit, as \
+                in Mitsuba.",
+    },
+    Plugin {
+        object: "texture",
+        kinds: &["checkerboard"],
+        properties: &[
+            p("color0", "0.4"),
+            p("color1", "0.2"),
+            p("to_uv", "identity"),
+        ],
+        notes: "On colour parameters and rough BSDFs' `alpha`s.",
+    },
+    Plugin {
+        object: "texture",
+        kinds: &["bitmap"],
+        properties: &[
+            p("filename", ""),
+            p("raw", "false"),
+            p("wrap_mode", "repeat"),
+            p("filter_type", "bilinear"),
+            p("to_uv", "identity"),
+            p("accel", "true"),
+        ],
+        notes: "PNG, JPEG (progressive too), BMP decoded from sRGB unless `raw`, OpenEXR \
+                linear; the format from the file's bytes, not its name; alpha dropped; at most \
+                16384 texels a side; `accel` is read and changes nothing.",
+    },
+    Plugin {
+        object: "emitter",
+        kinds: &["area"],
+        properties: &[p("radiance", "1")],
+        notes: "Inside a shape; one-sided, by the geometric normal.",
+    },
+    Plugin {
+        object: "emitter",
+        kinds: &["point"],
+        properties: &[
+            p("position", ""),
+            p("to_world", "identity"),
+            p("intensity", "1"),
+        ],
+        notes: "",
+    },
+    Plugin {
+        object: "emitter",
+        kinds: &["spot"],
+        properties: &[
+            p("to_world", "identity"),
+            p("intensity", "1"),
+            p("cutoff_angle", "20"),
+            p("beam_width", "3/4 of cutoff_angle"),
+            p("texture", ""),
+        ],
+        notes: "Shines along its +z; Mitsuba's falloff; `to_world` must keep the cone round; \
+                a projected `texture` is refused.",
+    },
+    Plugin {
+        object: "emitter",
+        kinds: &["directional"],
+        properties: &[
+            p("direction", ""),
+            p("to_world", "identity"),
+            p("irradiance", "1"),
+        ],
+        notes: "",
+    },
+    Plugin {
+        object: "emitter",
+        kinds: &["constant"],
+        properties: &[p("radiance", "1")],
+        notes: "At most one environment emitter, as in Mitsuba.",
+    },
+    Plugin {
+        object: "emitter",
+        kinds: &["envmap"],
+        properties: &[
+            p("filename", ""),
+            p("scale", "1"),
+            p("to_world", "identity"),
+            p("filter_type", "bilinear"),
+            p("mis_compensation", "false"),
+        ],
+        notes: "OpenEXR, Radiance HDR, PNG/JPEG/BMP; Mitsuba's orientation; `to_world` a \
+                rotation; `filter_type` bilinear and `mis_compensation` false only.",
+    },
+    Plugin {
+        object: "spectrum",
+        kinds: &["blackbody"],
+        properties: &[
+            p("temperature", ""),
+            p("wavelength_min", "360"),
+            p("wavelength_max", "830"),
+        ],
+        notes: "What Mitsuba's spectral variants render (its RGB variants cannot).",
+    },
+    Plugin {
+        object: "spectrum",
+        kinds: &["regular"],
+        properties: &[
+            p("values", ""),
+            p("wavelength_min", "360"),
+            p("wavelength_max", "830"),
+        ],
+        notes: "Converted as Mitsuba converts sampled spectra (below).",
+    },
+    Plugin {
+        object: "spectrum",
+        kinds: &["irregular"],
+        properties: &[p("wavelengths", ""), p("values", "")],
+        notes: "Converted as Mitsuba converts sampled spectra (below).",
+    },
+    Plugin {
+        object: "spectrum",
+        kinds: &["d65"],
+        properties: &[p("color", "1"), p("scale", "1")],
+        notes: "In RGB, `color` times `scale`.",
+    },
+    Plugin {
+        object: "spectrum",
+        kinds: &["srgb"],
+        properties: &[p("color", ""), p("unbounded", "false")],
+        notes: "`color` within [0, 1] unless `unbounded`.",
+    },
+];
+
+/// The plugins of `object` by type, for messages: "rectangle, cube, disk, ...".
+pub fn kinds_of(object: &str) -> String {
+    PLUGINS
+        .iter()
+        .filter(|p| p.object == object)
+        .flat_map(|p| p.kinds.iter().copied())
+        .filter(|k| *k != "any other")
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The plugin of `object` with `type` `kind`, if the loader reads it.
+pub fn find(object: &str, kind: &str) -> Option<&'static Plugin> {
+    PLUGINS
+        .iter()
+        .find(|p| p.object == object && p.kinds.contains(&kind))
+}
+
+/// The properties `kind` of `object` reads, for messages: "int_ior, ext_ior".
+pub fn properties_of(object: &str, kind: &str) -> String {
+    match find(object, kind) {
+        Some(plugin) if !plugin.properties.is_empty() => plugin
+            .properties
+            .iter()
+            .map(|p| p.name)
+            .collect::<Vec<_>>()
+            .join(", "),
+        _ => "no properties".into(),
+    }
+}
+
+/// The table in Markdown (`hppm plugins`, the README).
+pub fn markdown() -> String {
+    let mut out = String::from("| object | type | properties (Mitsuba's defaults) | notes |\n");
+    out.push_str("|---|---|---|---|\n");
+    for plugin in PLUGINS {
+        let kinds: Vec<String> = plugin
+            .kinds
+            .iter()
+            .map(|k| match *k {
+                "any other" => "any other".to_string(),
+                k => format!("`{k}`"),
+            })
+            .collect();
+        let properties: Vec<String> = plugin
+            .properties
+            .iter()
+            .map(|p| match p.default {
+                "" => format!("`{}`", p.name),
+                d => format!("`{}` ({d})", p.name),
+            })
+            .collect();
+        out.push_str(&format!(
+            "| {} | {} | {} | {} |\n",
+            plugin.object,
+            kinds.join(", "),
+            properties.join(", "),
+            plugin.notes
+        ));
+    }
+    out
+}
