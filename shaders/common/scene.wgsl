@@ -228,6 +228,27 @@ const BVH_STACK_SIZE: u32 = 64u;
 // Texture headers then their data, as 32-bit words (src/scene/texture.rs, gpu_words); bound
 // only for scenes with textures.
 @group(0) @binding(11) var<storage, read> textures: array<u32>;
+#ifdef TEXTURES_CHUNKED
+@group(0) @binding(56) var<storage, read> textures_1: array<u32>;
+#endif
+#ifdef TEXTURES_CHUNK_2
+@group(0) @binding(57) var<storage, read> textures_2: array<u32>;
+#endif
+#ifdef TEXTURES_CHUNK_3
+@group(0) @binding(58) var<storage, read> textures_3: array<u32>;
+#endif
+#ifdef TEXTURES_CHUNK_4
+@group(0) @binding(59) var<storage, read> textures_4: array<u32>;
+#endif
+#ifdef TEXTURES_CHUNK_5
+@group(0) @binding(60) var<storage, read> textures_5: array<u32>;
+#endif
+#ifdef TEXTURES_CHUNK_6
+@group(0) @binding(61) var<storage, read> textures_6: array<u32>;
+#endif
+#ifdef TEXTURES_CHUNK_7
+@group(0) @binding(62) var<storage, read> textures_7: array<u32>;
+#endif
 #endif
 
 // Tables larger than one storage binding (a mesh of millions of triangles on an adapter that
@@ -466,6 +487,40 @@ fn triangle_uvs_at(i: u32) -> TriangleUvs {
 }
 
 // Entry `i` of prim_indices, whichever way it is bound.
+#ifdef TEXTURES
+// Word `i` of the texture table, which is split over several bindings when it is larger than
+// one (TEXTURES_CHUNKED: chunks of 2^TEXTURES_CHUNK_SHIFT words).
+fn texture_word(i: u32) -> u32 {
+#ifdef TEXTURES_CHUNKED
+    let j = i & ((1u << #{TEXTURES_CHUNK_SHIFT}) - 1u);
+    switch i >> #{TEXTURES_CHUNK_SHIFT} {
+        case 1u: { return textures_1[j]; }
+#ifdef TEXTURES_CHUNK_2
+        case 2u: { return textures_2[j]; }
+#endif
+#ifdef TEXTURES_CHUNK_3
+        case 3u: { return textures_3[j]; }
+#endif
+#ifdef TEXTURES_CHUNK_4
+        case 4u: { return textures_4[j]; }
+#endif
+#ifdef TEXTURES_CHUNK_5
+        case 5u: { return textures_5[j]; }
+#endif
+#ifdef TEXTURES_CHUNK_6
+        case 6u: { return textures_6[j]; }
+#endif
+#ifdef TEXTURES_CHUNK_7
+        case 7u: { return textures_7[j]; }
+#endif
+        default: { return textures[j]; }
+    }
+#else
+    return textures[i];
+#endif
+}
+#endif
+
 fn prim_index(i: u32) -> u32 {
 #ifdef PRIM_INDICES_UNIFORM
     return prim_indices[i >> 2u][i & 3u];

@@ -4,7 +4,7 @@
 // (Texture::eval), which this must equal. Compiled in only for scenes with textures.
 
 #ifdef TEXTURES
-#import common::scene::{Material, NO_TEXTURE, textures}
+#import common::scene::{Material, NO_TEXTURE, texture_word}
 
 const TEXTURE_CHECKERBOARD: u32 = 0u;
 const HEADER_WORDS: u32 = 12u;
@@ -26,18 +26,18 @@ struct TextureHeader {
 }
 
 fn word_f32(i: u32) -> f32 {
-    return bitcast<f32>(textures[i]);
+    return bitcast<f32>(texture_word(i));
 }
 
 fn texture_header(index: u32) -> TextureHeader {
     let h = index * HEADER_WORDS;
     return TextureHeader(
-        textures[h],
-        i32(textures[h + 1u]),
-        i32(textures[h + 2u]),
-        textures[h + 3u],
-        textures[h + 4u],
-        textures[h + 5u],
+        texture_word(h),
+        i32(texture_word(h + 1u)),
+        i32(texture_word(h + 2u)),
+        texture_word(h + 3u),
+        texture_word(h + 4u),
+        texture_word(h + 5u),
         vec3<f32>(word_f32(h + 6u), word_f32(h + 7u), word_f32(h + 8u)),
         vec3<f32>(word_f32(h + 9u), word_f32(h + 10u), word_f32(h + 11u)),
     );

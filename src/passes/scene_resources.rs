@@ -96,7 +96,7 @@ struct ChunkableTable {
 /// Chunks a table may have (the bindings shaders/common/scene.wgsl declares for each).
 pub const MAX_CHUNKS: u32 = 8;
 
-const CHUNKABLE: [ChunkableTable; 5] = [
+const CHUNKABLE: [ChunkableTable; 6] = [
     ChunkableTable {
         binding: 1,
         prefix: "BVH_NODES",
@@ -127,7 +127,25 @@ const CHUNKABLE: [ChunkableTable; 5] = [
         stride: size_of::<crate::scene::gpu_layout::GpuTriangleUvs>() as u64,
         base: 48,
     },
+    // A scene's textures add up quickly: ten 2048x2048 bitmaps are 480 MiB of texels.
+    ChunkableTable {
+        binding: TEXTURES_BINDING,
+        prefix: "TEXTURES",
+        stride: 4,
+        base: 56,
+    },
 ];
+
+/// The binding of the texture table, which only textured scenes have.
+const TEXTURES_BINDING: u32 = 11;
+
+/// The bytes of the table at `binding` (1 to 11).
+fn table_bytes(scene: &GpuScene, binding: u32) -> &[u8] {
+    match binding {
+        TEXTURES_BINDING => bytemuck::cast_slice(&scene.textures),
+        b => tables(scene)[b as usize - 1].1,
+    }
+}
 
 /// How many more primitive tests per ray (by the surface area heuristic) than the tree as built
 /// a BVH collapsed to fit a uniform binding may take. On water_glass, with the nodes uniform,
@@ -508,7 +526,7 @@ fn chunked_tables(
     CHUNKABLE
         .iter()
         .filter_map(|t| {
-            let entries = (tables(scene)[t.binding as usize - 1].1.len() as u64).div_ceil(t.stride);
+            let entries = (table_bytes(scene, t.binding).len() as u64).div_ceil(t.stride);
             let fits = (binding_limit / t.stride).max(1);
             let per_chunk = chunk_entries.map_or(fits, |n| n.clamp(1, fits));
             if entries <= per_chunk {
@@ -590,7 +608,6 @@ impl SceneResources {
         placement: &TablePlacement,
     ) -> Result<Self, Error> {
         use bytemuck::{bytes_of, cast_slice};
-        let storage = wgpu::BufferUsages::STORAGE;
         let uniform = gpu.create_buffer_init(
             "scene uniform",
             bytes_of(&scene.uniform),
@@ -616,34 +633,22 @@ impl SceneResources {
                     buffers.push(uniform_buffer(gpu, label, bytes, size)?);
                     access.push(Access::Uniform);
                 }
-                None => match placement
-                    .chunked
-                    .iter()
-                    .find(|c| c.table.binding == binding)
-                {
-                    Some(c) => {
-                        let mut chunks = chunk_bytes(c, bytes, label)?.into_iter();
-                        let first = chunks.next().unwrap_or(bytes);
-                        buffers.push(gpu.create_buffer_init(label, first, storage)?);
-                        access.push(Access::Read);
-                        for (k, chunk) in (1u32..).zip(chunks) {
-                            let label = format!("{label}, chunk {k}");
-                            let buffer = gpu.create_buffer_init(&label, chunk, storage)?;
-                            chunk_buffers.push((c.table.base + k - 1, buffer));
-                        }
-                    }
-                    None => {
-                        buffers.push(gpu.create_buffer_init(label, bytes, storage)?);
-                        access.push(Access::Read);
-                    }
-                },
+                None => {
+                    let (first, rest) = storage_table(gpu, placement, binding, label, bytes)?;
+                    buffers.push(first);
+                    access.push(Access::Read);
+                    chunk_buffers.extend(rest);
+                }
             }
         }
         // Binding 11, only for a scene with textures (whose shaders are composed with
         // `TEXTURES`): untextured scenes keep their 10 storage buffers (GL allows 16 a stage).
         if !scene.textures.is_empty() {
             let words = cast_slice(&scene.textures);
-            buffers.push(gpu.create_buffer_init("scene textures", words, storage)?);
+            let (first, rest) =
+                storage_table(gpu, placement, TEXTURES_BINDING, "scene textures", words)?;
+            buffers.push(first);
+            chunk_buffers.extend(rest);
         }
         access.resize(buffers.len(), Access::Read);
         let mut entries: Vec<_> = (0u32..)
@@ -702,6 +707,36 @@ impl SceneResources {
             bound,
         })
     }
+}
+
+/// A storage table's buffer for `binding` and, when `placement` chunks it, the buffers of its
+/// other chunks with their bindings.
+fn storage_table(
+    gpu: &GpuContext,
+    placement: &TablePlacement,
+    binding: u32,
+    label: &str,
+    bytes: &[u8],
+) -> Result<(wgpu::Buffer, Vec<(u32, wgpu::Buffer)>), Error> {
+    let storage = wgpu::BufferUsages::STORAGE;
+    let Some(c) = placement
+        .chunked
+        .iter()
+        .find(|c| c.table.binding == binding)
+    else {
+        return Ok((gpu.create_buffer_init(label, bytes, storage)?, Vec::new()));
+    };
+    let mut chunks = chunk_bytes(c, bytes, label)?.into_iter();
+    let first = gpu.create_buffer_init(label, chunks.next().unwrap_or(bytes), storage)?;
+    let mut rest = Vec::new();
+    for (k, chunk) in (1u32..).zip(chunks) {
+        let label = format!("{label}, chunk {k}");
+        rest.push((
+            c.table.base + k - 1,
+            gpu.create_buffer_init(&label, chunk, storage)?,
+        ));
+    }
+    Ok((first, rest))
 }
 
 /// `bytes` of a chunked table cut into its chunks; refused when it needs more chunks than the
