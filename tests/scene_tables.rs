@@ -259,7 +259,7 @@ fn chunked_scene_tables_render_the_same_image_as_whole_tables() {
 }
 
 /// A texture table split over bindings (ten 2048x2048 bitmaps are 480 MiB; lavapipe binds 128)
-/// renders what one binding renders: a textured plane whose table of 60 words is cut into
+/// renders what one binding renders: a textured plane whose table of 28 words is cut into
 /// chunks of 16. Would catch a texel read from the wrong chunk (a shifted or garbled grid).
 #[test]
 fn chunked_textures_render_the_same_image_as_one_table() {

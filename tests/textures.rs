@@ -87,6 +87,7 @@ fn bitmap(wrap: WrapMode, filter: Filter) -> Bitmap {
     Bitmap {
         width: 3,
         height: 2,
+        bytes: None,
         texels,
         wrap,
         filter,
@@ -387,7 +388,9 @@ fn gpu_lookups(scene: &hppm::scene::Scene, queries: &[(u32, Vec2)]) -> Vec<Vec4>
 /// (scaled, rotated, translated) and bitmaps with every wrap mode and both filters, sRGB and
 /// raw (within 2e-5; checker cells within 1e-4 of an edge are skipped, where one rounding may
 /// pick either colour). Would catch a header field out of place, rows and columns swapped,
-/// a wrap mode or the half-texel offset differing, a texture index off by one.
+/// a wrap mode or the half-texel offset differing, a texture index off by one, an 8-bit texel
+/// (kept as its bytes on the GPU) decoded otherwise than the CPU decodes it, or a float one
+/// (EXR) read as bytes.
 #[test]
 fn gpu_lookup_equals_cpu_reference() {
     let dir = temp_dir("gpu");

@@ -7,6 +7,8 @@
 #import common::scene::{Material, NO_TEXTURE, texture_word}
 
 const TEXTURE_CHECKERBOARD: u32 = 0u;
+const TEXTURE_BITMAP: u32 = 1u;
+const TEXTURE_BITMAP_SRGB8: u32 = 2u;
 const HEADER_WORDS: u32 = 12u;
 const WRAP_REPEAT: u32 = 0u;
 const WRAP_MIRROR: u32 = 1u;
@@ -65,10 +67,24 @@ fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
     return clamp(i, 0, n - 1);
 }
 
+// Mitsuba's sRGB transfer function, the CPU's srgb_to_linear.
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
+}
+
 fn texel(t: TextureHeader, x: i32, y: i32) -> vec3<f32> {
     let wx = wrap_texel(x, t.width, t.wrap);
     let wy = wrap_texel(y, t.height, t.wrap);
-    return word_rgb(t.data + 3u * u32(wy * t.width + wx));
+    let i = u32(wy * t.width + wx);
+#ifdef FLOAT_TEXELS
+    if t.kind == TEXTURE_BITMAP {
+        return word_rgb(t.data + 3u * i);
+    }
+#endif
+    // One word a texel: the file's 8-bit channels, decoded here as the CPU decoded them.
+    let w = texture_word(t.data + i);
+    let c = vec3<f32>(f32(w & 255u), f32((w >> 8u) & 255u), f32((w >> 16u) & 255u)) / 255.0;
+    return select(c, srgb_to_linear(c), t.kind == TEXTURE_BITMAP_SRGB8);
 }
 
 fn upper_half(x: f32) -> bool {

@@ -81,6 +81,7 @@ pub const SCENE_DEFS: &[&str] = &[
     "PLASTIC",
     "ROUGH_DIELECTRIC",
     "TEXTURES",
+    "FLOAT_TEXELS",
 ];
 
 /// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
@@ -123,6 +124,9 @@ pub fn shader_library(
     placement: &TablePlacement,
 ) -> Result<ShaderLibrary, crate::Error> {
     let mut defs = scene_defs(&scene.features());
+    if crate::scene::texture::has_float_bitmaps(&scene.textures) {
+        defs.extend(defs_of(["FLOAT_TEXELS"]));
+    }
     defs.extend(placement.defs());
     Ok(ShaderLibrary::new(float_atomics, defs, COMMON_MODULES)?)
 }

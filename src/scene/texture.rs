@@ -82,11 +82,22 @@ pub struct Bitmap {
     pub width: u32,
     pub height: u32,
     pub texels: Vec<Vec3>,
+    /// The file's own bytes when it stores 8 bits a channel: the GPU keeps these (a third of
+    /// the float texels' size) and decodes each texel as it reads it.
+    pub bytes: Option<EncodedTexels>,
     pub wrap: WrapMode,
     pub filter: Filter,
     pub to_uv: UvTransform,
     /// The file it was read from (for messages).
     pub source: PathBuf,
+}
+
+/// An 8-bit image's texels as stored: `r | g << 8 | b << 16` per texel, row by row from the
+/// top, and whether they are sRGB-encoded (else linear, `raw`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct EncodedTexels {
+    pub words: Vec<u32>,
+    pub srgb: bool,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -229,12 +240,13 @@ impl Bitmap {
         filter: Filter,
         to_uv: UvTransform,
     ) -> Result<Self, String> {
-        let (width, height, texels) =
-            read_image(path, raw).map_err(|e| format!("bitmap texture {e}"))?;
+        let (width, height, texels, bytes) =
+            read_image_bytes(path, raw).map_err(|e| format!("bitmap texture {e}"))?;
         Ok(Self {
             width,
             height,
             texels,
+            bytes: bytes.map(|words| EncodedTexels { words, srgb: !raw }),
             wrap,
             filter,
             to_uv,
@@ -259,23 +271,28 @@ fn decode_image(path: &Path) -> Result<::image::DynamicImage, String> {
 }
 
 pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {
+    read_image_bytes(path, raw).map(|(w, h, texels, _)| (w, h, texels))
+}
+
+/// [`read_image`], with an 8-bit image's bytes as [`EncodedTexels::words`].
+fn read_image_bytes(path: &Path, raw: bool) -> Result<Decoded, String> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
     let fail = |why: String| format!("{}: {why}", path.display());
-    let (width, height, texels): (u32, u32, Vec<Vec3>) = match ext.as_str() {
+    let (width, height, texels, bytes): Decoded = match ext.as_str() {
         "exr" => {
             let image = crate::image::Image::read_exr(path).map_err(|e| fail(e.to_string()))?;
             let texels = image.pixels.iter().map(|p| Vec3::from_array(*p)).collect();
-            (image.width, image.height, texels)
+            (image.width, image.height, texels, None)
         }
         "hdr" => {
             let image = decode_image(path).map_err(fail)?;
             let rgb = image.to_rgb32f();
             let texels = rgb.pixels().map(|p| Vec3::from_array(p.0)).collect();
-            (rgb.width(), rgb.height(), texels)
+            (rgb.width(), rgb.height(), texels, None)
         }
         "png" | "jpg" | "jpeg" | "bmp" => {
             let image = decode_image(path).map_err(fail)?;
@@ -285,7 +302,20 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
                 .pixels()
                 .map(|p| Vec3::new(decode(p.0[0]), decode(p.0[1]), decode(p.0[2])))
                 .collect();
-            (rgb.width(), rgb.height(), texels)
+            let eight_bits = matches!(
+                image.color(),
+                ::image::ColorType::L8
+                    | ::image::ColorType::La8
+                    | ::image::ColorType::Rgb8
+                    | ::image::ColorType::Rgba8
+            );
+            let bytes = eight_bits.then(|| {
+                let pack = |p: &::image::Rgb<u8>| {
+                    p.0[0] as u32 | (p.0[1] as u32) << 8 | (p.0[2] as u32) << 16
+                };
+                image.to_rgb8().pixels().map(pack).collect()
+            });
+            (rgb.width(), rgb.height(), texels, bytes)
         }
         _ => {
             return Err(fail(
@@ -308,20 +338,35 @@ pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), Strin
             i as u32 / width
         )));
     }
-    Ok((width, height, texels))
+    Ok((width, height, texels, bytes))
 }
+
+/// Width, height, linear texels and, for an 8-bit image, its bytes.
+type Decoded = (u32, u32, Vec<Vec3>, Option<Vec<u32>>);
 
 /// `GpuMaterial`'s texture fields when the parameter has none.
 pub const NO_TEXTURE: u32 = u32::MAX;
 pub const TEXTURE_CHECKERBOARD: u32 = 0;
 pub const TEXTURE_BITMAP: u32 = 1;
+/// Bitmaps kept as their 8-bit bytes ([`EncodedTexels`]), sRGB-encoded or linear.
+pub const TEXTURE_BITMAP_SRGB8: u32 = 2;
+pub const TEXTURE_BITMAP_LINEAR8: u32 = 3;
 /// Words per texture header in the GPU's texture buffer.
 pub const HEADER_WORDS: usize = 12;
 
 /// Every texture as the GPU reads it, one array of 32-bit words (a single scene binding):
 /// a header of [`HEADER_WORDS`] per texture (kind, width, height, wrap, filter, offset of its
 /// data, the six numbers of `to_uv` as f32 bits), then the data: a checkerboard's two colours,
-/// a bitmap's texels as linear f32 RGB, row by row from the top.
+/// a bitmap's texels row by row from the top, as its 8-bit bytes one word a texel where the file
+/// has them, else as linear f32 RGB.
+/// Whether a bitmap of `textures` is kept as float texels (an OpenEXR, HDR or 16-bit image):
+/// the shaders read float texels only where one is.
+pub fn has_float_bitmaps(textures: &[Texture]) -> bool {
+    textures
+        .iter()
+        .any(|t| matches!(t, Texture::Bitmap(b) if b.bytes.is_none()))
+}
+
 pub fn gpu_words(textures: &[Texture]) -> Vec<u32> {
     let mut words = vec![0u32; HEADER_WORDS * textures.len()];
     for (i, t) in textures.iter().enumerate() {
@@ -337,13 +382,26 @@ pub fn gpu_words(textures: &[Texture]) -> Vec<u32> {
                 (TEXTURE_CHECKERBOARD, 0, 0, 0, 0, to_uv)
             }
             Texture::Bitmap(b) => {
-                words.extend(b.texels.iter().flat_map(|t| t.to_array().map(f32::to_bits)));
+                let kind = match &b.bytes {
+                    Some(bytes) => {
+                        words.extend_from_slice(&bytes.words);
+                        if bytes.srgb {
+                            TEXTURE_BITMAP_SRGB8
+                        } else {
+                            TEXTURE_BITMAP_LINEAR8
+                        }
+                    }
+                    None => {
+                        words.extend(b.texels.iter().flat_map(|t| t.to_array().map(f32::to_bits)));
+                        TEXTURE_BITMAP
+                    }
+                };
                 let filter = match b.filter {
                     Filter::Bilinear => 0,
                     Filter::Nearest => 1,
                 };
                 let (w, h) = (b.width, b.height);
-                (TEXTURE_BITMAP, w, h, b.wrap.code(), filter, &b.to_uv)
+                (kind, w, h, b.wrap.code(), filter, &b.to_uv)
             }
         };
         let header = &mut words[HEADER_WORDS * i..HEADER_WORDS * (i + 1)];
