@@ -57,7 +57,8 @@ impl PerturbedFrame {
     /// 2 / (1 + sqrt(1 + alpha^2 tan^2 theta)), theta from the unperturbed normal.
     pub fn factor(&self, light: Vec3) -> f32 {
         let cos_base = light.dot(self.base);
-        if !(cos_base * light.dot(self.n) > 0.0) {
+        let agree = cos_base * light.dot(self.n);
+        if agree.is_nan() || agree <= 0.0 {
             return 0.0;
         }
         match self.alpha2 {
