@@ -243,7 +243,7 @@ fn every_problem_is_reported_at_once() {
     let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
     let expected: &[(usize, &str)] = &[
         (2, "did you mean \"reflectance\"?"),
-        (3, "\"bumpmap\" is not supported"),
+        (3, "bumpmap needs a <texture"),
         (4, "the <bsdf id=\"a\"> at line 2 could not be read"),
         (5, "expected a number"),
         (7, "did you mean \"int_ior\"?"),

@@ -187,13 +187,13 @@ def main():
             ps = shape.sample_position(0.0, mi.Point2f(rng.random(), rng.random()))
             outward = np.array(v3(ps.n))
             side = sides if sides != 0 else rng.choice([1, -1])
-            # Every fifth ray grazes the surface, where Mitsuba flips invalid normals.
-            lo = 0.0 if count % 5 == 0 else 0.2
-            w = hemisphere(rng, side * outward, lo)
             if count % 5 == 0:
+                # Every fifth ray grazes the surface, where Mitsuba flips invalid normals.
                 w = hemisphere(rng, side * outward, 0.0)
                 w = w - 0.9 * np.dot(w, side * outward) * side * outward
                 w /= np.linalg.norm(w)
+            else:
+                w = hemisphere(rng, side * outward, 0.2)
             origin = np.array(v3(ps.p)) + 0.4 * w
             ray = mi.Ray3f(mi.Point3f(*origin), mi.Vector3f(*(-w)))
             si = scene.ray_intersect(ray)
