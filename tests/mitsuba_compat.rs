@@ -243,7 +243,7 @@ fn every_problem_is_reported_at_once() {
     let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
     let expected: &[(usize, &str)] = &[
         (2, "did you mean \"reflectance\"?"),
-        (3, "\"bumpmap\" is not supported"),
+        (3, "bumpmap needs a <texture"),
         (4, "the <bsdf id=\"a\"> at line 2 could not be read"),
         (5, "expected a number"),
         (7, "did you mean \"int_ior\"?"),
@@ -468,6 +468,16 @@ fn host(object: &str, kind: &str, property: &str) -> String {
         "bsdf" if kind == "twosided" => on_cube(format!(
             r#"<bsdf type="twosided">{property}<bsdf type="diffuse"/></bsdf>"#
         )),
+        "bsdf" if kind == "normalmap" || kind == "bumpmap" => {
+            let name = if kind == "normalmap" {
+                "normalmap"
+            } else {
+                "height"
+            };
+            on_cube(format!(
+                r#"<bsdf type="{kind}"><texture name="{name}" type="bitmap"><string name="filename" value="tests/data/textures/grid4.png"/><boolean name="raw" value="true"/></texture>{property}<bsdf type="diffuse"/></bsdf>"#
+            ))
+        }
         "bsdf" => on_cube(format!(r#"<bsdf type="{kind}">{property}</bsdf>"#)),
         "texture" => {
             let needs = match kind {

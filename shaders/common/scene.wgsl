@@ -123,6 +123,12 @@ struct Material {
     // Scalar textures replacing alpha_u and alpha_v, or NO_TEXTURE.
     alpha_u_texture: u32,
     alpha_v_texture: u32,
+    // A normalmap or bumpmap around the BSDF (common::normal_map's FRAME_*), its texture, the
+    // bump map's scale and FRAME_FLAG_* bits.
+    frame_kind: u32,
+    frame_texture: u32,
+    frame_scale: f32,
+    frame_flags: u32,
     pad_a: u32,
     pad_b: u32,
 }

@@ -130,6 +130,33 @@ fn texture_eval_1(index: u32, uv: vec2<f32>) -> f32 {
     return luminance(texture_eval(index, uv));
 }
 
+// Mitsuba's eval_1_grad of a bitmap (what a bump map reads; a checkerboard has none): the
+// luminance's bilinear interpolant differentiated in texel units, through the transpose of
+// to_uv's linear part, then times the resolution (Bitmap::eval_1_grad, src/scene/texture.rs).
+fn texture_eval_1_grad(index: u32, uv: vec2<f32>) -> vec2<f32> {
+    let t = texture_header(index);
+    if t.kind == TEXTURE_CHECKERBOARD || t.filter_type == FILTER_NEAREST {
+        return vec2<f32>(0.0);
+    }
+    var p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+    p = select(p, vec2<f32>(0.0), p != p);
+    p = clamp(p, vec2<f32>(-UV_LIMIT), vec2<f32>(UV_LIMIT));
+    let res = vec2<f32>(f32(t.width), f32(t.height));
+    let f = p * res - 0.5;
+    let i = floor(f);
+    let w1 = f - i;
+    let w0 = vec2<f32>(1.0) - w1;
+    let x = i32(i.x);
+    let y = i32(i.y);
+    let f00 = luminance(texel(t, x, y));
+    let f10 = luminance(texel(t, x + 1, y));
+    let f01 = luminance(texel(t, x, y + 1));
+    let f11 = luminance(texel(t, x + 1, y + 1));
+    let dx = w0.y * (f10 - f00) + w1.y * (f11 - f01);
+    let dy = w0.x * (f01 - f00) + w1.x * (f11 - f10);
+    return res * vec2<f32>(t.to_u.x * dx + t.to_v.x * dy, t.to_u.y * dx + t.to_v.y * dy);
+}
+
 // The material with its textured colours looked up at `uv`: everything after the lookup (BSDF
 // evaluation and sampling, hit-point weights, photon bounces) sees the surface's own values.
 fn textured_material(m: Material, uv: vec2<f32>) -> Material {

@@ -24,7 +24,7 @@
 // brings a pixel on average, so that both kinds of sample estimate the same filtered pixel.
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
-#import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite, basis_from_normal}
+#import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
 #import common::scene::{scene_info, materials, Material, Surface, Hit, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
 #ifdef GLOSSY
@@ -34,6 +34,10 @@
 #import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
 #import common::texture::textured_material
+#endif
+#import common::normal_map::{ShadingFrame, plain_frame, frame_factor}
+#ifdef NORMAL_MAPS
+#import common::normal_map::shading_frame
 #endif
 #import common::lights::{sample_light, area_light_pdf}
 #ifdef ENVIRONMENT
@@ -152,8 +156,9 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
     hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight, footprint);
 }
 
-// Next-event estimation at a diffuse vertex: one light sample with a shadow ray.
-fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+// Next-event estimation at a diffuse vertex: one light sample with a shadow ray. `shading`
+// (around surface.shading_normal) adds a normal map's masking and shadow terminator.
+fn direct_light(surface: Surface, albedo: vec3<f32>, shading: ShadingFrame, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
     let ls = sample_light(surface.position, u_pick, u);
@@ -161,7 +166,8 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, vec4<u32
         return vec3<f32>(0.0);
     }
     let cos_i = dot(surface.shading_normal, ls.dir);
-    if cos_i <= 0.0 {
+    let factor = frame_factor(shading, ls.dir);
+    if cos_i <= 0.0 || factor <= 0.0 {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
@@ -172,7 +178,7 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, rng: ptr<function, vec4<u32
     if !ls.is_delta {
         weight = power_heuristic(ls.pdf, cos_i * INV_PI);
     }
-    return albedo * INV_PI * cos_i * ls.radiance * weight / ls.pdf;
+    return albedo * INV_PI * cos_i * factor * ls.radiance * weight / ls.pdf;
 }
 
 // Caustic flux arriving per unit area at `surface` from the front, by this iteration's photons
@@ -226,20 +232,23 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
 }
 
 // Next-event estimation at a vertex with a non-Lambertian, non-delta lobe: the BSDF evaluated
-// towards one light sample, MIS-weighted against sampling the BSDF. `wi` is local, in `frame`.
-// With GLOSSY the `mapped` share of the specular lobes' part is left out (photons carry it).
-fn direct_light_bsdf(surface: Surface, material: Material, frame: mat3x3<f32>, wi: vec3<f32>, mapped: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+// towards one light sample, MIS-weighted against sampling the BSDF. `wi` is local, in
+// `shading`'s frame. With GLOSSY the `mapped` share of the specular lobes' part is left out
+// (photons carry it).
+fn direct_light_bsdf(surface: Surface, material: Material, shading: ShadingFrame, wi: vec3<f32>, mapped: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
     let ls = sample_light(surface.position, u_pick, u);
     if !ls.valid {
         return vec3<f32>(0.0);
     }
+    let frame = shading.frame;
     let e = material_eval(material, wi, ls.dir * frame, true);
 #ifdef GLOSSY
-    let value = e.value - mapped * material_specular_eval(material, wi, ls.dir * frame, e, params.glossy_threshold);
+    let specular = material_specular_eval(material, wi, ls.dir * frame, e, params.glossy_threshold);
+    let value = (e.value - mapped * specular) * frame_factor(shading, ls.dir);
 #else
-    let value = e.value;
+    let value = e.value * frame_factor(shading, ls.dir);
 #endif
     if max_component(value) <= 0.0 {
         return vec3<f32>(0.0);
@@ -369,15 +378,24 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     }
 #endif
     // A twosided material's back is its own BSDF, seen with the normal flipped.
+    var back = false;
     if cos_o < 0.0 && material.back != NO_BACK {
         material = materials[material.back];
         surface.normal = -surface.normal;
         surface.shading_normal = -surface.shading_normal;
         cos_o = -cos_o;
+        back = true;
     }
 #ifdef TEXTURES
     // Before any use of the colours: NEE, the bounce, hit-point weights, grid lookups.
     material = textured_material(material, surface.uv);
+#endif
+    // The BSDF's frame: a normal or bump map turns the shading normal every branch below
+    // shades with (which vertices are diffuse or specular stays the material's kind).
+    var shading = plain_frame(surface.shading_normal);
+#ifdef NORMAL_MAPS
+    shading = shading_frame(material, surface, hit.prim, back, wo, true);
+    surface.shading_normal = shading.frame[2];
 #endif
     if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
         return false;
@@ -417,13 +435,13 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
                 return false;
             }
         }
-        (*path).radiance += (*path).throughput * direct_light(surface, material.albedo, rng, rays);
+        (*path).radiance += (*path).throughput * direct_light(surface, material.albedo, shading, rng, rays);
         let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
         let cos_i = dot(dir, surface.shading_normal);
         if cos_i <= 0.0 {
             return false;
         }
-        (*path).throughput *= material.albedo;
+        (*path).throughput *= material.albedo * frame_factor(shading, dir);
         (*path).bsdf_pdf = cos_i * INV_PI;
         (*path).after_delta = false;
         (*path).dir = dir;
@@ -432,6 +450,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
             return false;
         }
         (*path).dir = reflect_about(wo, surface.shading_normal);
+        (*path).throughput *= frame_factor(shading, (*path).dir);
         (*path).after_delta = true;
 #ifdef GLOSSY
         (*path).after_specular = true;
@@ -439,7 +458,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
         let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
-        (*path).throughput *= s.weight;
+        (*path).throughput *= s.weight * frame_factor(shading, s.dir);
         (*path).dir = s.dir;
         (*path).after_delta = true;
 #ifdef GLOSSY
@@ -450,10 +469,10 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
 #endif
     } else {
         // Every other BSDF, in the shading frame of the side it is seen from.
-        let frame = basis_from_normal(surface.shading_normal);
+        let frame = shading.frame;
         let wi = wo * frame;
         if material_has_continuous_lobe(material.kind) {
-            (*path).radiance += (*path).throughput * direct_light_bsdf(surface, material, frame, wi, (*path).mapped, rng, rays);
+            (*path).radiance += (*path).throughput * direct_light_bsdf(surface, material, shading, wi, (*path).mapped, rng, rays);
         }
         let u1 = rng_next_f32(rng);
         let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
@@ -461,7 +480,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
             return false;
         }
         (*path).dir = normalize(frame * s.wo);
-        (*path).throughput *= s.weight;
+        (*path).throughput *= s.weight * frame_factor(shading, (*path).dir);
         (*path).after_delta = s.delta;
         if !s.delta {
             (*path).bsdf_pdf = s.pdf;

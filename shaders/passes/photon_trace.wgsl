@@ -37,6 +37,10 @@
 #ifdef TEXTURES
 #import common::texture::textured_material
 #endif
+#import common::normal_map::{plain_frame, frame_factor}
+#ifdef NORMAL_MAPS
+#import common::normal_map::shading_frame
+#endif
 #ifdef DIELECTRIC
 #import common::bsdf::sample_dielectric
 #endif
@@ -316,16 +320,28 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     var material = materials[surface.material];
     let wi = -photon.dir;
     var cos_i = dot(wi, surface.normal);
+    var back = false;
     if cos_i < 0.0 && material.back != NO_BACK {
         material = materials[material.back];
         surface.normal = -surface.normal;
         surface.shading_normal = -surface.shading_normal;
         cos_i = -cos_i;
+        back = true;
     }
 #ifdef TEXTURES
     // The diffuse bounce and every other lobe scatter with the surface's own colours.
     material = textured_material(material, surface.uv);
 #endif
+    // A normal or bump map's frame, as the camera pass has it but for flipping invalid
+    // normals, which depends on the viewer: taken as not flipped (exact wherever the camera
+    // direction sees the perturbed normal from above). Its masking and shadow terminator
+    // belong to the light's direction, here where the photon came from (`wi`).
+    var shading = plain_frame(surface.shading_normal);
+#ifdef NORMAL_MAPS
+    shading = shading_frame(material, surface, hit.prim, back, wi, false);
+    surface.shading_normal = shading.frame[2];
+#endif
+    let factor = frame_factor(shading, wi);
     if material.kind == MATERIAL_DIFFUSE {
         // One-sided, as the camera pass: the back of a diffuse surface absorbs.
         if cos_i <= 0.0 || dot(wi, surface.shading_normal) <= 0.0 {
@@ -334,7 +350,7 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
         // over the geometric one it arrived with turns it into what the camera pass would
         // gather there (1 on flat-shaded surfaces).
-        let deposited = photon.flux * (dot(wi, surface.shading_normal) / cos_i);
+        let deposited = photon.flux * (dot(wi, surface.shading_normal) * factor / cos_i);
         if params.mode == MODE_CAUSTIC {
             if after_specular {
                 deposit(surface.position, wi, deposited, segments);
@@ -344,27 +360,27 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         deposit(surface.position, wi, deposited, segments);
         photon.dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
         // Cosine sampling: f cos / pdf = albedo.
-        photon.flux *= material.albedo * photon_shading_correction(surface, wi, photon.dir);
+        photon.flux *= material.albedo * factor * photon_shading_correction(surface, wi, photon.dir);
         after_specular = false;
     } else if material.kind == MATERIAL_MIRROR {
         if cos_i <= 0.0 || dot(wi, surface.shading_normal) <= 0.0 {
             return false;
         }
         photon.dir = reflect_about(wi, surface.shading_normal);
-        photon.flux *= photon_shading_correction(surface, wi, photon.dir);
+        photon.flux *= factor * photon_shading_correction(surface, wi, photon.dir);
         after_specular = true;
     } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
         // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
         let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
-        photon.flux *= s.weight * photon_shading_correction(surface, wi, s.dir);
+        photon.flux *= s.weight * factor * photon_shading_correction(surface, wi, s.dir);
         photon.dir = s.dir;
         after_specular = true;
 #else
         return false;
 #endif
     } else {
-        let frame = basis_from_normal(surface.shading_normal);
+        let frame = shading.frame;
         let u1 = rng_next_f32(rng);
         let s = material_sample(material, wi * frame, u1, rng_next_vec2(rng), false);
         if !s.valid {
@@ -384,7 +400,7 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         }
 #endif
         photon.dir = normalize(frame * s.wo);
-        photon.flux *= s.weight * photon_shading_correction(surface, wi, photon.dir);
+        photon.flux *= s.weight * factor * photon_shading_correction(surface, wi, photon.dir);
 #ifdef GLOSSY
         photon.flux *= share;
         after_specular = s.delta || params.mode == MODE_CAUSTIC;

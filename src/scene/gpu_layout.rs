@@ -10,7 +10,7 @@ use super::bvh::{self, BvhNode};
 use super::emitter::Environment;
 use super::split_boxes::split_references;
 use super::texture::{self, NO_TEXTURE};
-use super::{Bsdf, Distribution, Microfacet, Scene, SideTextures};
+use super::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures};
 
 pub const MATERIAL_DIFFUSE: u32 = 0;
 pub const MATERIAL_DIELECTRIC: u32 = 1;
@@ -21,6 +21,17 @@ pub const MATERIAL_PLASTIC: u32 = 5;
 pub const MATERIAL_ROUGH_PLASTIC: u32 = 6;
 pub const MATERIAL_ROUGH_DIELECTRIC: u32 = 7;
 pub const MATERIAL_THIN_DIELECTRIC: u32 = 8;
+
+/// `GpuMaterial::frame_kind`: the shading frame as the shape gives it, or perturbed by a
+/// normal map or a bump map (src/scene/normal_map.rs).
+pub const FRAME_NONE: u32 = 0;
+pub const FRAME_NORMAL_MAP: u32 = 1;
+pub const FRAME_BUMP_MAP: u32 = 2;
+/// `GpuMaterial::frame_flags`: Mitsuba's `flip_invalid_normals` and `use_shadowing_function`,
+/// and the back side of a `twosided` the perturbation wraps.
+pub const FRAME_FLAG_FLIP_INVALID: u32 = 1;
+pub const FRAME_FLAG_SHADOWING: u32 = 2;
+pub const FRAME_FLAG_OUTSIDE_TWOSIDED: u32 = 4;
 
 /// `back` of a material without a back side of its own.
 pub const NO_BACK: u32 = u32::MAX;
@@ -120,6 +131,12 @@ pub struct GpuMaterial {
     /// The scalar textures that replace `alpha_u` and `alpha_v`, or `NO_TEXTURE`.
     pub alpha_u_texture: u32,
     pub alpha_v_texture: u32,
+    /// A `normalmap` or `bumpmap` around the BSDF (`FRAME_*`), its texture (or NO_TEXTURE),
+    /// the bump map's scale and `FRAME_FLAG_*` bits.
+    pub frame_kind: u32,
+    pub frame_texture: u32,
+    pub frame_scale: f32,
+    pub frame_flags: u32,
     pub _pad: [u32; 2],
 }
 
@@ -262,8 +279,23 @@ fn gpu_material(
         specular_texture: textures.specular.unwrap_or(NO_TEXTURE),
         alpha_u_texture: textures.alpha_u.unwrap_or(NO_TEXTURE),
         alpha_v_texture: textures.alpha_v.unwrap_or(NO_TEXTURE),
+        frame_kind: FRAME_NONE,
+        frame_texture: NO_TEXTURE,
+        frame_scale: 1.0,
+        frame_flags: 0,
         _pad: [0; 2],
     };
+    if let Some(frame) = textures.frame {
+        (m.frame_kind, m.frame_scale) = match frame.kind {
+            PerturbationKind::Normal => (FRAME_NORMAL_MAP, 1.0),
+            PerturbationKind::Bump { scale } => (FRAME_BUMP_MAP, scale),
+        };
+        m.frame_texture = frame.texture;
+        let flag = |on: bool, bit: u32| if on { bit } else { 0 };
+        m.frame_flags = flag(frame.flip_invalid_normals, FRAME_FLAG_FLIP_INVALID)
+            | flag(frame.shadowing, FRAME_FLAG_SHADOWING)
+            | flag(frame.outside_twosided, FRAME_FLAG_OUTSIDE_TWOSIDED);
+    }
     let rough = |m: &mut GpuMaterial, mf: &Microfacet| {
         m.alpha_u = mf.alpha_u.max(1e-4);
         m.alpha_v = mf.alpha_v.max(1e-4);

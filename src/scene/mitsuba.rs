@@ -21,8 +21,9 @@ use super::emitter::{DirectionalLight, EnvMap, Environment, SpotLight};
 use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
-    Bsdf, Camera, Distribution, Integrator, Material, MaterialTextures, Microfacet, PointLight,
-    Report, Scene, SceneError, SideTextures, Sphere, bsdf, mesh, plugins, spectrum,
+    Bsdf, Camera, Distribution, FramePerturbation, Integrator, Material, MaterialTextures,
+    Microfacet, PerturbationKind, PointLight, Report, Scene, SceneError, SideTextures, Sphere,
+    bsdf, mesh, plugins, spectrum,
 };
 use crate::error::Location;
 
@@ -1618,6 +1619,9 @@ impl<'a, 'input> Reader<'a, 'input> {
         if kind == "twosided" {
             return self.read_twosided(node);
         }
+        if kind == "normalmap" || kind == "bumpmap" {
+            return self.read_perturbed(node, &kind);
+        }
         let (front, textures) = self.read_one_sided(node, &kind)?;
         Ok(Sides {
             front,
@@ -1674,6 +1678,136 @@ impl<'a, 'input> Reader<'a, 'input> {
             }),
             _ => Err(self.error(node, "twosided: a nested <bsdf> is required")),
         }
+    }
+
+    /// Mitsuba's `normalmap` and `bumpmap`: one nested BSDF (inline or `<ref>`, possibly a
+    /// `twosided`) whose shading frame a bitmap perturbs (src/scene/normal_map.rs). The
+    /// normal map is the property `normalmap`; the bump map's height is any texture child, as
+    /// Mitsuba takes the one texture object it finds.
+    fn read_perturbed(&self, node: Node<'a, 'input>, kind: &str) -> Result<Sides, SceneError> {
+        let bump = kind == "bumpmap";
+        let objects: &[&str] = if bump {
+            &["bsdf", "ref", "texture"]
+        } else {
+            &["bsdf", "ref"]
+        };
+        let mut props = self.props(node, objects)?;
+        let mut nested: Option<Sides> = None;
+        let mut texture: Option<u32> = None;
+        let mut add_texture = |child: Node<'a, 'input>, name: &str| {
+            let Some((_, index)) = self.texture_node(child, name)? else {
+                return Err(self.error(child, format!("{kind}: expected a <texture>")));
+            };
+            if texture.replace(index).is_some() {
+                return Err(self.error(
+                    child,
+                    format!("{kind}: only one texture can be given (as in Mitsuba)"),
+                ));
+            }
+            Ok(())
+        };
+        if !bump && let Some(n) = props.take("normalmap") {
+            add_texture(n, "normalmap")?;
+        }
+        for child in node.children().filter(Node::is_element) {
+            let sides = match child.tag_name().name() {
+                "bsdf" => self.read_bsdf(child)?,
+                "texture" if bump => {
+                    add_texture(child, "texture")?;
+                    continue;
+                }
+                "ref" if !bump && self.attr(child, "name")?.as_deref() == Some("normalmap") => {
+                    add_texture(child, "normalmap")?;
+                    continue;
+                }
+                "ref" => {
+                    let id = self.required_attr(child, "id")?;
+                    match self.named_bsdfs.get(&id) {
+                        Some(sides) => *sides,
+                        None if bump && self.named_textures.contains_key(&id) => {
+                            add_texture(child, "texture")?;
+                            continue;
+                        }
+                        None => {
+                            let what = format!("<ref id=\"{id}\">");
+                            return Err(self.missing_ref(child, &id, "bsdf", &what));
+                        }
+                    }
+                }
+                _ => continue,
+            };
+            if nested.is_some() {
+                return Err(self.error(
+                    child,
+                    format!("{kind}: only one nested BSDF can be given (as in Mitsuba)"),
+                ));
+            }
+            if sides.textures.front.frame.is_some() || sides.textures.back.frame.is_some() {
+                return Err(self.error(
+                    child,
+                    format!("{kind}: a nested normalmap or bumpmap is not supported"),
+                ));
+            }
+            nested = Some(sides);
+        }
+        let scale = match bump.then(|| props.take("scale")).flatten() {
+            Some(n) => self.float(n)?,
+            None => 1.0,
+        };
+        let mut flag = |name: &str| match props.take(name) {
+            Some(n) => self.boolean(n),
+            None => Ok(true),
+        };
+        let flip_invalid_normals = flag("flip_invalid_normals")?;
+        let shadowing = flag("use_shadowing_function")?;
+        let takes = plugins::properties_of("bsdf", kind);
+        self.finish_with(props, node, Some(&takes))?;
+        let Some(texture) = texture else {
+            let needed = if bump {
+                "a <texture type=\"bitmap\"> (the height map)"
+            } else {
+                "<texture name=\"normalmap\" type=\"bitmap\">"
+            };
+            return Err(self.error(node, format!("{kind} needs {needed}")));
+        };
+        if !matches!(
+            self.textures.borrow().get(texture as usize),
+            Some(Texture::Bitmap(_))
+        ) {
+            return Err(self.error(
+                node,
+                format!(
+                    "{kind}: the texture must be a bitmap (Mitsuba's other textures have no \
+                     {})",
+                    if bump { "gradient" } else { "RGB lookup" }
+                ),
+            ));
+        }
+        let Some(mut sides) = nested else {
+            return Err(self.error(
+                node,
+                format!("{kind}: a nested <bsdf> is required (as in Mitsuba)"),
+            ));
+        };
+        let frame = FramePerturbation {
+            kind: if bump {
+                PerturbationKind::Bump { scale }
+            } else {
+                PerturbationKind::Normal
+            },
+            texture,
+            flip_invalid_normals,
+            shadowing,
+            outside_twosided: false,
+        };
+        sides.textures.front.frame = Some(frame);
+        if sides.back.is_some() {
+            sides.textures.back.frame = Some(FramePerturbation {
+                outside_twosided: true,
+                ..frame
+            });
+        }
+        Ok(sides)
     }
 
     /// One side's BSDF and the textures of its colour parameters.

@@ -10,6 +10,7 @@ pub mod filter;
 pub mod gpu_layout;
 pub mod mesh;
 pub mod mitsuba;
+pub mod normal_map;
 pub mod obj;
 pub mod plugins;
 pub mod ply;
@@ -209,9 +210,35 @@ pub struct Material {
     pub textures: MaterialTextures,
 }
 
+/// How Mitsuba's `normalmap` or `bumpmap` turns the shading frame of the BSDF it wraps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PerturbationKind {
+    /// `normalmap`: the texture's RGB, mapped x -> 2x - 1, is the normal in the shading frame.
+    Normal,
+    /// `bumpmap`: the texture's luminance times `scale` is a height along the shading normal.
+    Bump { scale: f32 },
+}
+
+/// A side's shading frame perturbed by a texture (src/scene/normal_map.rs is the reference).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FramePerturbation {
+    pub kind: PerturbationKind,
+    /// Index into `Scene::textures` (a bitmap).
+    pub texture: u32,
+    /// Mitsuba's `flip_invalid_normals`: a perturbed normal the viewer sees from below has its
+    /// tangential part mirrored.
+    pub flip_invalid_normals: bool,
+    /// Mitsuba's `use_shadowing_function`: Estevez et al.'s shadow terminator.
+    pub shadowing: bool,
+    /// The back side of a `twosided` the perturbation wraps (`normalmap` > `twosided`): the
+    /// frame is perturbed as on the front, then turned over. Inside a `twosided` (`twosided` >
+    /// `normalmap`) the back is perturbed in its own, turned-over frame instead.
+    pub outside_twosided: bool,
+}
+
 /// The textures of one side's colour parameters; `None` keeps the BSDF's constant (which for a
 /// textured parameter holds the texture's mean, what plastic's sampling weight uses).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SideTextures {
     /// `reflectance` (diffuse) or `diffuse_reflectance` (plastics).
     pub diffuse: Option<u32>,
@@ -221,6 +248,8 @@ pub struct SideTextures {
     /// scalars ([`texture::Texture::eval_1`]).
     pub alpha_u: Option<u32>,
     pub alpha_v: Option<u32>,
+    /// A `normalmap` or `bumpmap` around the side's BSDF.
+    pub frame: Option<FramePerturbation>,
 }
 
 impl SideTextures {
@@ -228,12 +257,18 @@ impl SideTextures {
         self.all().iter().any(Option::is_some)
     }
 
-    pub fn all(&self) -> [Option<u32>; 4] {
-        [self.diffuse, self.specular, self.alpha_u, self.alpha_v]
+    pub fn all(&self) -> [Option<u32>; 5] {
+        [
+            self.diffuse,
+            self.specular,
+            self.alpha_u,
+            self.alpha_v,
+            self.frame.map(|f| f.texture),
+        ]
     }
 }
 
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct MaterialTextures {
     pub front: SideTextures,
     pub back: SideTextures,
@@ -337,6 +372,8 @@ pub struct SceneFeatures {
     pub spheres: bool,
     /// Some shape's material has a texture.
     pub textures: bool,
+    /// Some shape's material has a `normalmap` or `bumpmap` (textures then too).
+    pub normal_maps: bool,
 }
 
 impl SceneFeatures {
@@ -590,6 +627,7 @@ impl Scene {
             }
             f.area_lights |= m.emission.max_element() > 0.0;
             f.textures |= m.textures.front.any() || m.textures.back.any();
+            f.normal_maps |= m.textures.front.frame.is_some() || m.textures.back.frame.is_some();
         }
         f
     }
@@ -637,7 +675,13 @@ impl Scene {
             let sides = [m.textures.front, m.textures.back];
             let ok = finite(m.emission)
                 && m.bsdfs().all(Bsdf::is_valid)
-                && sides.iter().all(|s| s.all().into_iter().all(texture_ok));
+                && sides.iter().all(|s| s.all().into_iter().all(texture_ok))
+                && sides.iter().all(|s| {
+                    s.frame.is_none_or(|f| match f.kind {
+                        PerturbationKind::Bump { scale } => scale.is_finite(),
+                        PerturbationKind::Normal => true,
+                    })
+                });
             if !ok {
                 return fail(format!(
                     "material {i} has a non-finite or non-positive value"
@@ -758,10 +802,13 @@ pub fn place_mesh(
                 };
                 Some(if swap { [na, nc, nb] } else { [na, nb, nc] })
             });
+            // Without texture coordinates Mitsuba's are the barycentrics of the corners in the
+            // file's order (and so are its dp_du, dp_dv): a swapped triangle keeps that order's.
             let uvs = uvs
                 .as_ref()
                 .and_then(|uv| uv.get(i))
-                .map(|&[a, b, c]| if swap { [a, c, b] } else { [a, b, c] });
+                .map(|&[a, b, c]| if swap { [a, c, b] } else { [a, b, c] })
+                .or_else(|| swap.then_some([glam::Vec2::ZERO, glam::Vec2::Y, glam::Vec2::X]));
             Triangle {
                 v,
                 material,

@@ -285,6 +285,31 @@ pub const PLUGINS: &[Plugin] = &[
                 in Mitsuba.",
     },
     Plugin {
+        object: "bsdf",
+        kinds: &["normalmap"],
+        properties: &[
+            p("normalmap", ""),
+            p("flip_invalid_normals", "true"),
+            p("use_shadowing_function", "true"),
+        ],
+        notes: "A bitmap `normalmap` (x -> 2x - 1, the normal in the shading frame; `raw` as \
+                Mitsuba's docs ask) and one nested BSDF (inline or `<ref>`), evaluated and \
+                sampled in the perturbed frame with Mitsuba's masking and shadow terminator; \
+                `twosided` inside or outside it.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["bumpmap"],
+        properties: &[
+            p("scale", "1"),
+            p("flip_invalid_normals", "true"),
+            p("use_shadowing_function", "true"),
+        ],
+        notes: "One bitmap (any name: the height, its luminance) and one nested BSDF; the \
+                normal from the texture's bilinear gradient (Mitsuba's `eval_1_grad`) along \
+                dp/du and dp/dv, otherwise as `normalmap`.",
+    },
+    Plugin {
         object: "texture",
         kinds: &["checkerboard"],
         properties: &[

@@ -162,6 +162,15 @@ impl Texture {
         }
     }
 
+    /// The gradient of [`eval_1`](Self::eval_1) in (u, v) as Mitsuba's `eval_1_grad` gives it
+    /// (what a bump map reads); only Mitsuba's bitmap has one, here a checkerboard's is zero.
+    pub fn eval_1_grad(&self, uv: Vec2) -> Vec2 {
+        match self {
+            Texture::Checkerboard { .. } => Vec2::ZERO,
+            Texture::Bitmap(b) => b.eval_1_grad(uv),
+        }
+    }
+
     /// The scalar mean Mitsuba's `Texture::mean` gives (what plastic's sampling weight uses):
     /// a checkerboard's colours' channel means averaged, a bitmap's mean luminance.
     pub fn mean(&self) -> f32 {
@@ -230,6 +239,38 @@ impl Bitmap {
                     + self.texel(x + 1, y + 1) * (w1.x * w1.y)
             }
         }
+    }
+
+    /// Mitsuba's `eval_1_grad` (bitmap.cpp): the luminance's bilinear interpolant
+    /// differentiated in texel units, taken to (u, v) through the transpose of `to_uv`'s
+    /// linear part and then scaled by the resolution, in that order as Mitsuba has it (the
+    /// chain rule would scale first; the two differ only for a rotating `to_uv` on a texture
+    /// that is not square). Zero for nearest-neighbour lookups.
+    pub fn eval_1_grad(&self, uv: Vec2) -> Vec2 {
+        if self.filter == Filter::Nearest {
+            return Vec2::ZERO;
+        }
+        let limit = |x: f32| {
+            if x.is_nan() {
+                0.0
+            } else {
+                x.clamp(-UV_LIMIT, UV_LIMIT)
+            }
+        };
+        let p = self.to_uv.apply(uv);
+        let p = Vec2::new(limit(p.x), limit(p.y));
+        let res = Vec2::new(self.width as f32, self.height as f32);
+        let f = p * res - 0.5;
+        let i = f.floor();
+        let w1 = f - i;
+        let w0 = Vec2::ONE - w1;
+        let (x, y) = (i.x as i32, i.y as i32);
+        let l = |x: i32, y: i32| luminance(self.texel(x, y));
+        let (f00, f10, f01, f11) = (l(x, y), l(x + 1, y), l(x, y + 1), l(x + 1, y + 1));
+        let dx = w0.y * (f10 - f00) + w1.y * (f11 - f01);
+        let dy = w0.x * (f01 - f00) + w1.x * (f11 - f10);
+        let [a, b] = self.to_uv.rows;
+        res * Vec2::new(a[0] * dx + b[0] * dy, a[1] * dx + b[1] * dy)
     }
 
     /// Reads `path` (see [`read_image`]) as a bitmap texture. The error names the file.
