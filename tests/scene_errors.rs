@@ -254,10 +254,6 @@ fn unsupported_mitsuba_features_are_refused_with_a_location() {
             "negative",
         ),
         (
-            r#"<shape type="sphere"><emitter type="area"/></shape>"#,
-            "radiance",
-        ),
-        (
             r#"<shape type="sphere"><transform name="to_world"><scale x="2"/></transform></shape>"#,
             "uniformly",
         ),
