@@ -47,16 +47,22 @@ fn check(cases: &[&Case]) -> Vec<String> {
     failures
 }
 
-fn shard(k: usize) {
-    let cases = corpus(CORPUS);
-    assert!(cases.len() >= 40, "the corpus has {} scenes", cases.len());
-    let mine: Vec<&Case> = cases.iter().skip(k).step_by(SHARDS).collect();
+/// Renders every `of`-th case of `cases` from the `k`-th; fails naming each biased one.
+fn assert_unbiased(cases: &[Case], k: usize, of: usize) {
+    let mine: Vec<&Case> = cases.iter().skip(k).step_by(of).collect();
     let failures = check(&mine);
+    eprintln!("{} scenes, {} failures", mine.len(), failures.len());
     assert!(
         failures.is_empty(),
         "biased against Mitsuba:\n{}",
         failures.join("\n")
     );
+}
+
+fn shard(k: usize) {
+    let cases = corpus(CORPUS);
+    assert!(cases.len() >= 40, "the corpus has {} scenes", cases.len());
+    assert_unbiased(&cases, k, SHARDS);
 }
 
 #[test]
@@ -91,13 +97,7 @@ fn corpus_shard_3() {
 #[test]
 fn found_by_long_runs() {
     let cases = corpus("tests/differential/found");
-    let all: Vec<&Case> = cases.iter().collect();
-    let failures = check(&all);
-    assert!(
-        failures.is_empty(),
-        "biased against Mitsuba:\n{}",
-        failures.join("\n")
-    );
+    assert_unbiased(&cases, 0, 1);
 }
 
 /// Hand-written scenes for plugins and scene forms the generator does not draw
@@ -116,13 +116,7 @@ fn found_by_long_runs() {
 /// of their 16 blocks fail (up to 2.3x and 5.4x the bound).
 fn plugins_shard(k: usize) {
     let cases = corpus("tests/differential/plugins");
-    let mine: Vec<&Case> = cases.iter().skip(k).step_by(2).collect();
-    let failures = check(&mine);
-    assert!(
-        failures.is_empty(),
-        "biased against Mitsuba:\n{}",
-        failures.join("\n")
-    );
+    assert_unbiased(&cases, k, 2);
 }
 
 // In two halves, so the test harness renders them side by side.
@@ -143,12 +137,5 @@ fn corpus_from_env() {
     let dir = std::env::var("HPPM_DIFFERENTIAL_CORPUS")
         .expect("HPPM_DIFFERENTIAL_CORPUS names a corpus from tests/differential/generate.py");
     let cases = corpus(&dir);
-    let all: Vec<&Case> = cases.iter().collect();
-    let failures = check(&all);
-    eprintln!("{} scenes, {} failures", cases.len(), failures.len());
-    assert!(
-        failures.is_empty(),
-        "biased against Mitsuba:\n{}",
-        failures.join("\n")
-    );
+    assert_unbiased(&cases, 0, 1);
 }

@@ -91,22 +91,28 @@ fn upper_half(x: f32) -> bool {
     return x - floor(x) > 0.5;
 }
 
+// A bitmap's `uv` after to_uv, in texels (Bitmap::texel_space): a NaN coordinate (which equals
+// nothing) reads 0, an infinite one the limit, as on the CPU.
+fn texel_space(t: TextureHeader, uv: vec2<f32>) -> vec2<f32> {
+    var p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+    p = select(p, vec2<f32>(0.0), p != p);
+    p = clamp(p, vec2<f32>(-UV_LIMIT), vec2<f32>(UV_LIMIT));
+    return p * vec2<f32>(f32(t.width), f32(t.height));
+}
+
 // Texture `index` at texture coordinates `uv`.
 fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
     let t = texture_header(index);
-    var p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
     if t.kind == TEXTURE_CHECKERBOARD {
+        let p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
         return select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) == upper_half(p.y));
     }
-    // A NaN coordinate (which equals nothing) reads 0, an infinite one the limit, as on the CPU.
-    p = select(p, vec2<f32>(0.0), p != p);
-    p = clamp(p, vec2<f32>(-UV_LIMIT), vec2<f32>(UV_LIMIT));
-    let res = vec2<f32>(f32(t.width), f32(t.height));
+    let p = texel_space(t, uv);
     if t.filter_type == FILTER_NEAREST {
-        let i = floor(p * res);
+        let i = floor(p);
         return texel(t, i32(i.x), i32(i.y));
     }
-    let f = p * res - 0.5;
+    let f = p - 0.5;
     let i = floor(f);
     let w1 = f - i;
     let w0 = vec2<f32>(1.0) - w1;
@@ -138,11 +144,8 @@ fn texture_eval_1_grad(index: u32, uv: vec2<f32>) -> vec2<f32> {
     if t.kind == TEXTURE_CHECKERBOARD || t.filter_type == FILTER_NEAREST {
         return vec2<f32>(0.0);
     }
-    var p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
-    p = select(p, vec2<f32>(0.0), p != p);
-    p = clamp(p, vec2<f32>(-UV_LIMIT), vec2<f32>(UV_LIMIT));
     let res = vec2<f32>(f32(t.width), f32(t.height));
-    let f = p * res - 0.5;
+    let f = texel_space(t, uv) - 0.5;
     let i = floor(f);
     let w1 = f - i;
     let w0 = vec2<f32>(1.0) - w1;

@@ -13,7 +13,7 @@ use serde::Deserialize;
 use super::pass::{IMAGE, PassKind, SlotDecl, SlotDir};
 use super::source_map::{self, NodeSpans, SourceMap};
 use super::{Edge, GraphError, GraphErrors, ValidGraph, ValidNode};
-use crate::error::Location;
+use crate::error::{Location, edit_distance};
 
 const VERSION: u32 = 1;
 
@@ -678,21 +678,4 @@ fn unused_nodes(
             ),
         })
         .collect()
-}
-
-/// Levenshtein distance, for "did you mean".
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let cost = usize::from(ca != cb);
-            let next = (row[j + 1] + 1).min(row[j] + 1).min(prev + cost);
-            prev = row[j + 1];
-            row[j + 1] = next;
-        }
-    }
-    row[b.len()]
 }

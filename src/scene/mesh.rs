@@ -19,6 +19,38 @@ pub struct MeshData {
     pub computed_normal_vertices: Option<Vec<Option<[usize; 3]>>>,
 }
 
+impl MeshData {
+    /// An indexed mesh file's triangles (`faces` index the vertex arrays) with its values per
+    /// corner; a 2D `uvs` has its z ignored. Without normals in the file, Mitsuba's computed
+    /// ones, with `computed_normal_vertices` set so that placing the mesh computes them again.
+    pub fn from_indexed(
+        positions: &[Vec3],
+        normals: Option<&[Vec3]>,
+        uvs: Option<&[Vec3]>,
+        faces: Vec<[usize; 3]>,
+    ) -> Self {
+        let per_corner = |values: &[Vec3]| -> Vec<[Vec3; 3]> {
+            faces.iter().map(|c| c.map(|i| values[i])).collect()
+        };
+        MeshData {
+            triangles: per_corner(positions),
+            normals: Some(match normals {
+                Some(n) => per_corner(n),
+                None => angle_weighted_normals(positions, &faces),
+            }),
+            uvs: uvs.map(|uv| {
+                faces
+                    .iter()
+                    .map(|c| c.map(|i| Vec2::new(uv[i].x, uv[i].y)))
+                    .collect()
+            }),
+            computed_normal_vertices: normals
+                .is_none()
+                .then(|| faces.iter().map(|&c| Some(c)).collect()),
+        }
+    }
+}
+
 /// Vertex normals as Mitsuba 3 computes them for a mesh file that has none (Thürmer and
 /// Wüthrich, "Computing Vertex Normals from Polygonal Facets", JGT 1998): each face adds its unit
 /// normal to its corners' vertices, weighted by the corner's angle. `faces` index `positions`;

@@ -25,7 +25,7 @@ use super::{
     Microfacet, PerturbationKind, PointLight, Report, Scene, SceneError, SideTextures, Sphere,
     bsdf, mesh, plugins, spectrum,
 };
-use crate::error::Location;
+use crate::error::{Location, edit_distance};
 
 /// Mitsuba's default BSDF for a shape that names none.
 const DEFAULT_BSDF: Bsdf = Bsdf::Diffuse {
@@ -332,22 +332,6 @@ impl<'a, 'input> Props<'a, 'input> {
             .min_by_key(|(d, _)| *d)
             .map(|(_, a)| a.as_str())
     }
-}
-
-/// Levenshtein distance between two names.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let substituted = diagonal + usize::from(ca != *cb);
-            diagonal = row[j + 1];
-            row[j + 1] = substituted.min(row[j] + 1).min(diagonal + 1);
-        }
-    }
-    row[b.len()]
 }
 
 /// Properties that Mitsuba 0.5/0.6 plugins read and Mitsuba 3's do not (after the version

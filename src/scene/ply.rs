@@ -8,12 +8,12 @@
 
 use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 
 use super::SceneError;
-use super::mesh::{MeshData, angle_weighted_normals};
+use super::mesh::MeshData;
 use crate::error::Location;
 
 /// The mesh of PLY file `path`, in the file's coordinates.
@@ -60,29 +60,12 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<MeshData, SceneError> {
         }
     }
     drop(faces);
-    let per_corner = |values: &[Vec3]| -> Vec<[Vec3; 3]> {
-        corners_of_triangles
-            .iter()
-            .map(|c| c.map(|i| values[i]))
-            .collect()
-    };
-    let mesh = MeshData {
-        triangles: per_corner(&positions),
-        // Mitsuba computes vertex normals for a mesh file that has none.
-        normals: Some(match &normals {
-            Some(n) => per_corner(n),
-            None => angle_weighted_normals(&positions, &corners_of_triangles),
-        }),
-        uvs: uvs.as_ref().map(|uv| {
-            per_corner(uv)
-                .into_iter()
-                .map(|c| c.map(|t| Vec2::new(t.x, t.y)))
-                .collect()
-        }),
-        computed_normal_vertices: normals
-            .is_none()
-            .then(|| corners_of_triangles.iter().map(|&c| Some(c)).collect()),
-    };
+    let mesh = MeshData::from_indexed(
+        &positions,
+        normals.as_deref(),
+        uvs.as_deref(),
+        corners_of_triangles,
+    );
     Ok(mesh)
 }
 

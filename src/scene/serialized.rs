@@ -20,10 +20,10 @@
 use std::path::Path;
 
 use flate2::{Decompress, FlushDecompress, Status};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::SceneError;
-use super::mesh::{MeshData, angle_weighted_normals};
+use super::mesh::MeshData;
 
 const MAGIC: u16 = 0x041C;
 const VERSION_3: u16 = 3;
@@ -342,26 +342,7 @@ fn decode(data: &[u8], version: u16) -> Result<Serialized, String> {
         ));
     }
 
-    let per_corner = |values: &[Vec3]| -> Vec<[Vec3; 3]> {
-        faces.iter().map(|c| c.map(|i| values[i])).collect()
-    };
-    let mesh = MeshData {
-        triangles: per_corner(&positions),
-        // Mitsuba computes vertex normals for a mesh file that has none.
-        normals: Some(match &normals {
-            Some(n) => per_corner(n),
-            None => angle_weighted_normals(&positions, &faces),
-        }),
-        uvs: uvs.as_ref().map(|uv| {
-            faces
-                .iter()
-                .map(|c| c.map(|i| Vec2::new(uv[i].x, uv[i].y)))
-                .collect()
-        }),
-        computed_normal_vertices: normals
-            .is_none()
-            .then(|| faces.iter().map(|&c| Some(c)).collect()),
-    };
+    let mesh = MeshData::from_indexed(&positions, normals.as_deref(), uvs.as_deref(), faces);
     Ok(Serialized {
         mesh,
         face_normals: flags & FACE_NORMALS != 0,
@@ -373,7 +354,10 @@ fn decode(data: &[u8], version: u16) -> Result<Serialized, String> {
 mod tests {
     use std::io::Write;
 
+    use glam::Vec2;
+
     use super::*;
+    use crate::scene::mesh::angle_weighted_normals;
 
     /// A shape for the test writer; reals are written as `f64` or `f32` by `double`.
     #[derive(Clone, Default)]

@@ -208,10 +208,9 @@ impl Bitmap {
         self.texels[(y * w + x) as usize]
     }
 
-    /// Dr.Jit's lookup: texel centres at (i + 1/2) / resolution; bilinear weights of the four
-    /// texels around the point, each index wrapped by itself.
-    pub fn eval(&self, uv: Vec2) -> Vec3 {
-        // A NaN coordinate reads (0, 0) (on the GPU too), an infinite one the limit.
+    /// `uv` after `to_uv`, in texels: a NaN coordinate reads 0 (on the GPU too), an infinite
+    /// one the limit.
+    fn texel_space(&self, uv: Vec2) -> Vec2 {
         let limit = |x: f32| {
             if x.is_nan() {
                 0.0
@@ -220,15 +219,20 @@ impl Bitmap {
             }
         };
         let p = self.to_uv.apply(uv);
-        let p = Vec2::new(limit(p.x), limit(p.y));
-        let res = Vec2::new(self.width as f32, self.height as f32);
+        Vec2::new(limit(p.x), limit(p.y)) * Vec2::new(self.width as f32, self.height as f32)
+    }
+
+    /// Dr.Jit's lookup: texel centres at (i + 1/2) / resolution; bilinear weights of the four
+    /// texels around the point, each index wrapped by itself.
+    pub fn eval(&self, uv: Vec2) -> Vec3 {
+        let p = self.texel_space(uv);
         match self.filter {
             Filter::Nearest => {
-                let i = (p * res).floor();
+                let i = p.floor();
                 self.texel(i.x as i32, i.y as i32)
             }
             Filter::Bilinear => {
-                let f = p * res - 0.5;
+                let f = p - 0.5;
                 let i = f.floor();
                 let w1 = f - i;
                 let w0 = Vec2::ONE - w1;
@@ -250,17 +254,7 @@ impl Bitmap {
         if self.filter == Filter::Nearest {
             return Vec2::ZERO;
         }
-        let limit = |x: f32| {
-            if x.is_nan() {
-                0.0
-            } else {
-                x.clamp(-UV_LIMIT, UV_LIMIT)
-            }
-        };
-        let p = self.to_uv.apply(uv);
-        let p = Vec2::new(limit(p.x), limit(p.y));
-        let res = Vec2::new(self.width as f32, self.height as f32);
-        let f = p * res - 0.5;
+        let f = self.texel_space(uv) - 0.5;
         let i = f.floor();
         let w1 = f - i;
         let w0 = Vec2::ONE - w1;
@@ -270,6 +264,7 @@ impl Bitmap {
         let dx = w0.y * (f10 - f00) + w1.y * (f11 - f01);
         let dy = w0.x * (f01 - f00) + w1.x * (f11 - f10);
         let [a, b] = self.to_uv.rows;
+        let res = Vec2::new(self.width as f32, self.height as f32);
         res * Vec2::new(a[0] * dx + b[0] * dy, a[1] * dx + b[1] * dy)
     }
 
