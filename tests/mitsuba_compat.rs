@@ -478,6 +478,20 @@ fn host(object: &str, kind: &str, property: &str) -> String {
                 r#"<bsdf type="{kind}"><texture name="{name}" type="bitmap"><string name="filename" value="tests/data/textures/grid4.png"/><boolean name="raw" value="true"/></texture>{property}<bsdf type="diffuse"/></bsdf>"#
             ))
         }
+        "bsdf" if kind == "blendbsdf" => {
+            // The weight it needs, unless the property under test is that weight.
+            let weight = if property.is_empty() {
+                r#"<float name="weight" value="0.5"/>"#
+            } else {
+                ""
+            };
+            on_cube(format!(
+                r#"<bsdf type="blendbsdf">{weight}{property}<bsdf type="diffuse"/><bsdf type="roughconductor"/></bsdf>"#
+            ))
+        }
+        "bsdf" if kind == "mask" => on_cube(format!(
+            r#"<bsdf type="mask">{property}<bsdf type="diffuse"/></bsdf>"#
+        )),
         "bsdf" => on_cube(format!(r#"<bsdf type="{kind}">{property}</bsdf>"#)),
         "texture" => {
             let needs = match kind {
@@ -589,4 +603,115 @@ fn the_readme_table_is_generated_from_the_code() {
         readme[start..end] == hppm::scene::plugins::markdown(),
         "README.md's plugin table differs from `hppm plugins`: regenerate it"
     );
+}
+
+/// The materials a shape's blend chooses among, as (weight, first, second) and the children.
+fn blend_of(scene: &Scene, material: u32) -> (f32, Bsdf, Bsdf) {
+    let m = &scene.materials[material as usize];
+    let Bsdf::Blend {
+        weight,
+        first,
+        second,
+    } = m.bsdf
+    else {
+        panic!("not a blend: {:?}", m.bsdf);
+    };
+    assert!(first < material && second < material, "children come first");
+    (
+        weight,
+        scene.materials[first as usize].bsdf,
+        scene.materials[second as usize].bsdf,
+    )
+}
+
+/// `blendbsdf`, `mask` and `null` load as Mitsuba reads them: the weight is the second child's
+/// share; a mask is a blend of `null` and its BSDF by opacity (0.5 by default); children may be
+/// `<ref>`s and blends themselves; a texture weight is kept; a `bumpmap` around a blend perturbs
+/// both children (copies, so the referenced BSDF elsewhere keeps its plain frame). Would catch
+/// children swapped, the default opacity, a lost texture or frame.
+#[test]
+fn blends_and_masks_load_as_mitsuba_reads_them() {
+    let body = format!(
+        r#"<bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf>
+        <shape type="cube"><bsdf type="blendbsdf"><float name="weight" value="0.25"/><ref id="red"/><bsdf type="roughconductor"/></bsdf></shape>
+        <shape type="cube"><bsdf type="mask"><ref id="red"/></bsdf></shape>
+        <shape type="cube"><bsdf type="null"/></shape>
+        <shape type="cube"><bsdf type="blendbsdf"><texture name="weight" type="checkerboard"/><bsdf type="blendbsdf"><float name="weight" value="0.5"/><ref id="red"/><bsdf type="null"/></bsdf><ref id="red"/></bsdf></shape>
+        <shape type="cube"><bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="tests/data/textures/grid4.png"/></texture><bsdf type="mask"><float name="opacity" value="0.7"/><ref id="red"/></bsdf></bsdf></shape>
+        <shape type="cube"><ref id="red"/></shape>
+        {}{LIGHT}"#,
+        sensor("", 8, 8)
+    );
+    let scene = scene_of(check(&body));
+    let shape = |i: usize| scene.triangles[12 * i].material;
+    let red = Bsdf::Diffuse {
+        reflectance: Vec3::new(0.8, 0.1, 0.1),
+    };
+    let (w, first, second) = blend_of(&scene, shape(0));
+    assert_eq!((w, first), (0.25, red));
+    assert!(matches!(second, Bsdf::RoughConductor { .. }));
+    assert_eq!(blend_of(&scene, shape(1)), (0.5, Bsdf::Null, red));
+    assert_eq!(scene.materials[shape(2) as usize].bsdf, Bsdf::Null);
+    let textured = &scene.materials[shape(3) as usize];
+    assert!(textured.textures.front.blend_weight.is_some());
+    let (_, inner, outer_second) = blend_of(&scene, shape(3));
+    assert!(matches!(inner, Bsdf::Blend { .. }));
+    assert_eq!(outer_second, red);
+    let Bsdf::Blend { first, second, .. } = scene.materials[shape(4) as usize].bsdf else {
+        panic!("bumpmap > mask is a blend");
+    };
+    assert_eq!(blend_of(&scene, shape(4)).0, 0.7);
+    let frame = |i: u32| scene.materials[i as usize].textures.front.frame;
+    assert!(frame(first).is_some() && frame(second).is_some());
+    assert!(
+        frame(shape(5)).is_none(),
+        "the referenced BSDF keeps its own frame"
+    );
+    assert!(scene.features().blends);
+}
+
+/// What Mitsuba refuses, hppm refuses at the element, every problem at once: a blendbsdf
+/// without its weight, with one child or three; a mask inside twosided (its pass-through
+/// transmits); a blend inside twosided with a dielectric child.
+#[test]
+fn broken_blends_are_errors_at_their_line() {
+    let cases = [
+        (
+            r#"<bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+            "needs a weight",
+        ),
+        (
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>"#,
+            "needs two nested",
+        ),
+        (
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+            "at most 2",
+        ),
+        (
+            r#"<bsdf type="twosided"><bsdf type="mask"><bsdf type="diffuse"/></bsdf></bsdf>"#,
+            "without transmission",
+        ),
+        (
+            r#"<bsdf type="twosided"><bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="dielectric"/></bsdf></bsdf>"#,
+            "without transmission",
+        ),
+        (
+            r#"<bsdf type="mask"><float name="opacty" value="0.5"/><bsdf type="diffuse"/></bsdf>"#,
+            "opacity",
+        ),
+    ];
+    for (bsdf, expected) in cases {
+        let report = check(&format!(
+            "{}\n<shape type=\"cube\">{bsdf}</shape>{LIGHT}",
+            sensor("", 8, 8)
+        ));
+        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+        assert!(
+            errors
+                .iter()
+                .any(|e| e.contains(expected) && e.contains("shipped.xml:3:")),
+            "{bsdf}: expected \"{expected}\" at line 3 in {errors:?}"
+        );
+    }
 }

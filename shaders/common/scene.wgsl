@@ -129,6 +129,11 @@ struct Material {
     frame_texture: u32,
     frame_scale: f32,
     frame_flags: u32,
+    // A blend (common::blend): the two materials it chooses between, the probability of the
+    // second and the scalar texture that replaces it, or NO_TEXTURE.
+    children: vec2<u32>,
+    blend_weight: f32,
+    blend_weight_texture: u32,
     pad_a: u32,
     pad_b: u32,
 }
@@ -168,6 +173,8 @@ const MATERIAL_PLASTIC: u32 = 5u;
 const MATERIAL_ROUGH_PLASTIC: u32 = 6u;
 const MATERIAL_ROUGH_DIELECTRIC: u32 = 7u;
 const MATERIAL_THIN_DIELECTRIC: u32 = 8u;
+const MATERIAL_BLEND: u32 = 9u;
+const MATERIAL_NULL: u32 = 10u;
 const NO_BACK: u32 = 0xffffffffu;
 const LIGHT_TRIANGLE: u32 = 0u;
 const LIGHT_SPHERE: u32 = 1u;

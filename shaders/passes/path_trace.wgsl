@@ -25,8 +25,12 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, Material, Surface, Hit, NO_HIT, NO_LIGHT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::scene::{scene_info, materials, Material, Surface, Hit, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
 #import common::material::{material_eval, material_sample, material_has_continuous_lobe}
+#import common::blend::choose_material
+#ifdef BLENDS
+#import common::scene::MATERIAL_NULL
+#endif
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
 #endif
@@ -133,6 +137,8 @@ struct PathState {
     mapped: vec3<f32>,
     // GLOSSY only: the last vertex was not diffuse, so `mapped` applies to what is reached now.
     after_specular: bool,
+    // The last vertex was a mask's pass-through (BLENDS only).
+    through_null: bool,
     // Light gathered so far (throughput-weighted).
     radiance: vec3<f32>,
     // The segment traced next, counting from 1 at the camera.
@@ -264,6 +270,13 @@ fn direct_light_bsdf(surface: Surface, material: Material, shading: ShadingFrame
     return value * ls.radiance * weight / ls.pdf;
 }
 
+// Emission the path reaches now takes full weight, not MIS's: light sampling could not have
+// found it (the last vertex was delta, the camera, or a pass-through whose surface blocked
+// the light sample of the vertex before).
+fn full_weight(path: PathState) -> bool {
+    return path.after_delta || path.through_null;
+}
+
 #ifdef ENVIRONMENT
 // The environment seen by a path that escapes, under the same rules as an area light's
 // emission: dropped when photon mapping counts it (reached from a photon-mapped vertex through
@@ -283,7 +296,7 @@ fn environment_emission(path: PathState) -> vec3<f32> {
 #endif
     let seen = escaped(path.dir);
     var weight = 1.0;
-    if !path.after_delta {
+    if !full_weight(path) {
         weight = power_heuristic(path.bsdf_pdf, seen.pdf);
     }
     return kept * seen.radiance * weight;
@@ -305,7 +318,7 @@ fn primary_direction(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u
 // A camera path at the camera, through `pixel`.
 fn start_path(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> PathState {
     let dir = primary_direction(pixel, splatted, rng);
-    return PathState(scene_info.camera_origin, dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, vec3<f32>(0.0), 1u);
+    return PathState(scene_info.camera_origin, dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, false, vec3<f32>(0.0), 1u);
 }
 
 // Emitting shapes a camera ray steps through under hide_emitters before it counts as hidden.
@@ -363,7 +376,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         // is the photons'; the rest keeps its MIS weight (a glossy lobe's pdf, not delta's).
         let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - (*path).mapped, (*path).after_specular);
         var weight = 1.0;
-        if !(*path).after_delta {
+        if !full_weight(*path) {
             weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
         }
         (*path).radiance += (*path).throughput * kept * material.emission * weight;
@@ -371,20 +384,21 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
 #else
     if surface.light != NO_LIGHT && cos_o > 0.0 && !hidden && !((*path).after_delta && (*path).after_merge) {
         var weight = 1.0;
-        if !(*path).after_delta {
+        if !full_weight(*path) {
             weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
         }
         (*path).radiance += (*path).throughput * material.emission * weight;
     }
 #endif
-    // A twosided material's back is its own BSDF, seen with the normal flipped.
-    var back = false;
-    if cos_o < 0.0 && material.back != NO_BACK {
-        material = materials[material.back];
+    // A twosided material's back is its own BSDF, seen with the normal flipped; a blend
+    // scatters with one of its children.
+    let chosen = choose_material(surface.material, cos_o, surface.uv, rng);
+    material = chosen.material;
+    let back = chosen.back;
+    if back {
         surface.normal = -surface.normal;
         surface.shading_normal = -surface.shading_normal;
         cos_o = -cos_o;
-        back = true;
     }
 #ifdef TEXTURES
     // Before any use of the colours: NEE, the bounce, hit-point weights, grid lookups.
@@ -407,6 +421,18 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         }
         (*path).throughput /= survive;
     }
+#ifdef BLENDS
+    if material.kind == MATERIAL_NULL {
+        // A mask's pass-through, a vertex as in Mitsuba (it counts towards max_depth) that
+        // leaves the path's class alone. Light sampled from the vertex before was blocked by
+        // this surface, so what lies behind it takes full weight.
+        (*path).origin = spawn_origin(surface, (*path).dir);
+        (*path).through_null = true;
+        (*path).depth = depth + 1u;
+        return true;
+    }
+    (*path).through_null = false;
+#endif
 
     if material.kind == MATERIAL_DIFFUSE {
         // One-sided, as Mitsuba's diffuse: black from behind, and where the shading normal

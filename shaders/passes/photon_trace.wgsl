@@ -21,8 +21,13 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
-#import common::scene::{scene_info, materials, lights, Light, NO_HIT, NO_BACK, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
+#import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
 #import common::material::material_sample
+#import common::blend::choose_material
+#ifdef BLENDS
+#import common::scene::MATERIAL_NULL
+#import common::blend::diffuse_probability
+#endif
 #ifdef GLOSSY
 #import common::material::material_specular_share
 #endif
@@ -317,17 +322,25 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         return false;
     }
     var surface = surface_at(hit, photon.origin, photon.dir);
-    var material = materials[surface.material];
     let wi = -photon.dir;
     var cos_i = dot(wi, surface.normal);
-    var back = false;
-    if cos_i < 0.0 && material.back != NO_BACK {
-        material = materials[material.back];
+    let facing = cos_i;
+    let chosen = choose_material(surface.material, cos_i, surface.uv, rng);
+    var material = chosen.material;
+    let back = chosen.back;
+    if back {
         surface.normal = -surface.normal;
         surface.shading_normal = -surface.shading_normal;
         cos_i = -cos_i;
-        back = true;
     }
+#ifdef BLENDS
+    if material.kind == MATERIAL_NULL {
+        // A mask's pass-through: the photon goes on unchanged, its class with it.
+        photon.origin = spawn_origin(surface, photon.dir);
+        (*path).photon = photon;
+        return true;
+    }
+#endif
 #ifdef TEXTURES
     // The diffuse bounce and every other lobe scatter with the surface's own colours.
     material = textured_material(material, surface.uv);
@@ -350,7 +363,14 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
         // over the geometric one it arrived with turns it into what the camera pass would
         // gather there (1 on flat-shaded surfaces).
-        let deposited = photon.flux * (dot(wi, surface.shading_normal) * factor / cos_i);
+        var deposited = photon.flux * (dot(wi, surface.shading_normal) * factor / cos_i);
+#ifdef BLENDS
+        // The flux arriving is the same whichever child of a blend this photon took, but only
+        // a diffuse one deposits it.
+        if chosen.blended {
+            deposited /= diffuse_probability(surface.material, facing, surface.uv);
+        }
+#endif
         if params.mode == MODE_CAUSTIC {
             if after_specular {
                 deposit(surface.position, wi, deposited, segments);

@@ -63,6 +63,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/rough_dielectric.wgsl"),
     shader_file!("shaders/common/texture.wgsl"),
     shader_file!("shaders/common/normal_map.wgsl"),
+    shader_file!("shaders/common/blend.wgsl"),
     shader_file!("shaders/common/material.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
@@ -84,6 +85,7 @@ pub const SCENE_DEFS: &[&str] = &[
     "TEXTURES",
     "FLOAT_TEXELS",
     "NORMAL_MAPS",
+    "BLENDS",
 ];
 
 /// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
@@ -91,7 +93,8 @@ pub const SCENE_DEFS: &[&str] = &[
 /// (smooth or rough), `ROUGH_DIELECTRIC` a rough dielectric, `SPHERES` when it has spheres,
 /// `POINT_LIGHTS` when it has a point or spot light, `SPOT_LIGHTS` a spot light,
 /// `DIRECTIONAL_LIGHTS` a directional light, `ENVIRONMENT` a constant or map light, `TEXTURES` when a material has a texture (the
-/// scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap (with `TEXTURES`).
+/// scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap (with `TEXTURES`), `BLENDS`
+/// a blendbsdf, mask or null BSDF.
 pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
     let present = [
         ("DIELECTRIC", features.dielectric),
@@ -105,6 +108,7 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
         ("ENVIRONMENT", features.environment),
         ("TEXTURES", features.textures),
         ("NORMAL_MAPS", features.normal_maps),
+        ("BLENDS", features.blends),
     ];
     defs_of(present.iter().filter(|(_, on)| *on).map(|(name, _)| *name))
 }

@@ -426,7 +426,9 @@ pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
             }
         }
         Bsdf::Dielectric { .. } | Bsdf::Mirror | Bsdf::Conductor { .. } => Vec3::ZERO,
-        Bsdf::ThinDielectric { .. } => Vec3::ZERO,
+        Bsdf::ThinDielectric { .. } | Bsdf::Null => Vec3::ZERO,
+        // Never evaluated: a child is chosen first (see `Bsdf::Blend`).
+        Bsdf::Blend { .. } => Vec3::ZERO,
         Bsdf::RoughConductor {
             eta,
             k,
@@ -546,7 +548,9 @@ pub fn pdf(p: &Prepared, wi: Vec3, wo: Vec3) -> f32 {
         Bsdf::Dielectric { .. }
         | Bsdf::Mirror
         | Bsdf::Conductor { .. }
-        | Bsdf::ThinDielectric { .. } => 0.0,
+        | Bsdf::ThinDielectric { .. }
+        | Bsdf::Null
+        | Bsdf::Blend { .. } => 0.0,
         Bsdf::RoughConductor { microfacet, .. } => {
             if ci <= 0.0 || co <= 0.0 {
                 return 0.0;
@@ -678,6 +682,13 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
                 delta: true,
             })
         }
+        Bsdf::Null => Some(Sample {
+            wo: -wi,
+            weight: Vec3::ONE,
+            pdf: 1.0,
+            delta: true,
+        }),
+        Bsdf::Blend { .. } => None,
         Bsdf::ThinDielectric { int_ior, ext_ior } => {
             let mut r = fresnel(ci.abs(), int_ior / ext_ior).0;
             r *= 2.0 / (1.0 + r);

@@ -21,6 +21,8 @@ pub const MATERIAL_PLASTIC: u32 = 5;
 pub const MATERIAL_ROUGH_PLASTIC: u32 = 6;
 pub const MATERIAL_ROUGH_DIELECTRIC: u32 = 7;
 pub const MATERIAL_THIN_DIELECTRIC: u32 = 8;
+pub const MATERIAL_BLEND: u32 = 9;
+pub const MATERIAL_NULL: u32 = 10;
 
 /// `GpuMaterial::frame_kind`: the shading frame as the shape gives it, or perturbed by a
 /// normal map or a bump map (src/scene/normal_map.rs).
@@ -137,6 +139,11 @@ pub struct GpuMaterial {
     pub frame_texture: u32,
     pub frame_scale: f32,
     pub frame_flags: u32,
+    /// Blend: the two materials it chooses between (indices of this table), the probability
+    /// of the second and the scalar texture replacing it (or NO_TEXTURE).
+    pub children: [u32; 2],
+    pub blend_weight: f32,
+    pub blend_weight_texture: u32,
     pub _pad: [u32; 2],
 }
 
@@ -283,6 +290,9 @@ fn gpu_material(
         frame_texture: NO_TEXTURE,
         frame_scale: 1.0,
         frame_flags: 0,
+        children: [0; 2],
+        blend_weight: 0.0,
+        blend_weight_texture: textures.blend_weight.unwrap_or(NO_TEXTURE),
         _pad: [0; 2],
     };
     if let Some(frame) = textures.frame {
@@ -321,6 +331,16 @@ fn gpu_material(
             rough(&mut m, &microfacet);
         }
         Bsdf::Mirror => m.kind = MATERIAL_MIRROR,
+        Bsdf::Null => m.kind = MATERIAL_NULL,
+        Bsdf::Blend {
+            weight,
+            first,
+            second,
+        } => {
+            m.kind = MATERIAL_BLEND;
+            // The fronts of the scene's materials keep their indices in the GPU table.
+            (m.children, m.blend_weight) = ([first, second], weight.clamp(0.0, 1.0));
+        }
         Bsdf::Conductor { eta, k, specular } => {
             m.kind = MATERIAL_CONDUCTOR;
             (m.eta, m.k, m.specular) = (eta.to_array(), k.to_array(), specular.to_array());
@@ -757,9 +777,9 @@ fn padded_sphere(sphere: Option<(Vec3, f32)>) -> [f32; 4] {
 fn bounding_sphere(scene: &Scene, kept: impl Fn(&Bsdf) -> bool) -> Option<(Vec3, f32)> {
     let is_specular = |material: u32| {
         scene
-            .materials
-            .get(material as usize)
-            .is_some_and(|m| m.bsdfs().any(&kept))
+            .with_nested(material)
+            .iter()
+            .any(|(_, m)| m.bsdfs().any(&kept))
     };
     let triangles = || scene.triangles.iter().filter(|t| is_specular(t.material));
     let spheres = || scene.spheres.iter().filter(|s| is_specular(s.material));

@@ -113,6 +113,7 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
         in_group: false,
         named_textures: HashMap::new(),
         textures: RefCell::new(Vec::new()),
+        materials: RefCell::new(Vec::new()),
         scene: empty_scene(path),
         has_integrator: false,
         has_sensor: false,
@@ -126,6 +127,7 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
     let unused = reader.check_defines_used(defines);
     reader.keep(unused);
     reader.scene.textures = reader.textures.take();
+    reader.scene.materials = reader.materials.take();
     if !reader.has_sensor {
         reader.report(reader.error(doc.root_element(), "the scene has no <sensor>"));
     }
@@ -286,6 +288,9 @@ struct Reader<'a, 'input> {
     named_textures: HashMap<String, (Texture, RefCell<Option<u32>>)>,
     /// The textures the scene's materials use, in the order first used.
     textures: RefCell<Vec<Texture>>,
+    /// The scene's materials: each shape's, and the ones blends and masks choose among
+    /// (pushed while their BSDF is read, so before the blend that uses them).
+    materials: RefCell<Vec<Material>>,
     /// The ids of top-level BSDFs and textures that could not be read, and where they were:
     /// a reference to one is reported as such, not as an undeclared id.
     failed_ids: HashMap<String, usize>,
@@ -1606,6 +1611,18 @@ impl<'a, 'input> Reader<'a, 'input> {
         if kind == "normalmap" || kind == "bumpmap" {
             return self.read_perturbed(node, &kind);
         }
+        if kind == "blendbsdf" || kind == "mask" {
+            return self.read_blend(node, &kind);
+        }
+        if kind == "null" {
+            let props = self.props(node, &[])?;
+            self.finish(props, node)?;
+            return Ok(Sides {
+                front: Bsdf::Null,
+                back: None,
+                textures: MaterialTextures::default(),
+            });
+        }
         let (front, textures) = self.read_one_sided(node, &kind)?;
         Ok(Sides {
             front,
@@ -1631,11 +1648,11 @@ impl<'a, 'input> Reader<'a, 'input> {
             if sides.back.is_some() {
                 return Err(self.error(child, "twosided: a nested BSDF is already twosided"));
             }
-            if sides.front.transmits() {
+            if self.transmits(&sides.front) {
                 return Err(self.error(
                     child,
-                    "twosided: only BSDFs without transmission can be nested (as in Mitsuba); \
-                     a dielectric is two-sided already",
+                    "twosided: only BSDFs without transmission can be nested (as in Mitsuba; \
+                     a mask's pass-through counts); a dielectric is two-sided already",
                 ));
             }
             if nested.len() == 2 {
@@ -1662,6 +1679,118 @@ impl<'a, 'input> Reader<'a, 'input> {
             }),
             _ => Err(self.error(node, "twosided: a nested <bsdf> is required")),
         }
+    }
+
+    /// Whether `bsdf`, or any BSDF a blend or mask of it may choose, transmits.
+    fn transmits(&self, bsdf: &Bsdf) -> bool {
+        match *bsdf {
+            Bsdf::Blend { first, second, .. } => {
+                let children: Vec<Material> = {
+                    let materials = self.materials.borrow();
+                    [first, second]
+                        .iter()
+                        .filter_map(|&i| materials.get(i as usize).copied())
+                        .collect()
+                };
+                children
+                    .iter()
+                    .any(|m| m.bsdfs().any(|b| self.transmits(b)))
+            }
+            _ => bsdf.transmits(),
+        }
+    }
+
+    /// Mitsuba's `blendbsdf` (two nested BSDFs; `weight`, the second's share, is required)
+    /// and `mask` (one nested BSDF; `opacity`, its share, defaults to 0.5, and the rest passes
+    /// through as `null`). Each nested BSDF becomes a material of its own, which the blend's
+    /// choice at each interaction points at.
+    fn read_blend(&self, node: Node<'a, 'input>, kind: &str) -> Result<Sides, SceneError> {
+        let mask = kind == "mask";
+        let name = if mask { "opacity" } else { "weight" };
+        let mut props = self.props(node, &["bsdf", "ref"])?;
+        let mut weight_node = props.take(name);
+        let mut nested: Vec<Sides> = Vec::new();
+        let wanted = if mask { 1 } else { 2 };
+        for child in node.children().filter(Node::is_element) {
+            let sides = match child.tag_name().name() {
+                "bsdf" => self.read_bsdf(child)?,
+                "ref" if self.attr(child, "name")?.as_deref() == Some(name) => {
+                    if weight_node.replace(child).is_some() {
+                        return Err(self.error(child, format!("{kind}: {name} given twice")));
+                    }
+                    continue;
+                }
+                "ref" => self.bsdf_ref(child)?,
+                _ => continue,
+            };
+            if nested.len() == wanted {
+                return Err(self.error(
+                    child,
+                    format!("{kind}: at most {wanted} nested BSDF(s), as in Mitsuba"),
+                ));
+            }
+            nested.push(sides);
+        }
+        let takes = plugins::properties_of("bsdf", kind);
+        self.finish_with(props, node, Some(&takes))?;
+        if nested.len() < wanted {
+            let needed = if mask {
+                "one nested <bsdf>"
+            } else {
+                "two nested <bsdf>s"
+            };
+            return Err(self.error(node, format!("{kind} needs {needed} (as in Mitsuba)")));
+        }
+        let (weight, texture) = match weight_node {
+            Some(n) => match self.texture_node(n, name)? {
+                Some((mean, index)) => (mean, Some(index)),
+                None => (self.float(n)?, None),
+            },
+            None if mask => (0.5, None),
+            None => {
+                return Err(self.error(
+                    node,
+                    "blendbsdf needs a weight (a <float name=\"weight\"> or a texture), as in \
+                     Mitsuba",
+                ));
+            }
+        };
+        if mask {
+            nested.insert(
+                0,
+                Sides {
+                    front: Bsdf::Null,
+                    back: None,
+                    textures: MaterialTextures::default(),
+                },
+            );
+        }
+        let add = |sides: &Sides| {
+            let mut materials = self.materials.borrow_mut();
+            materials.push(Material {
+                bsdf: sides.front,
+                back: sides.back,
+                emission: Vec3::ZERO,
+                textures: sides.textures,
+            });
+            materials.len() as u32 - 1
+        };
+        let (first, second) = (add(&nested[0]), add(&nested[1]));
+        Ok(Sides {
+            front: Bsdf::Blend {
+                weight,
+                first,
+                second,
+            },
+            back: None,
+            textures: MaterialTextures {
+                front: SideTextures {
+                    blend_weight: texture,
+                    ..SideTextures::default()
+                },
+                back: SideTextures::default(),
+            },
+        })
     }
 
     /// Mitsuba's `normalmap` and `bumpmap`: one nested BSDF (inline or `<ref>`, possibly a
@@ -1767,7 +1896,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 ),
             ));
         }
-        let Some(mut sides) = nested else {
+        let Some(sides) = nested else {
             return Err(self.error(
                 node,
                 format!("{kind}: a nested <bsdf> is required (as in Mitsuba)"),
@@ -1784,13 +1913,72 @@ impl<'a, 'input> Reader<'a, 'input> {
             shadowing,
             outside_twosided: false,
         };
-        sides.textures.front.frame = Some(frame);
+        self.perturbed(sides, frame, node)
+    }
+
+    /// `sides` in the frame `frame` perturbs. A blend's or mask's children each get the frame
+    /// instead (the same surface: a blend is linear in its children), as copies, since a
+    /// `<ref>`'d child may be used elsewhere without it.
+    fn perturbed(
+        &self,
+        mut sides: Sides,
+        frame: FramePerturbation,
+        node: Node,
+    ) -> Result<Sides, SceneError> {
+        let Bsdf::Blend {
+            weight,
+            first,
+            second,
+        } = sides.front
+        else {
+            if sides.textures.front.frame.is_some() || sides.textures.back.frame.is_some() {
+                return Err(self.error(
+                    node,
+                    "a normalmap or bumpmap inside another (here through a blendbsdf or mask) \
+                     is not supported",
+                ));
+            }
+            sides.textures.front.frame = Some(frame);
+            if sides.back.is_some() {
+                sides.textures.back.frame = Some(FramePerturbation {
+                    outside_twosided: true,
+                    ..frame
+                });
+            }
+            return Ok(sides);
+        };
         if sides.back.is_some() {
-            sides.textures.back.frame = Some(FramePerturbation {
-                outside_twosided: true,
-                ..frame
-            });
+            return Err(self.error(
+                node,
+                "a normalmap or bumpmap around a twosided blendbsdf is not supported: put it \
+                 around the BSDFs nested in the blend",
+            ));
         }
+        let mut children = [first, second];
+        for child in &mut children {
+            let Some(material) = self.materials.borrow().get(*child as usize).copied() else {
+                return Err(self.error(node, "internal: a blend's child is missing"));
+            };
+            let nested = Sides {
+                front: material.bsdf,
+                back: material.back,
+                textures: material.textures,
+            };
+            let turned = self.perturbed(nested, frame, node)?;
+            let mut materials = self.materials.borrow_mut();
+            materials.push(Material {
+                bsdf: turned.front,
+                back: turned.back,
+                textures: turned.textures,
+                ..material
+            });
+            *child = materials.len() as u32 - 1;
+        }
+        sides.front = Bsdf::Blend {
+            weight,
+            first: children[0],
+            second: children[1],
+        };
         Ok(sides)
     }
 
@@ -2346,7 +2534,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let (triangles, spheres, materials) = (
             self.scene.triangles.len(),
             self.scene.spheres.len(),
-            self.scene.materials.len(),
+            self.materials.borrow().len(),
         );
         self.in_group = true;
         let checked = shapes
@@ -2355,7 +2543,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.in_group = false;
         self.scene.triangles.truncate(triangles);
         self.scene.spheres.truncate(spheres);
-        self.scene.materials.truncate(materials);
+        self.materials.borrow_mut().truncate(materials);
         checked.map(|()| shapes)
     }
 
@@ -2412,14 +2600,14 @@ impl<'a, 'input> Reader<'a, 'input> {
                     .map(|n| self.transform(n))
                     .transpose()?
                     .unwrap_or(Mat4::IDENTITY),
-            material: self.scene.materials.len() as u32,
+            material: self.materials.borrow().len() as u32,
             flip_normals: props
                 .take("flip_normals")
                 .map(|n| self.boolean(n))
                 .transpose()?
                 .unwrap_or(false),
         };
-        self.scene.materials.push(material);
+        self.materials.borrow_mut().push(material);
         let (triangles, spheres) = (self.scene.triangles.len(), self.scene.spheres.len());
         match kind.as_str() {
             "rectangle" => self.push_mesh_data(mesh::rectangle_mesh(), &common),

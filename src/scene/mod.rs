@@ -102,6 +102,17 @@ pub enum Bsdf {
     },
     /// A thin slab of dielectric: reflects or passes straight through.
     ThinDielectric { int_ior: f32, ext_ior: f32 },
+    /// Lets light through unchanged (Mitsuba `null`): a vertex that is neither S nor D.
+    Null,
+    /// One of two materials, `second` with probability `weight` (clamped to [0, 1]; a texture
+    /// in the side's `blend_weight` replaces it), chosen anew at every interaction (Mitsuba
+    /// `blendbsdf`; `mask` is a blend of `null` and its BSDF by opacity). Indices into
+    /// `Scene::materials`, always below the blend's own.
+    Blend {
+        weight: f32,
+        first: u32,
+        second: u32,
+    },
 }
 
 impl Bsdf {
@@ -144,7 +155,10 @@ impl Bsdf {
     pub fn transmits(&self) -> bool {
         matches!(
             self,
-            Bsdf::Dielectric { .. } | Bsdf::RoughDielectric { .. } | Bsdf::ThinDielectric { .. }
+            Bsdf::Dielectric { .. }
+                | Bsdf::RoughDielectric { .. }
+                | Bsdf::ThinDielectric { .. }
+                | Bsdf::Null
         )
     }
 
@@ -160,7 +174,8 @@ impl Bsdf {
             Bsdf::Dielectric { int_ior, ext_ior } | Bsdf::ThinDielectric { int_ior, ext_ior } => {
                 ior(*int_ior, *ext_ior)
             }
-            Bsdf::Mirror => true,
+            Bsdf::Mirror | Bsdf::Null => true,
+            Bsdf::Blend { weight, .. } => weight.is_finite(),
             Bsdf::Conductor { eta, k, specular } => finite(*eta) && finite(*k) && finite(*specular),
             Bsdf::RoughConductor {
                 eta,
@@ -250,6 +265,8 @@ pub struct SideTextures {
     pub alpha_v: Option<u32>,
     /// A `normalmap` or `bumpmap` around the side's BSDF.
     pub frame: Option<FramePerturbation>,
+    /// A blend's weight (`blendbsdf`) or opacity (`mask`), looked up as a scalar.
+    pub blend_weight: Option<u32>,
 }
 
 impl SideTextures {
@@ -257,13 +274,14 @@ impl SideTextures {
         self.all().iter().any(Option::is_some)
     }
 
-    pub fn all(&self) -> [Option<u32>; 5] {
+    pub fn all(&self) -> [Option<u32>; 6] {
         [
             self.diffuse,
             self.specular,
             self.alpha_u,
             self.alpha_v,
             self.frame.map(|f| f.texture),
+            self.blend_weight,
         ]
     }
 }
@@ -374,6 +392,8 @@ pub struct SceneFeatures {
     pub textures: bool,
     /// Some shape's material has a `normalmap` or `bumpmap` (textures then too).
     pub normal_maps: bool,
+    /// Some shape's material is a blend or mask, or lets light through (`null`).
+    pub blends: bool,
 }
 
 impl SceneFeatures {
@@ -420,6 +440,7 @@ impl std::fmt::Display for SceneFeatures {
                 ("conductor", self.conductor),
                 ("plastic", self.plastic),
                 ("rough dielectric", self.rough_dielectric),
+                ("blend/mask", self.blends),
             ]),
             list(&[
                 ("area", self.area_lights),
@@ -603,9 +624,15 @@ impl Scene {
             .iter()
             .map(|t| t.material)
             .chain(self.spheres.iter().map(|s| s.material));
-        for m in shape_materials.filter_map(|m| self.materials.get(m as usize)) {
+        let mut seen = vec![false; self.materials.len()];
+        for m in shape_materials.flat_map(|m| self.with_nested(m)) {
+            if std::mem::replace(&mut seen[m.0], true) {
+                continue;
+            }
+            let m = m.1;
             for bsdf in m.bsdfs() {
                 match bsdf {
+                    Bsdf::Null | Bsdf::Blend { .. } => f.blends = true,
                     Bsdf::Diffuse { .. } => f.diffuse = true,
                     Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => f.dielectric = true,
                     Bsdf::Mirror => f.mirror = true,
@@ -630,6 +657,29 @@ impl Scene {
             f.normal_maps |= m.textures.front.frame.is_some() || m.textures.back.frame.is_some();
         }
         f
+    }
+
+    /// The material at `index` and every material its blends and masks may choose, each with
+    /// its index (blends of blends included; a blend's children always come before it, so
+    /// this ends). Empty for an index out of range.
+    pub fn with_nested(&self, index: u32) -> Vec<(usize, &Material)> {
+        let mut out = Vec::new();
+        let mut pending = vec![index as usize];
+        while let Some(i) = pending.pop() {
+            let Some(m) = self.materials.get(i) else {
+                continue;
+            };
+            out.push((i, m));
+            for bsdf in m.bsdfs() {
+                if let Bsdf::Blend { first, second, .. } = *bsdf
+                    && (first as usize) < i
+                    && (second as usize) < i
+                {
+                    pending.extend([first as usize, second as usize]);
+                }
+            }
+        }
+        out
     }
 
     /// Some shape emits or a point light exists (either may still have zero power).
@@ -673,7 +723,13 @@ impl Scene {
         let texture_ok = |t: Option<u32>| t.is_none_or(|t| (t as usize) < self.textures.len());
         for (i, m) in self.materials.iter().enumerate() {
             let sides = [m.textures.front, m.textures.back];
+            // A blend's children come before it: choosing among them always ends.
+            let children_ok = m.bsdfs().all(|b| match *b {
+                Bsdf::Blend { first, second, .. } => (first as usize) < i && (second as usize) < i,
+                _ => true,
+            });
             let ok = finite(m.emission)
+                && children_ok
                 && m.bsdfs().all(Bsdf::is_valid)
                 && sides.iter().all(|s| s.all().into_iter().all(texture_ok))
                 && sides.iter().all(|s| {

@@ -286,6 +286,33 @@ pub const PLUGINS: &[Plugin] = &[
     },
     Plugin {
         object: "bsdf",
+        kinds: &["blendbsdf"],
+        properties: &[p("weight", "")],
+        notes: "Two nested BSDFs; `weight` (a float or scalar texture, clamped to [0, 1]) is the \
+                second's share. Each interaction picks one child by the weight and scatters \
+                with it alone, which is unbiased; Mitsuba 3.9.1 instead samples a child and \
+                divides by both children's densities, which for a delta child (a smooth \
+                conductor or dielectric) next to a continuous one mixes a probability with a \
+                density and renders darker (docs/mitsuba-scenes.md). Not inside `normalmap` or \
+                `bumpmap` (put those around the nested BSDFs).",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["mask"],
+        properties: &[p("opacity", "0.5")],
+        notes: "One nested BSDF; with probability 1 - `opacity` (a float or scalar texture) the \
+                ray passes straight through, as Mitsuba's null lobe: it counts as a bounce of \
+                `max_depth`, shadow rays stop at the surface, and a light path through it keeps \
+                its class (neither S nor D). Not inside `twosided` (Mitsuba refuses it too).",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["null"],
+        properties: &[],
+        notes: "Lets every ray through unchanged, as `mask` with opacity 0.",
+    },
+    Plugin {
+        object: "bsdf",
         kinds: &["normalmap"],
         properties: &[
             p("normalmap", ""),
