@@ -46,7 +46,9 @@ fn pixel_of(x: f64, y: f64) -> (f64, f64) {
 #[test]
 fn the_thin_lens_focuses_on_its_plane_and_blurs_the_rest() {
     let report = mitsuba::check_text(Path::new("lens.xml"), SCENE, &[]);
-    let scene = report.scene.unwrap_or_else(|| panic!("{:?}", report.errors));
+    let scene = report
+        .scene
+        .unwrap_or_else(|| panic!("{:?}", report.errors));
     let gpu = gpu();
     let mut r = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 1);
     let image = render_to(&mut r, 1024);
@@ -69,8 +71,14 @@ fn the_thin_lens_focuses_on_its_plane_and_blurs_the_rest() {
     }
     assert!(right > 0.0, "the focused light is not in the image");
     let sharp = near / right;
-    eprintln!("focused light: {:.3} of its light in the 3x3 at ({sx}, {sy})", sharp);
-    assert!(sharp > 0.9, "the focus plane is blurred: {sharp:.3} in the 3x3");
+    eprintln!(
+        "focused light: {:.3} of its light in the 3x3 at ({sx}, {sy})",
+        sharp
+    );
+    assert!(
+        sharp > 0.9,
+        "the focus plane is blurred: {sharp:.3} in the 3x3"
+    );
     // The blurred light, at (-0.6, -0.3) / 3.
     let (cx, cy) = pixel_of(-0.2, -0.1);
     let step = 2.0 * (20f64).to_radians().tan() / 32.0;

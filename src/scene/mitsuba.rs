@@ -1310,7 +1310,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let near_clip = near.map(|n| self.float(n)).transpose()?.unwrap_or(0.01);
         let far_clip = far.map(|n| self.float(n)).transpose()?.unwrap_or(1e4);
         if let Some(n) = near
-            && !(near_clip > 0.0)
+            && (near_clip <= 0.0 || near_clip.is_nan())
         {
             return Err(self.attr_error(
                 n,
@@ -1319,7 +1319,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         if let Some(n) = far.or(near)
-            && !(near_clip < far_clip)
+            && (near_clip >= far_clip || far_clip.is_nan())
         {
             return Err(self.attr_error(
                 n,
