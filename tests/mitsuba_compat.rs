@@ -106,6 +106,222 @@ fn the_perspective_sensor_takes_every_property_mitsuba_reads() {
     );
 }
 
+/// A perspective sensor whose 96x64 film holds `props` (hdrfilm's crop window), one a line from
+/// line 4 on, so errors can be placed.
+fn cropped(props: &[&str]) -> Report {
+    let props: String = props.iter().map(|p| format!("\n{p}")).collect();
+    check(&format!(
+        "<sensor type=\"perspective\">\n<film type=\"hdrfilm\">\n<integer name=\"width\" value=\"96\"/><integer name=\"height\" value=\"64\"/>{props}\n</film></sensor>{LIGHT}"
+    ))
+}
+
+/// hdrfilm's crop window: the image is the window's size and the fov stays the whole film's
+/// (Mitsuba 3.9.1's x_fov for the default 50 mm lens on this 96x64 film cropped to 32x32 is
+/// 39.59775 degrees, as uncropped; taken on the square window's shape it would be 34.02). No crop, or a window equal to
+/// the film, leaves the camera as it was. A loader that ignored the crop (a 96x64 image) or
+/// kept the window's offset nowhere fails.
+#[test]
+fn a_crop_window_sets_the_image_size_and_keeps_the_films_view() {
+    let window = [
+        r#"<integer name="crop_offset_x" value="40"/>"#,
+        r#"<integer name="crop_offset_y" value="18"/>"#,
+        r#"<integer name="crop_width" value="32"/>"#,
+        r#"<integer name="crop_height" value="32"/>"#,
+    ];
+    let scene = scene_of(cropped(&window));
+    let camera = &scene.camera;
+    assert_eq!((camera.width, camera.height), (32, 32));
+    assert_eq!(
+        camera.crop,
+        Some(hppm::scene::Crop {
+            film_width: 96,
+            film_height: 64,
+            x: 40,
+            y: 18
+        })
+    );
+    assert!(
+        (camera.fov_x_deg - 39.597_75).abs() < 1e-3,
+        "{}",
+        camera.fov_x_deg
+    );
+    let whole = scene_of(cropped(&[
+        r#"<integer name="crop_offset_x" value="0"/>"#,
+        r#"<integer name="crop_width" value="96"/>"#,
+    ]));
+    let plain = scene_of(cropped(&[]));
+    assert_eq!(whole.camera, plain.camera);
+    assert_eq!(plain.camera.crop, None);
+    assert_eq!((plain.camera.width, plain.camera.height), (96, 64));
+    // Only the width cropped: the height stays the film's.
+    let strip = scene_of(cropped(&[r#"<integer name="crop_width" value="10"/>"#]));
+    assert_eq!((strip.camera.width, strip.camera.height), (10, 64));
+}
+
+/// The window's rays are the film's: the camera plane through pixel (x, y) of the cropped image
+/// is the one through pixel (x + 40, y + 18) of the whole film, at the scene's size and at a
+/// `--size` of twice it (film and window scaled together). Rendering the film's top-left corner
+/// (no offset), the window stretched over the whole view (the window's own projection) or an
+/// offset left unscaled under `--size` fails.
+#[test]
+fn a_crop_window_sees_what_the_film_sees_there() {
+    use hppm::scene::gpu_layout::GpuScene;
+    let window = [
+        r#"<integer name="crop_offset_x" value="40"/>"#,
+        r#"<integer name="crop_offset_y" value="18"/>"#,
+        r#"<integer name="crop_width" value="32"/>"#,
+        r#"<integer name="crop_height" value="24"/>"#,
+    ];
+    let crop = scene_of(cropped(&window));
+    let film = scene_of(cropped(&[]));
+    for scale in [1, 2] {
+        let c = GpuScene::new(&crop, 32 * scale, 24 * scale).uniform;
+        let f = GpuScene::new(&film, 96 * scale, 64 * scale).uniform;
+        let plane = |u: &hppm::scene::gpu_layout::GpuSceneUniform, x: f32, y: f32| {
+            (
+                u.plane_origin[0] + x * u.plane_step_x,
+                u.plane_origin[1] + y * u.plane_step_y,
+            )
+        };
+        let s = scale as f32;
+        for (x, y) in [
+            (0.0, 0.0),
+            (0.5, 0.5),
+            (31.0, 23.0),
+            (32.0, 24.0),
+            (-1.5, 25.0),
+        ] {
+            let (x, y) = (x * s, y * s);
+            let seen = plane(&c, x, y);
+            let expected = plane(&f, x + 40.0 * s, y + 18.0 * s);
+            assert!(
+                (seen.0 - expected.0).abs() < 1e-5 && (seen.1 - expected.1).abs() < 1e-5,
+                "at {scale}x, image ({x}, {y}): {seen:?}, the film there {expected:?}"
+            );
+        }
+    }
+}
+
+/// A crop window that leaves the film is an error at the property that takes it past the edge
+/// (the size if given, else the offset: Mitsuba's default size is the whole film), naming the
+/// field, as Mitsuba refuses it. A window of no pixels too. Accepting any of them (or placing
+/// the error on the film or sensor) fails.
+#[test]
+fn a_crop_window_off_the_film_is_refused_where_it_is_given() {
+    let cases: &[(&[&str], &str, &str)] = &[
+        (
+            &[
+                r#"<integer name="crop_offset_x" value="40"/>"#,
+                r#"<integer name="crop_width" value="64"/>"#,
+            ],
+            "shipped.xml:6:",
+            "crop_width 64",
+        ),
+        (
+            &[r#"<integer name="crop_offset_y" value="1"/>"#],
+            "shipped.xml:5:",
+            "crop_offset_y 1",
+        ),
+        (
+            &[r#"<integer name="crop_height" value="65"/>"#],
+            "shipped.xml:5:",
+            "crop_height 65",
+        ),
+        (
+            &[r#"<integer name="crop_width" value="0"/>"#],
+            "shipped.xml:5:",
+            "crop_width 0",
+        ),
+    ];
+    for (props, place, field) in cases {
+        let report = cropped(props);
+        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+        assert!(
+            report.scene.is_none()
+                && errors
+                    .first()
+                    .is_some_and(|e| e.contains(place) && e.contains(field)),
+            "{props:?}: {errors:#?}"
+        );
+    }
+}
+
+/// Mitsuba's thinlens: aperture and focus distance read (focus defaulting to far_clip, itself
+/// 10^4 by default), the fov read as the perspective sensor reads it, a zero aperture a
+/// pinhole with a warning, no aperture an error at the sensor (Mitsuba has no default), a
+/// principal point shift unknown (thinlens reads none), a negative aperture or focus and clip
+/// planes out of order refused. A loader that dropped the lens, took another default focus
+/// or let the principal point through fails.
+#[test]
+fn the_thinlens_sensor_reads_what_mitsubas_reads() {
+    use hppm::scene::Lens;
+    let lens = |inner: &str| {
+        check(&format!(
+            "<sensor type=\"thinlens\">\n{inner}\n<film type=\"hdrfilm\"><integer name=\"width\" value=\"200\"/><integer name=\"height\" value=\"100\"/></film></sensor>{LIGHT}"
+        ))
+    };
+    let scene = scene_of(lens(
+        r#"<float name="aperture_radius" value="0.2"/><float name="focus_distance" value="3"/><float name="fov" value="30"/><string name="fov_axis" value="y"/>"#,
+    ));
+    assert_eq!(
+        scene.camera.lens,
+        Some(Lens {
+            aperture_radius: 0.2,
+            focus_distance: 3.0
+        })
+    );
+    assert!((scene.camera.fov_x_deg - 56.373_57).abs() < 1e-3);
+    let far = scene_of(lens(
+        r#"<float name="aperture_radius" value="0.2"/><float name="far_clip" value="50"/>"#,
+    ));
+    assert_eq!(far.camera.lens.map(|l| l.focus_distance), Some(50.0));
+    let default = scene_of(lens(r#"<float name="aperture_radius" value="0.2"/>"#));
+    assert_eq!(default.camera.lens.map(|l| l.focus_distance), Some(1e4));
+    let pinhole = lens(r#"<float name="aperture_radius" value="0"/>"#);
+    assert!(
+        warnings(&pinhole)
+            .iter()
+            .any(|w| w.contains("aperture_radius 0")),
+        "{:?}",
+        warnings(&pinhole)
+    );
+    assert_eq!(scene_of(pinhole).camera.lens, None);
+    let refused: &[(&str, &str, &str)] = &[
+        ("", "shipped.xml:2:", "aperture_radius"),
+        (
+            r#"<float name="aperture_radius" value="0.1"/><float name="principal_point_offset_x" value="0.1"/>"#,
+            "shipped.xml:3:",
+            "principal_point_offset_x",
+        ),
+        (
+            r#"<float name="aperture_radius" value="-0.1"/>"#,
+            "shipped.xml:3:",
+            "aperture_radius -0.1",
+        ),
+        (
+            r#"<float name="aperture_radius" value="0.1"/><float name="focus_distance" value="0"/>"#,
+            "shipped.xml:3:",
+            "focus_distance 0",
+        ),
+        (
+            r#"<float name="aperture_radius" value="0.1"/><float name="near_clip" value="5"/><float name="far_clip" value="2"/>"#,
+            "shipped.xml:3:",
+            "near_clip 5",
+        ),
+    ];
+    for (inner, place, field) in refused {
+        let report = lens(inner);
+        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+        assert!(
+            report.scene.is_none()
+                && errors
+                    .first()
+                    .is_some_and(|e| e.contains(place) && e.contains(field)),
+            "{inner}: {errors:#?}"
+        );
+    }
+}
+
 /// A `<lookat>` without `up` (Mitsuba picks one orthogonal to the view): the camera's up
 /// direction equals the second column of Mitsuba's to_world for the same lookat. Any other
 /// choice of perpendicular (or an error) fails.
@@ -432,7 +648,14 @@ fn host(object: &str, kind: &str, property: &str) -> String {
         "integrator" => {
             format!(r#"<integrator type="{kind}">{property}</integrator>{plain}{LIGHT}"#)
         }
-        "sensor" => format!(r#"<sensor type="{kind}">{property}{film}</sensor>{LIGHT}"#),
+        "sensor" => {
+            // Mitsuba's thinlens has no default aperture.
+            let needs = match kind {
+                "thinlens" => r#"<float name="aperture_radius" value="0.1"/>"#,
+                _ => "",
+            };
+            format!(r#"<sensor type="{kind}">{needs}{property}{film}</sensor>{LIGHT}"#)
+        }
         "sampler" => format!(
             r#"<sensor type="perspective"><sampler type="{kind}">{property}</sampler>{film}</sensor>{LIGHT}"#
         ),

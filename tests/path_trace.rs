@@ -61,6 +61,8 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
             height: 32,
             filter: hppm::scene::filter::PixelFilter::Box,
             sample_border: false,
+            crop: None,
+            lens: None,
         },
         integrator: Integrator {
             max_depth: None,

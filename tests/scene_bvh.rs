@@ -327,6 +327,8 @@ fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
             height: 8,
             filter: hppm::scene::filter::PixelFilter::Box,
             sample_border: false,
+            crop: None,
+            lens: None,
         },
         integrator: Integrator::default(),
         spp_hint: None,

@@ -60,6 +60,8 @@ fn camera(origin: Vec3, target: Vec3, fov: f32, size: u32) -> Camera {
         height: size,
         filter: PixelFilter::Box,
         sample_border: false,
+        crop: None,
+        lens: None,
     }
 }
 

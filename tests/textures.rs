@@ -478,10 +478,10 @@ fn analytic_image(
             let mut constant = true;
             for j in 0..n {
                 for i in 0..n {
-                    let fx = (px as f32 + (i as f32 + 0.5) / n as f32) / w as f32;
-                    let fy = (py as f32 + (j as f32 + 0.5) / n as f32) / h as f32;
-                    let x = (2.0 * fx - 1.0) * u.tan_half_x;
-                    let y = (1.0 - 2.0 * fy) * u.tan_half_y;
+                    let fx = px as f32 + (i as f32 + 0.5) / n as f32;
+                    let fy = py as f32 + (j as f32 + 0.5) / n as f32;
+                    let x = u.plane_origin[0] + fx * u.plane_step_x;
+                    let y = u.plane_origin[1] + fy * u.plane_step_y;
                     let dir = Vec3::from_array(u.camera_forward)
                         + x * Vec3::from_array(u.camera_right)
                         + y * Vec3::from_array(u.camera_up);

@@ -2,30 +2,34 @@
 
 #import common::scene::scene_info
 #import common::pixel_filter::{FILTER_BOX, filter_offset}
+#import common::sampling::square_to_disk_concentric
 
-// A dispatch covers a grid of scene_info.width x height pixels: the whole film, or a tile of it
-// at (tile_x, tile_y). Rays and random streams follow film pixels, so a tile renders exactly
-// what the whole film would have there.
+// A dispatch covers a grid of scene_info.width x height pixels: the image, or a tile of it
+// at (tile_x, tile_y). Rays and random streams follow image pixels, so a tile renders exactly
+// what the whole image would have there. The image may itself be a crop window of the film
+// the camera projects: scene_info's plane_origin and plane_step place it.
 
-// The film pixel of grid pixel `pixel`.
+// The image pixel of grid pixel `pixel`.
 fn film_pixel(pixel: vec2<u32>) -> vec2<u32> {
     return pixel + vec2<u32>(scene_info.tile_x, scene_info.tile_y);
 }
 
-// The film's index (row-major over the whole image) of grid pixel `pixel_index`: what random
-// streams are keyed by. Equal to `pixel_index` when the grid is the film.
+// The image's index (row-major over the whole image) of grid pixel `pixel_index`: what random
+// streams are keyed by. Equal to `pixel_index` when the grid is the image.
 fn film_index(pixel_index: u32) -> u32 {
     let pixel = film_pixel(vec2<u32>(pixel_index % scene_info.width, pixel_index / scene_info.width));
     return pixel.y * scene_info.film_width + pixel.x;
 }
 
+// The image's size: where samples keep to unless sample_border (a crop window's samples keep
+// to the window, as Mitsuba's do).
 fn film_size() -> vec2<f32> {
     return vec2<f32>(f32(scene_info.film_width), f32(scene_info.film_height));
 }
 
-// Where on the film, in pixels, a camera sample of film pixel `pixel` lands for the uniform
+// Where in the image, in pixels, a camera sample of image pixel `pixel` lands for the uniform
 // pair `u`: offset from the pixel centre with the pixel filter's density (common::pixel_filter),
-// the filter cut at the film's edge unless samples may leave it (Mitsuba's sample_border).
+// the filter cut at the image's edge unless samples may leave it (Mitsuba's sample_border).
 fn film_position(pixel: vec2<u32>, u: vec2<f32>) -> vec2<f32> {
     // The box filter keeps the plain jitter: the same position for the same numbers as before.
     if scene_info.filter_kind == FILTER_BOX {
@@ -44,16 +48,32 @@ fn film_position(pixel: vec2<u32>, u: vec2<f32>) -> vec2<f32> {
     return center + vec2<f32>(filter_offset(kind, param, u.x, lo.x, hi.x), filter_offset(kind, param, u.y, lo.y, hi.y));
 }
 
-// Direction of a primary ray for a camera sample of film pixel `pixel` drawn from the uniform
-// pair `u` (see film_position). Row 0 is the top of the image.
-fn camera_direction(pixel: vec2<u32>, u: vec2<f32>) -> vec3<f32> {
-    return camera_direction_through(film_position(pixel, u));
+// Whether camera rays need a lens sample (a thin lens): then two more numbers per ray.
+fn has_lens() -> bool {
+    return scene_info.aperture_radius > 0.0;
 }
 
-// Direction of the primary ray through film position `position` (pixels from the top left).
-fn camera_direction_through(position: vec2<f32>) -> vec3<f32> {
-    let film = position / film_size();
-    let x = (2.0 * film.x - 1.0) * scene_info.tan_half_x;
-    let y = (1.0 - 2.0 * film.y) * scene_info.tan_half_y;
-    return normalize(scene_info.camera_forward + x * scene_info.camera_right + y * scene_info.camera_up);
+struct CameraRay {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+// The primary ray for a camera sample of image pixel `pixel` drawn from the uniform pair `u`
+// (see film_position), through the lens point `lens_u` picks (unused for a pinhole).
+fn camera_ray(pixel: vec2<u32>, u: vec2<f32>, lens_u: vec2<f32>) -> CameraRay {
+    return camera_ray_through(film_position(pixel, u), lens_u);
+}
+
+// The primary ray through image position `position` (pixels from the top left). A thin lens
+// (Mitsuba's thinlens) starts it at a uniform point of the aperture disc and aims it at where
+// the pinhole ray meets the focus plane, so only that plane is sharp.
+fn camera_ray_through(position: vec2<f32>, lens_u: vec2<f32>) -> CameraRay {
+    let plane = scene_info.plane_origin + position * vec2<f32>(scene_info.plane_step_x, scene_info.plane_step_y);
+    let toward = scene_info.camera_forward + plane.x * scene_info.camera_right + plane.y * scene_info.camera_up;
+    if !has_lens() {
+        return CameraRay(scene_info.camera_origin, normalize(toward));
+    }
+    let disc = scene_info.aperture_radius * square_to_disk_concentric(lens_u);
+    let offset = disc.x * scene_info.camera_right + disc.y * scene_info.camera_up;
+    return CameraRay(scene_info.camera_origin + offset, normalize(toward * scene_info.focus_distance - offset));
 }

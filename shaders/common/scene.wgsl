@@ -11,9 +11,10 @@
 
 struct SceneUniform {
     camera_origin: vec3<f32>,
-    tan_half_x: f32,
+    // The camera plane (one unit ahead) per image pixel, across and down (common::camera).
+    plane_step_x: f32,
     camera_right: vec3<f32>,
-    tan_half_y: f32,
+    plane_step_y: f32,
     camera_up: vec3<f32>,
     // The pixel grid this dispatch's buffers hold: the film, or a tile of it at (tile_x, tile_y).
     width: u32,
@@ -44,8 +45,14 @@ struct SceneUniform {
     tile_y: u32,
     // 1: camera rays pass through emitting shapes and see no environment (hide_emitters).
     hide_emitters: u32,
-    pad_tile_b: u32,
-    pad_tile_c: u32,
+    // The camera plane at the image's top-left corner: the whole film's projection, and
+    // where the image (a crop window, maybe) lies in it.
+    plane_origin: vec2<f32>,
+    // A thin lens: aperture radius (0: a pinhole) and focus distance along the view.
+    aperture_radius: f32,
+    focus_distance: f32,
+    pad_lens_a: u32,
+    pad_lens_b: u32,
 }
 
 struct BvhNode {

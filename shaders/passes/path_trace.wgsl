@@ -34,7 +34,7 @@
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
 #endif
-#import common::camera::{camera_direction, camera_direction_through, film_index, film_pixel}
+#import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel}
 #import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
 #import common::texture::textured_material
@@ -154,7 +154,7 @@ struct HitPointSink {
 
 fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f32>, depth: u32, weight: vec3<f32>, travelled: f32) {
     let index = sink.pixel * params.merge_depth + slot;
-    let footprint = travelled * 2.0 * scene_info.tan_half_x / f32(scene_info.film_width);
+    let footprint = travelled * abs(scene_info.plane_step_x);
     var radius = radii.radii[index];
     if radius <= 0.0 {
         radius = initial_radius(radii.rule, footprint);
@@ -305,20 +305,24 @@ fn environment_emission(path: PathState) -> vec3<f32> {
 
 // The primary ray of a sample: through a uniform point of the pixel when it is splatted, else
 // with the pixel filter's distribution. Always the stream's first two numbers (`splat` finds
-// the point again from them).
-fn primary_direction(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> vec3<f32> {
+// the point again from them); a thin lens takes the next two for its aperture.
+fn primary_ray(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> CameraRay {
     let u = rng_next_vec2(rng);
+    var lens_u = vec2<f32>(0.0);
+    if has_lens() {
+        lens_u = rng_next_vec2(rng);
+    }
     let on_film = film_pixel(pixel);
     if splatted {
-        return camera_direction_through(vec2<f32>(on_film) + u);
+        return camera_ray_through(vec2<f32>(on_film) + u, lens_u);
     }
-    return camera_direction(on_film, u);
+    return camera_ray(on_film, u, lens_u);
 }
 
 // A camera path at the camera, through `pixel`.
 fn start_path(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> PathState {
-    let dir = primary_direction(pixel, splatted, rng);
-    return PathState(scene_info.camera_origin, dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, false, vec3<f32>(0.0), 1u);
+    let ray = primary_ray(pixel, splatted, rng);
+    return PathState(ray.origin, ray.dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, false, vec3<f32>(0.0), 1u);
 }
 
 // Emitting shapes a camera ray steps through under hide_emitters before it counts as hidden.

@@ -24,10 +24,11 @@ const TRACER: crate::gpu::shaders::ShaderFile =
 /// tests/shaders.rs).
 pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuSceneUniform => "SceneUniform" in TRACER, {
-        camera_origin, tan_half_x, camera_right, tan_half_y, camera_up, width, camera_forward,
+        camera_origin, plane_step_x, camera_right, plane_step_y, camera_up, width, camera_forward,
         height, bounds_min, bounds_max, scene_radius, num_triangles, num_spheres,
         num_lights, max_depth, rr_depth, filter_kind, filter_param, sample_border, specular_center,
-        specular_radius, environment, film_width, film_height, tile_x, tile_y
+        specular_radius, environment, film_width, film_height, tile_x, tile_y, hide_emitters,
+        plane_origin, aperture_radius, focus_distance
     }),
     struct_layout!(BvhNode => "BvhNode" in TRACER, { min, left_or_first, max, count }),
     struct_layout!(GpuTriangle => "Triangle" in TRACER, {

@@ -183,9 +183,11 @@ pub struct GpuLight {
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuSceneUniform {
     pub camera_origin: [f32; 3],
-    pub tan_half_x: f32,
+    /// The camera plane (one unit ahead, across `camera_right` and `camera_up`) per pixel of
+    /// the image: x across, y down the rows (negative). See `plane_origin`.
+    pub plane_step_x: f32,
     pub camera_right: [f32; 3],
-    pub tan_half_y: f32,
+    pub plane_step_y: f32,
     pub camera_up: [f32; 3],
     /// The pixel grid this render's buffers hold: the whole film, or one tile of it.
     pub width: u32,
@@ -220,7 +222,14 @@ pub struct GpuSceneUniform {
     /// 1 when camera rays pass through emitting shapes and see no environment (Mitsuba's
     /// `hide_emitters`).
     pub hide_emitters: u32,
-    pub _pad_tile: [u32; 2],
+    /// Where the image's top-left corner meets the camera plane: with the steps above, the
+    /// projection of the whole film and where the image (a crop window, maybe) lies in it.
+    pub plane_origin: [f32; 2],
+    /// A thin lens: the aperture's radius (0 for a pinhole) and the focus plane's distance
+    /// along the view.
+    pub aperture_radius: f32,
+    pub focus_distance: f32,
+    pub _pad_lens: [u32; 2],
 }
 
 /// Everything the GPU needs to trace rays through a scene. Arrays are never empty (a zeroed
@@ -573,14 +582,22 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
     // Right-handed, y up: image x grows along forward x up, image y along the camera's up.
     let right = forward.cross(cam.up).normalize_or_zero();
     let up = right.cross(forward);
-    let tan_half_x = (cam.fov_x_deg.to_radians() * 0.5).tan();
-    let tan_half_y = tan_half_x * height as f32 / width.max(1) as f32;
+    // The fov spans the whole film (a crop window shows part of it); as without a crop, pixels
+    // stay square, so the vertical extent follows the projected film's shape.
+    let ([film_w, film_h], [offset_x, offset_y]) = cam.projected_film((width, height));
+    let tan_half_x = ((cam.fov_x_deg as f64).to_radians() * 0.5).tan();
+    let tan_half_y = tan_half_x * film_h / film_w.max(f64::MIN_POSITIVE);
+    let step_x = 2.0 * tan_half_x / film_w;
+    let step_y = -2.0 * tan_half_y / film_h;
     let (filter_kind, filter_param) = cam.filter.gpu_code();
+    let (aperture_radius, focus_distance) = cam
+        .lens
+        .map_or((0.0, 1.0), |l| (l.aperture_radius, l.focus_distance));
     GpuSceneUniform {
         camera_origin: cam.origin.to_array(),
-        tan_half_x,
+        plane_step_x: step_x as f32,
         camera_right: right.to_array(),
-        tan_half_y,
+        plane_step_y: step_y as f32,
         camera_up: up.to_array(),
         width,
         camera_forward: forward.to_array(),
@@ -590,6 +607,12 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
         filter_kind,
         filter_param,
         sample_border: cam.sample_border as u32,
+        plane_origin: [
+            (-tan_half_x + offset_x * step_x) as f32,
+            (tan_half_y + offset_y * step_y) as f32,
+        ],
+        aperture_radius,
+        focus_distance,
         ..Zeroable::zeroed()
     }
 }

@@ -21,9 +21,9 @@ use super::emitter::{DirectionalLight, EnvMap, Environment, SpotLight};
 use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
-    Bsdf, Camera, Distribution, FramePerturbation, Integrator, Material, MaterialTextures,
-    Microfacet, PerturbationKind, PointLight, Report, Scene, SceneError, SideTextures, Sphere,
-    bsdf, mesh, plugins, spectrum,
+    Bsdf, Camera, Crop, Distribution, FramePerturbation, Integrator, Lens, Material,
+    MaterialTextures, Microfacet, PerturbationKind, PointLight, Report, Scene, SceneError,
+    SideTextures, Sphere, bsdf, mesh, plugins, spectrum,
 };
 use crate::error::{Location, edit_distance};
 
@@ -206,6 +206,8 @@ fn empty_scene(path: &Path) -> Scene {
             height: 576,
             filter: PixelFilter::MITSUBA_DEFAULT,
             sample_border: false,
+            crop: None,
+            lens: None,
         },
         integrator: Integrator {
             max_depth: None,
@@ -1276,11 +1278,14 @@ impl<'a, 'input> Reader<'a, 'input> {
             return Err(self.error(node, "a second <sensor>: only one is supported"));
         }
         let kind = self.required_attr(node, "type")?;
-        if kind != "perspective" {
+        if kind != "perspective" && kind != "thinlens" {
             return Err(self.attr_error(
                 node,
                 "type",
-                format!("sensor type \"{kind}\" is not supported (only \"perspective\")"),
+                format!(
+                    "sensor type \"{kind}\" is not supported (only \"perspective\" and \
+                     \"thinlens\")"
+                ),
             ));
         }
         // The film first: the fov conversion needs its aspect ratio.
@@ -1302,28 +1307,55 @@ impl<'a, 'input> Reader<'a, 'input> {
             .map(|n| self.string(n).map(|v| (n, v)))
             .transpose()?;
         let focal_length = props.take("focal_length");
-        // A pinhole renders everything in focus, so the focal distance changes nothing; clip
-        // planes cut no geometry here, and nothing moves while the shutter is open.
-        self.ignore(
-            &mut props,
-            &[
-                "near_clip",
-                "far_clip",
-                "focus_distance",
-                "shutter_open",
-                "shutter_close",
-            ],
-            |r, n| r.float(n).map(drop),
-        )?;
-        for name in ["principal_point_offset_x", "principal_point_offset_y"] {
-            if let Some(n) = props.take(name)
-                && self.float(n)? != 0.0
-            {
-                return Err(self.attr_error(
-                    n,
-                    "value",
-                    format!("{name}: an off-centre principal point is not supported"),
-                ));
+        // Checked as Mitsuba checks them, not applied: camera rays are not cut at the clip
+        // planes (only what lies within near_clip of the camera or beyond far_clip would show
+        // the difference), and nothing moves while the shutter is open.
+        let near = props.take("near_clip");
+        let far = props.take("far_clip");
+        let near_clip = near.map(|n| self.float(n)).transpose()?.unwrap_or(0.01);
+        let far_clip = far.map(|n| self.float(n)).transpose()?.unwrap_or(1e4);
+        if let Some(n) = near
+            && (near_clip <= 0.0 || near_clip.is_nan())
+        {
+            return Err(self.attr_error(
+                n,
+                "value",
+                format!("near_clip {near_clip}: expected more than 0 (Mitsuba refuses it too)"),
+            ));
+        }
+        if let Some(n) = far.or(near)
+            && (near_clip >= far_clip || far_clip.is_nan())
+        {
+            return Err(self.attr_error(
+                n,
+                "value",
+                format!(
+                    "near_clip {near_clip} is not below far_clip {far_clip} (Mitsuba refuses it \
+                     too)"
+                ),
+            ));
+        }
+        let focus = props.take("focus_distance");
+        let focus_distance = focus.map(|n| self.float(n)).transpose()?;
+        self.ignore(&mut props, &["shutter_open", "shutter_close"], |r, n| {
+            r.float(n).map(drop)
+        })?;
+        if kind == "thinlens" {
+            // Mitsuba focuses on the far clip plane unless told.
+            let focus_distance = focus_distance.unwrap_or(far_clip);
+            self.scene.camera.lens = self.read_lens(node, &mut props, focus, focus_distance)?;
+        } else {
+            // A pinhole renders everything in focus, so the focal distance changes nothing.
+            for name in ["principal_point_offset_x", "principal_point_offset_y"] {
+                if let Some(n) = props.take(name)
+                    && self.float(n)? != 0.0
+                {
+                    return Err(self.attr_error(
+                        n,
+                        "value",
+                        format!("{name}: an off-centre principal point is not supported"),
+                    ));
+                }
             }
         }
         if let Some(n) = props.take("srf") {
@@ -1337,7 +1369,12 @@ impl<'a, 'input> Reader<'a, 'input> {
             self.read_camera_transform(n)?;
         }
         self.finish(props, node)?;
-        let aspect = self.scene.camera.width as f64 / self.scene.camera.height as f64;
+        // The fov is the whole film's, whatever window of it a crop renders.
+        let camera = &self.scene.camera;
+        let (film_w, film_h) = camera.crop.map_or((camera.width, camera.height), |c| {
+            (c.film_width, c.film_height)
+        });
+        let aspect = film_w as f64 / film_h as f64;
         let (fov, axis) = match (fov, focal_length) {
             (Some((n, _)), Some(_)) => {
                 return Err(self.error(
@@ -1362,6 +1399,54 @@ impl<'a, 'input> Reader<'a, 'input> {
         };
         self.scene.camera.fov_x_deg = self.horizontal_fov(axis.0, fov, &axis.1, aspect)?;
         Ok(())
+    }
+
+    /// A `thinlens` sensor's lens: `aperture_radius` (which Mitsuba requires) and the focus
+    /// distance. A zero aperture is a pinhole (Mitsuba warns and uses a radius of 1e-7).
+    fn read_lens(
+        &self,
+        sensor: Node,
+        props: &mut Props<'a, 'input>,
+        focus: Option<Node>,
+        focus_distance: f32,
+    ) -> Result<Option<Lens>, SceneError> {
+        let Some(n) = props.take("aperture_radius") else {
+            return Err(self.error(
+                sensor,
+                "a thinlens sensor needs aperture_radius (Mitsuba has no default for it)",
+            ));
+        };
+        let aperture_radius = self.float(n)?;
+        if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+            return Err(self.attr_error(
+                n,
+                "value",
+                format!("aperture_radius {aperture_radius}: expected 0 or more scene units"),
+            ));
+        }
+        // Without one the default (far_clip) is already checked to lie beyond near_clip > 0.
+        if let Some(f) = focus
+            && !(focus_distance > 0.0 && focus_distance.is_finite())
+        {
+            return Err(self.attr_error(
+                f,
+                "value",
+                format!(
+                    "focus_distance {focus_distance}: expected a positive distance along the view"
+                ),
+            ));
+        }
+        if aperture_radius == 0.0 {
+            self.warn(
+                n,
+                "aperture_radius 0: rendered as a pinhole (Mitsuba warns and uses 1e-7)",
+            );
+            return Ok(None);
+        }
+        Ok(Some(Lens {
+            aperture_radius,
+            focus_distance,
+        }))
     }
 
     /// `focal_length` ("50mm", or a bare number of millimetres) as the diagonal field of view
@@ -1522,7 +1607,73 @@ impl<'a, 'input> Reader<'a, 'input> {
         if let Some(n) = props.take("sample_border") {
             self.scene.camera.sample_border = self.boolean(n)?;
         }
+        let (x, width) = self.crop_window(
+            self.scene.camera.width,
+            ("crop_offset_x", props.take("crop_offset_x")),
+            ("crop_width", props.take("crop_width")),
+        )?;
+        let (y, height) = self.crop_window(
+            self.scene.camera.height,
+            ("crop_offset_y", props.take("crop_offset_y")),
+            ("crop_height", props.take("crop_height")),
+        )?;
+        let camera = &mut self.scene.camera;
+        if (x, y, width, height) != (0, 0, camera.width, camera.height) {
+            camera.crop = Some(Crop {
+                film_width: camera.width,
+                film_height: camera.height,
+                x,
+                y,
+            });
+            camera.width = width;
+            camera.height = height;
+        }
         self.finish(props, node)
+    }
+
+    /// One axis of hdrfilm's crop window, (offset, size) on a film `film` pixels long: Mitsuba's
+    /// defaults (offset 0, the whole film) and its rule that the window lies inside the film.
+    fn crop_window(
+        &self,
+        film: u32,
+        (offset_name, offset): (&str, Option<Node>),
+        (size_name, size): (&str, Option<Node>),
+    ) -> Result<(u32, u32), SceneError> {
+        let read = |name: &str, node: Node, least: i64| -> Result<u32, SceneError> {
+            let v = self.integer(node)?;
+            if v < least || v > film as i64 {
+                return Err(self.attr_error(
+                    node,
+                    "value",
+                    format!("{name} {v}: expected {least} to {film} (the film's side)"),
+                ));
+            }
+            Ok(v as u32)
+        };
+        let at = offset
+            .map(|n| read(offset_name, n, 0))
+            .transpose()?
+            .unwrap_or(0);
+        // Mitsuba's default size is the whole film even beside an offset (the window then runs
+        // off the film, which it refuses).
+        let length = size
+            .map(|n| read(size_name, n, 1))
+            .transpose()?
+            .unwrap_or(film);
+        // Past the film only with an offset given: blame the size if given, else the offset.
+        if let Some(blame) = size.or(offset)
+            && at as u64 + length as u64 > film as u64
+        {
+            return Err(self.attr_error(
+                blame,
+                "value",
+                format!(
+                    "crop window: {offset_name} {at} + {size_name} {length} runs past the \
+                     film's {film} pixels (Mitsuba refuses it too)"
+                ),
+            ));
+        }
+        Ok((at, length))
     }
 
     fn film_side(&self, node: Node, name: &str) -> Result<u32, SceneError> {

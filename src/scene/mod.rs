@@ -26,8 +26,10 @@ use glam::Vec3;
 
 use crate::error::Location;
 
-/// A perspective pinhole camera. `fov_x_deg` is the full horizontal field of view; loaders that
-/// read a vertical fov convert it with the film's aspect ratio.
+/// A perspective camera: a pinhole, or a thin lens (`lens`). `fov_x_deg` is the full
+/// horizontal field of view of the whole film; loaders that read a vertical fov convert it with
+/// the film's aspect ratio. `width` x `height` is the rendered image: the whole film, or the
+/// window of it that `crop` places.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Camera {
     pub origin: Vec3,
@@ -41,6 +43,50 @@ pub struct Camera {
     /// Camera samples may land beyond the film's edge (Mitsuba's `sample_border`); otherwise
     /// the filter of a pixel near the edge is cut off at it, as in Mitsuba.
     pub sample_border: bool,
+    /// The image is a window of a larger film (Mitsuba's hdrfilm crop): `None` when it is the
+    /// whole film.
+    pub crop: Option<Crop>,
+    /// A thin lens (Mitsuba's `thinlens`); `None` for a pinhole.
+    pub lens: Option<Lens>,
+}
+
+/// Where the image lies in the film the camera projects: its top-left pixel at (`x`, `y`) of a
+/// `film_width` x `film_height` film. The fov belongs to the whole film; only the window is
+/// rendered, and samples of its pixels keep to it as Mitsuba's keep to a crop window (the
+/// pixel filter is cut at the window's edges unless `sample_border`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Crop {
+    pub film_width: u32,
+    pub film_height: u32,
+    pub x: u32,
+    pub y: u32,
+}
+
+/// A thin lens as Mitsuba's `thinlens` models it: rays leave a uniform point of a disc of
+/// `aperture_radius` around the camera's origin, across the view, and pass through the point
+/// the pinhole ray meets on the plane `focus_distance` ahead (measured along the view axis).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lens {
+    pub aperture_radius: f32,
+    pub focus_distance: f32,
+}
+
+impl Camera {
+    /// The film the camera projects and where the `width` x `height` image lies in it, both
+    /// scaled to an image of `image` pixels (`--size`): each axis by the image's size over the
+    /// camera's, so the window keeps its place as a fraction of the film. Without a crop this
+    /// is `image` itself at (0, 0).
+    pub fn projected_film(&self, image: (u32, u32)) -> ([f64; 2], [f64; 2]) {
+        let sx = image.0 as f64 / self.width.max(1) as f64;
+        let sy = image.1 as f64 / self.height.max(1) as f64;
+        match self.crop {
+            None => ([image.0 as f64, image.1 as f64], [0.0, 0.0]),
+            Some(c) => (
+                [c.film_width as f64 * sx, c.film_height as f64 * sy],
+                [c.x as f64 * sx, c.y as f64 * sy],
+            ),
+        }
+    }
 }
 
 /// Microfacet normal distributions (Mitsuba's `distribution`).
@@ -579,6 +625,10 @@ impl Scene {
         }
         out.camera.origin *= s;
         out.camera.target *= s;
+        if let Some(lens) = &mut out.camera.lens {
+            lens.aperture_radius *= s;
+            lens.focus_distance *= s;
+        }
         out
     }
 
@@ -719,6 +769,27 @@ impl Scene {
         }
         if cam.width == 0 || cam.height == 0 {
             return fail("the film has zero size".into());
+        }
+        if let Some(c) = cam.crop
+            && (c.x as u64 + cam.width as u64 > c.film_width as u64
+                || c.y as u64 + cam.height as u64 > c.film_height as u64)
+        {
+            return fail(format!(
+                "the crop window {}x{} at ({}, {}) does not fit the {}x{} film",
+                cam.width, cam.height, c.x, c.y, c.film_width, c.film_height
+            ));
+        }
+        if let Some(l) = cam.lens
+            && !(l.aperture_radius.is_finite()
+                && l.aperture_radius >= 0.0
+                && l.focus_distance.is_finite()
+                && l.focus_distance > 0.0)
+        {
+            return fail(format!(
+                "the lens has aperture radius {} and focus distance {}: expected a radius of at \
+                 least 0 and a positive distance",
+                l.aperture_radius, l.focus_distance
+            ));
         }
         let texture_ok = |t: Option<u32>| t.is_none_or(|t| (t as usize) < self.textures.len());
         for (i, m) in self.materials.iter().enumerate() {

@@ -313,6 +313,8 @@ pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, Sce
             height: 512,
             filter: PixelFilter::Box,
             sample_border: false,
+            crop: None,
+            lens: None,
         },
         integrator: Integrator::default(),
         spp_hint: None,

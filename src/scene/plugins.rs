@@ -120,10 +120,34 @@ pub const PLUGINS: &[Plugin] = &[
             p("to_world", "identity"),
         ],
         notes: "`fov_axis` x, y, diagonal, smaller or larger; without `fov`, the `focal_length` \
-                of a 36 x 24 mm frame gives the diagonal fov, as in Mitsuba. A pinhole: clip \
-                planes, focus distance and shutter times change nothing; an off-centre principal \
-                point is refused; `srf` (spectral rendering only) is a warning. No mirroring \
-                `to_world`.",
+                of a 36 x 24 mm frame gives the diagonal fov (of the whole film, whatever its \
+                crop window), as in Mitsuba. A pinhole: the focus distance changes nothing; clip \
+                planes are checked as Mitsuba checks them but cut no camera ray (only geometry \
+                within `near_clip` of the camera or beyond `far_clip` would show it); shutter \
+                times change nothing; an off-centre principal point is refused; `srf` (spectral \
+                rendering only) is a warning. No mirroring `to_world`.",
+    },
+    Plugin {
+        object: "sensor",
+        kinds: &["thinlens"],
+        properties: &[
+            p("aperture_radius", ""),
+            p("focus_distance", "far_clip"),
+            p("fov", ""),
+            p("fov_axis", "x"),
+            p("focal_length", "50mm"),
+            p("near_clip", "0.01"),
+            p("far_clip", "10000"),
+            p("shutter_open", "0"),
+            p("shutter_close", "0"),
+            p("srf", ""),
+            p("to_world", "identity"),
+        ],
+        notes: "As `perspective`, through a thin lens: rays leave a uniform point of the \
+                aperture disc (Mitsuba's concentric map) and meet on the plane `focus_distance` \
+                ahead along the view axis. `aperture_radius` is required, as in Mitsuba; 0 is a \
+                pinhole with a warning. No principal point shift (Mitsuba's thinlens reads \
+                none).",
     },
     Plugin {
         object: "sampler",
@@ -138,12 +162,19 @@ pub const PLUGINS: &[Plugin] = &[
         properties: &[
             p("width", "768"),
             p("height", "576"),
+            p("crop_offset_x", "0"),
+            p("crop_offset_y", "0"),
+            p("crop_width", "width"),
+            p("crop_height", "height"),
             p("sample_border", "false"),
             p("pixel_format", "rgb"),
             p("component_format", "float16"),
             p("file_format", "openexr"),
         ],
-        notes: "Output is RGB: the last three are read and ignored.",
+        notes: "A crop window renders that part of the film's view into an image of the \
+                window's size; its samples keep to the window unless `sample_border`, as in \
+                Mitsuba; a window off the film is refused. `--size` scales film and window \
+                together. Output is RGB: the last three are read and ignored.",
     },
     Plugin {
         object: "rfilter",

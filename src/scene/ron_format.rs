@@ -330,6 +330,8 @@ impl<'a> Builder<'a> {
             height: c.height,
             filter: PixelFilter::Box,
             sample_border: false,
+            crop: None,
+            lens: None,
         };
         let here = self.field("camera");
         let view = camera.target - camera.origin;
