@@ -71,6 +71,18 @@ const MATERIALS: &[(&str, &str)] = &[
         "dielectric",
         r#"<bsdf type="dielectric"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/></bsdf>"#,
     ),
+    (
+        "principled_plain",
+        r#"<bsdf type="principled"><rgb name="base_color" value="0.8, 0.4, 0.2"/><float name="roughness" value="0.4"/></bsdf>"#,
+    ),
+    (
+        "principled_every_lobe",
+        r#"<bsdf type="principled"><rgb name="base_color" value="0.9, 0.6, 0.3"/><float name="metallic" value="0.3"/><float name="roughness" value="0.35"/><float name="anisotropic" value="0.5"/><float name="spec_tint" value="0.4"/><float name="sheen" value="0.3"/><float name="sheen_tint" value="0.5"/><float name="clearcoat" value="0.6"/><float name="clearcoat_gloss" value="0.3"/><float name="flatness" value="0.2"/><float name="specular" value="0.7"/></bsdf>"#,
+    ),
+    (
+        "principled_glass",
+        r#"<bsdf type="principled"><rgb name="base_color" value="0.9, 0.95, 1.0"/><float name="spec_trans" value="0.8"/><float name="roughness" value="0.25"/><float name="eta" value="1.45"/></bsdf>"#,
+    ),
 ];
 
 /// A one-sphere Mitsuba scene per BSDF snippet, loaded through the XML loader.
@@ -228,6 +240,9 @@ fn test_bsdfs() -> Vec<(&'static str, Bsdf)> {
         "roughplastic_beckmann_nonlinear",
         "roughdielectric_ggx",
         "roughdielectric_beckmann_aniso",
+        "principled_plain",
+        "principled_every_lobe",
+        "principled_glass",
     ]
     .iter()
     .map(|n| (*n, loaded(n)))
@@ -275,6 +290,15 @@ fn samplers_match_their_pdf_chi_square() {
     let mut rng = Rng(0x5eed);
     let mut report = Vec::new();
     for (name, b) in test_bsdfs() {
+        // Mitsuba 3.9.1's principled with spec_trans picks its lobe by the Fresnel of the
+        // sampled specular normal but reports a pdf that takes it at the half vector of the
+        // pair: its sampler does not follow its pdf (chi-square z 17 at wi.z 0.95), and hppm
+        // samples as it does (tests/data/bsdf/mitsuba_values.csv's rows agree). The sample
+        // weights' mean then falls 0.3-1.9% below the albedo eval integrates to (measured at
+        // wi.z 0.95, 0.6, 0.2, -0.6 over 2M samples; docs/mitsuba-scenes.md).
+        if name == "principled_glass" {
+            continue;
+        }
         let p = Prepared::new(b);
         for wi in incident_directions(b.transmits()) {
             let mut observed = vec![0.0f64; ZB * PB + 1];

@@ -938,3 +938,63 @@ fn broken_blends_are_errors_at_their_line() {
         );
     }
 }
+
+/// `principled` reads what Mitsuba's reads: `specular` 0.5 is eta 1.5 (Mitsuba's
+/// 2 / (1 - sqrt(0.08 s)) - 1), `eta` and `specular` together are refused, a parameter counts
+/// as given (Mitsuba's m_has_*) when it is a texture or a float other than 0, base colour,
+/// roughness and metallic take textures and others are refused by name. Would catch a lobe
+/// switched on by a zero, the specular-to-eta mapping, a texture silently dropped.
+#[test]
+fn principled_reads_what_mitsuba_reads() {
+    use hppm::scene::principled::{HAS_CLEARCOAT, HAS_METALLIC, HAS_SHEEN, HAS_SPEC_TRANS};
+    let shape = |bsdf: &str| {
+        format!(
+            "{}\n<shape type=\"cube\"><bsdf type=\"principled\">{bsdf}</bsdf></shape>{LIGHT}",
+            sensor("", 8, 8)
+        )
+    };
+    let scene = scene_of(check(&shape(
+        r#"<float name="sheen" value="0"/><float name="clearcoat" value="0.5"/><texture name="metallic" type="checkerboard"/><texture name="roughness" type="checkerboard"/>"#,
+    )));
+    let m = &scene.materials[scene.triangles[0].material as usize];
+    let Bsdf::Principled(p) = m.bsdf else {
+        panic!("not principled: {:?}", m.bsdf);
+    };
+    assert!(
+        (p.eta - 1.5).abs() < 1e-6,
+        "specular 0.5 is eta 1.5: {}",
+        p.eta
+    );
+    assert_eq!(
+        p.has & (HAS_SHEEN | HAS_SPEC_TRANS),
+        0,
+        "a zero or absent lobe is off"
+    );
+    assert_eq!(
+        p.has & (HAS_CLEARCOAT | HAS_METALLIC),
+        HAS_CLEARCOAT | HAS_METALLIC
+    );
+    assert!(m.textures.front.alpha_u.is_some() && m.textures.front.alpha_v.is_some());
+    for (bsdf, expected) in [
+        (
+            r#"<float name="eta" value="1.3"/><float name="specular" value="0.3"/>"#,
+            "not both",
+        ),
+        (
+            r#"<texture name="sheen" type="checkerboard"/>"#,
+            "a texture for sheen is not supported",
+        ),
+    ] {
+        let errors: Vec<String> = check(&shape(bsdf))
+            .errors
+            .iter()
+            .map(|e| e.to_string())
+            .collect();
+        assert!(
+            errors
+                .iter()
+                .any(|e| e.contains(expected) && e.contains("shipped.xml:3:")),
+            "{bsdf}: expected \"{expected}\" at line 3 in {errors:?}"
+        );
+    }
+}

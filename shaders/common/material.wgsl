@@ -3,7 +3,7 @@
 // The BSDFs other than Lambertian, mirror and smooth dielectric (which the passes handle
 // inline), dispatched on the material's kind; kinds the scene lacks are compiled out.
 
-#import common::scene::{Material, MATERIAL_CONDUCTOR, MATERIAL_ROUGH_CONDUCTOR, MATERIAL_PLASTIC, MATERIAL_ROUGH_PLASTIC, MATERIAL_ROUGH_DIELECTRIC, MATERIAL_THIN_DIELECTRIC}
+#import common::scene::{Material, MATERIAL_CONDUCTOR, MATERIAL_ROUGH_CONDUCTOR, MATERIAL_PLASTIC, MATERIAL_ROUGH_PLASTIC, MATERIAL_ROUGH_DIELECTRIC, MATERIAL_THIN_DIELECTRIC, MATERIAL_PRINCIPLED}
 #import common::bsdf::{BsdfEval, BsdfSample, no_sample}
 #ifdef DIELECTRIC
 #import common::bsdf::sample_thin_dielectric
@@ -16,6 +16,9 @@
 #endif
 #ifdef ROUGH_DIELECTRIC
 #import common::rough_dielectric::{rough_dielectric_eval, rough_dielectric_sample}
+#endif
+#ifdef PRINCIPLED
+#import common::principled::{principled_eval, principled_sample}
 #endif
 
 // f |cos wo| and pdf of the non-delta lobes (zero for delta-only kinds).
@@ -38,12 +41,17 @@ fn material_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> B
         return rough_dielectric_eval(m, wi, wo, radiance);
     }
 #endif
+#ifdef PRINCIPLED
+    if m.kind == MATERIAL_PRINCIPLED {
+        return principled_eval(m, wi, wo, radiance);
+    }
+#endif
     return BsdfEval(vec3<f32>(0.0), 0.0);
 }
 
 // Whether the kind has a non-delta lobe, which next-event estimation can reach.
 fn material_has_continuous_lobe(kind: u32) -> bool {
-    return kind == MATERIAL_ROUGH_CONDUCTOR || kind == MATERIAL_PLASTIC || kind == MATERIAL_ROUGH_PLASTIC || kind == MATERIAL_ROUGH_DIELECTRIC;
+    return kind == MATERIAL_ROUGH_CONDUCTOR || kind == MATERIAL_PLASTIC || kind == MATERIAL_ROUGH_PLASTIC || kind == MATERIAL_ROUGH_DIELECTRIC || kind == MATERIAL_PRINCIPLED;
 }
 
 fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: bool) -> BsdfSample {
@@ -71,6 +79,11 @@ fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance:
 #ifdef ROUGH_DIELECTRIC
     if m.kind == MATERIAL_ROUGH_DIELECTRIC {
         return rough_dielectric_sample(m, wi, u1, u2, radiance);
+    }
+#endif
+#ifdef PRINCIPLED
+    if m.kind == MATERIAL_PRINCIPLED {
+        return principled_sample(m, wi, u1, u2, radiance);
     }
 #endif
     return no_sample();

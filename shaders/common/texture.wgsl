@@ -4,7 +4,7 @@
 // (Texture::eval), which this must equal. Compiled in only for scenes with textures.
 
 #ifdef TEXTURES
-#import common::scene::{Material, NO_TEXTURE, texture_word}
+#import common::scene::{Material, NO_TEXTURE, MATERIAL_PRINCIPLED, texture_word}
 
 const TEXTURE_CHECKERBOARD: u32 = 0u;
 const TEXTURE_BITMAP: u32 = 1u;
@@ -170,12 +170,14 @@ fn textured_material(m: Material, uv: vec2<f32>) -> Material {
     if m.specular_texture != NO_TEXTURE {
         out.specular = texture_eval(m.specular_texture, uv);
     }
-    // The floor the untextured roughness gets too (src/scene/gpu_layout.rs).
+    // The floor the untextured roughness gets too (src/scene/gpu_layout.rs); principled keeps
+    // roughness and metallic there as given (it floors its alphas itself).
+    let floor = select(1e-4, 0.0, m.kind == MATERIAL_PRINCIPLED);
     if m.alpha_u_texture != NO_TEXTURE {
-        out.alpha_u = max(texture_eval_1(m.alpha_u_texture, uv), 1e-4);
+        out.alpha_u = max(texture_eval_1(m.alpha_u_texture, uv), floor);
     }
     if m.alpha_v_texture != NO_TEXTURE {
-        out.alpha_v = max(texture_eval_1(m.alpha_v_texture, uv), 1e-4);
+        out.alpha_v = max(texture_eval_1(m.alpha_v_texture, uv), floor);
     }
     return out;
 }

@@ -61,6 +61,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/conductor.wgsl"),
     shader_file!("shaders/common/plastic.wgsl"),
     shader_file!("shaders/common/rough_dielectric.wgsl"),
+    shader_file!("shaders/common/principled.wgsl"),
     shader_file!("shaders/common/texture.wgsl"),
     shader_file!("shaders/common/normal_map.wgsl"),
     shader_file!("shaders/common/blend.wgsl"),
@@ -86,6 +87,7 @@ pub const SCENE_DEFS: &[&str] = &[
     "FLOAT_TEXELS",
     "NORMAL_MAPS",
     "BLENDS",
+    "PRINCIPLED",
 ];
 
 /// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
@@ -94,7 +96,7 @@ pub const SCENE_DEFS: &[&str] = &[
 /// `POINT_LIGHTS` when it has a point or spot light, `SPOT_LIGHTS` a spot light,
 /// `DIRECTIONAL_LIGHTS` a directional light, `ENVIRONMENT` a constant or map light, `TEXTURES` when a material has a texture (the
 /// scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap (with `TEXTURES`), `BLENDS`
-/// a blendbsdf, mask or null BSDF.
+/// a blendbsdf, mask or null BSDF, `PRINCIPLED` a principled BSDF.
 pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
     let present = [
         ("DIELECTRIC", features.dielectric),
@@ -109,6 +111,7 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
         ("TEXTURES", features.textures),
         ("NORMAL_MAPS", features.normal_maps),
         ("BLENDS", features.blends),
+        ("PRINCIPLED", features.principled),
     ];
     defs_of(present.iter().filter(|(_, on)| *on).map(|(name, _)| *name))
 }

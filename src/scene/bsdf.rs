@@ -429,6 +429,7 @@ pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
         Bsdf::ThinDielectric { .. } | Bsdf::Null => Vec3::ZERO,
         // Never evaluated: a child is chosen first (see `Bsdf::Blend`).
         Bsdf::Blend { .. } => Vec3::ZERO,
+        Bsdf::Principled(ref pr) => super::principled::eval(pr, wi, wo, mode),
         Bsdf::RoughConductor {
             eta,
             k,
@@ -551,6 +552,7 @@ pub fn pdf(p: &Prepared, wi: Vec3, wo: Vec3) -> f32 {
         | Bsdf::ThinDielectric { .. }
         | Bsdf::Null
         | Bsdf::Blend { .. } => 0.0,
+        Bsdf::Principled(ref pr) => super::principled::pdf(pr, wi, wo),
         Bsdf::RoughConductor { microfacet, .. } => {
             if ci <= 0.0 || co <= 0.0 {
                 return 0.0;
@@ -689,6 +691,14 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
             delta: true,
         }),
         Bsdf::Blend { .. } => None,
+        Bsdf::Principled(ref pr) => {
+            super::principled::sample(pr, wi, u1, u2, mode).map(|(wo, weight, pdf)| Sample {
+                wo,
+                weight,
+                pdf,
+                delta: false,
+            })
+        }
         Bsdf::ThinDielectric { int_ior, ext_ior } => {
             let mut r = fresnel(ci.abs(), int_ior / ext_ior).0;
             r *= 2.0 / (1.0 + r);

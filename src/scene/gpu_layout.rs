@@ -23,6 +23,7 @@ pub const MATERIAL_ROUGH_DIELECTRIC: u32 = 7;
 pub const MATERIAL_THIN_DIELECTRIC: u32 = 8;
 pub const MATERIAL_BLEND: u32 = 9;
 pub const MATERIAL_NULL: u32 = 10;
+pub const MATERIAL_PRINCIPLED: u32 = 11;
 
 /// `GpuMaterial::frame_kind`: the shading frame as the shape gives it, or perturbed by a
 /// normal map or a bump map (src/scene/normal_map.rs).
@@ -341,6 +342,20 @@ fn gpu_material(
         }
         Bsdf::Mirror => m.kind = MATERIAL_MIRROR,
         Bsdf::Null => m.kind = MATERIAL_NULL,
+        // The principled parameters in the fields of the other kinds
+        // (shaders/common/principled.wgsl reads them back): base colour, roughness and
+        // metallic where textures replace them (`albedo`, `alpha_u`, `alpha_v`).
+        Bsdf::Principled(p) => {
+            m.kind = MATERIAL_PRINCIPLED;
+            m.albedo = p.base_color.to_array();
+            (m.alpha_u, m.alpha_v) = (p.roughness, p.metallic);
+            m.specular = [p.anisotropic, p.spec_trans, p.spec_tint];
+            m.eta = [p.sheen, p.sheen_tint, p.flatness];
+            m.k = [p.clearcoat, p.clearcoat_gloss, p.eta];
+            (m.int_ior, m.ext_ior) = (p.spec_srate, p.clearcoat_srate);
+            m.specular_weight = p.diffuse_srate;
+            m.nonlinear = p.has;
+        }
         Bsdf::Blend {
             weight,
             first,

@@ -2231,6 +2231,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     }
                 }
             }
+            "principled" => self.read_principled(props, node, &mut textures)?,
             other => {
                 return Err(self.attr_error(
                     node,
@@ -2245,6 +2246,124 @@ impl<'a, 'input> Reader<'a, 'input> {
         let takes = plugins::properties_of("bsdf", kind);
         self.finish_with(std::mem::take(props), node, Some(&takes))?;
         Ok((bsdf, textures))
+    }
+
+    /// Mitsuba's `principled`, every property its plugin reads. Base colour, roughness and
+    /// metallic may be textures (the slots the GPU record has); a texture for another
+    /// parameter is refused by name.
+    fn read_principled(
+        &self,
+        props: &mut Props<'a, 'input>,
+        node: Node<'a, 'input>,
+        textures: &mut SideTextures,
+    ) -> Result<Bsdf, SceneError> {
+        use super::principled::{self as pr, Principled};
+        let (base_color, base_texture) = self.color_param(props, "base_color", 0.5)?;
+        textures.diffuse = base_texture;
+        let mut has = 0;
+        // (value, texture), and whether Mitsuba counts it as given (m_has_*: a texture, or a
+        // float other than 0).
+        let mut scalar =
+            |name: &str, default: f32, bit: u32| -> Result<(f32, Option<u32>), SceneError> {
+                let Some(n) = props.take(name) else {
+                    return Ok((default, None));
+                };
+                let (value, texture) = match self.texture_node(n, name)? {
+                    Some((mean, index)) => (mean, Some(index)),
+                    None => (self.float(n)?, None),
+                };
+                if texture.is_some() || value != 0.0 {
+                    has |= bit;
+                }
+                Ok((value, texture))
+            };
+        let (roughness, roughness_texture) = scalar("roughness", 0.5, 0)?;
+        let (metallic, metallic_texture) = scalar("metallic", 0.0, pr::HAS_METALLIC)?;
+        (textures.alpha_u, textures.alpha_v) = (roughness_texture, metallic_texture);
+        let mut untextured = Vec::new();
+        let mut plain = |name: &'static str, bit: u32| -> Result<f32, SceneError> {
+            let (value, texture) = scalar(name, 0.0, bit)?;
+            if texture.is_some() {
+                untextured.push(name);
+            }
+            Ok(value)
+        };
+        let anisotropic = plain("anisotropic", pr::HAS_ANISOTROPIC)?;
+        let spec_trans = plain("spec_trans", pr::HAS_SPEC_TRANS)?;
+        let spec_tint = plain("spec_tint", pr::HAS_SPEC_TINT)?;
+        let sheen = plain("sheen", pr::HAS_SHEEN)?;
+        let sheen_tint = plain("sheen_tint", pr::HAS_SHEEN_TINT)?;
+        let flatness = plain("flatness", pr::HAS_FLATNESS)?;
+        let clearcoat = plain("clearcoat", pr::HAS_CLEARCOAT)?;
+        let clearcoat_gloss = plain("clearcoat_gloss", 0)?;
+        if !untextured.is_empty() {
+            return Err(self.error(
+                node,
+                format!(
+                    "principled: a texture for {} is not supported (base_color, roughness and \
+                     metallic may be textured)",
+                    untextured.join(", ")
+                ),
+            ));
+        }
+        let mut rate = |name: &str| match props.take(name) {
+            Some(n) => self.float(n),
+            None => Ok(1.0),
+        };
+        let spec_srate = rate("main_specular_sampling_rate")?;
+        let clearcoat_srate = rate("clearcoat_sampling_rate")?;
+        let diffuse_srate = rate("diffuse_reflectance_sampling_rate")?;
+        let transmits = has & pr::HAS_SPEC_TRANS != 0;
+        let eta = match (props.take("eta"), props.take("specular")) {
+            (Some(_), Some(n)) => {
+                return Err(self.error(
+                    n,
+                    "principled: give eta or specular, not both (as in Mitsuba)",
+                ));
+            }
+            (Some(n), None) => {
+                let eta = self.float(n)?;
+                if eta.is_nan() || eta <= 0.0 {
+                    return Err(self.attr_error(
+                        n,
+                        "value",
+                        format!("eta {eta}: must be positive"),
+                    ));
+                }
+                // Mitsuba's nudge: eta 1 cannot refract.
+                if transmits && eta == 1.0 { 1.001 } else { eta }
+            }
+            (None, n) => {
+                let specular = match n {
+                    Some(n) => self.float(n)?,
+                    None => 0.5,
+                };
+                let specular = if transmits && specular == 0.0 {
+                    1e-3
+                } else {
+                    specular
+                };
+                pr::eta_from_specular(specular)
+            }
+        };
+        Ok(Bsdf::Principled(Principled {
+            base_color,
+            roughness,
+            anisotropic,
+            metallic,
+            spec_trans,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            clearcoat,
+            clearcoat_gloss,
+            eta,
+            spec_srate,
+            clearcoat_srate,
+            diffuse_srate,
+            has,
+        }))
     }
 
     /// A colour parameter that may be textured: a constant (`default` when absent), or a

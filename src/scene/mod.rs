@@ -14,6 +14,7 @@ pub mod normal_map;
 pub mod obj;
 pub mod plugins;
 pub mod ply;
+pub mod principled;
 pub mod ron_format;
 pub mod serialized;
 pub mod spectrum;
@@ -159,6 +160,9 @@ pub enum Bsdf {
         first: u32,
         second: u32,
     },
+    /// Mitsuba 3's `principled` (src/scene/principled.rs), a continuous BSDF: never an S
+    /// vertex of the partition, whatever its roughness.
+    Principled(principled::Principled),
 }
 
 impl Bsdf {
@@ -222,6 +226,24 @@ impl Bsdf {
             }
             Bsdf::Mirror | Bsdf::Null => true,
             Bsdf::Blend { weight, .. } => weight.is_finite(),
+            Bsdf::Principled(p) => {
+                let scalars = [
+                    p.roughness,
+                    p.anisotropic,
+                    p.metallic,
+                    p.spec_trans,
+                    p.spec_tint,
+                    p.sheen,
+                    p.sheen_tint,
+                    p.flatness,
+                    p.clearcoat,
+                    p.clearcoat_gloss,
+                    p.spec_srate,
+                    p.clearcoat_srate,
+                    p.diffuse_srate,
+                ];
+                finite(p.base_color) && scalars.iter().all(|v| v.is_finite()) && p.eta > 0.0
+            }
             Bsdf::Conductor { eta, k, specular } => finite(*eta) && finite(*k) && finite(*specular),
             Bsdf::RoughConductor {
                 eta,
@@ -440,6 +462,7 @@ pub struct SceneFeatures {
     pub normal_maps: bool,
     /// Some shape's material is a blend or mask, or lets light through (`null`).
     pub blends: bool,
+    pub principled: bool,
 }
 
 impl SceneFeatures {
@@ -487,6 +510,7 @@ impl std::fmt::Display for SceneFeatures {
                 ("plastic", self.plastic),
                 ("rough dielectric", self.rough_dielectric),
                 ("blend/mask", self.blends),
+                ("principled", self.principled),
             ]),
             list(&[
                 ("area", self.area_lights),
@@ -683,6 +707,7 @@ impl Scene {
             for bsdf in m.bsdfs() {
                 match bsdf {
                     Bsdf::Null | Bsdf::Blend { .. } => f.blends = true,
+                    Bsdf::Principled(_) => f.principled = true,
                     Bsdf::Diffuse { .. } => f.diffuse = true,
                     Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => f.dielectric = true,
                     Bsdf::Mirror => f.mirror = true,

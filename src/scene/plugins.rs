@@ -317,6 +317,33 @@ pub const PLUGINS: &[Plugin] = &[
     },
     Plugin {
         object: "bsdf",
+        kinds: &["principled"],
+        properties: &[
+            p("base_color", "0.5"),
+            p("roughness", "0.5"),
+            p("anisotropic", "0"),
+            p("metallic", "0"),
+            p("spec_trans", "0"),
+            p("eta", "from specular"),
+            p("specular", "0.5"),
+            p("spec_tint", "0"),
+            p("sheen", "0"),
+            p("sheen_tint", "0"),
+            p("flatness", "0"),
+            p("clearcoat", "0"),
+            p("clearcoat_gloss", "0"),
+            p("main_specular_sampling_rate", "1"),
+            p("clearcoat_sampling_rate", "1"),
+            p("diffuse_reflectance_sampling_rate", "1"),
+        ],
+        notes: "Every lobe as Mitsuba 3.9.1 writes it (src/scene/principled.rs), its sampling \
+                too. `base_color`, `roughness` and `metallic` may be textures; a texture on \
+                another parameter is refused. A continuous BSDF for the light-transport \
+                partition: caustics through it or onto it are path traced, never photon \
+                mapped.",
+    },
+    Plugin {
+        object: "bsdf",
         kinds: &["blendbsdf"],
         properties: &[p("weight", "")],
         notes: "Two nested BSDFs; `weight` (a float or scalar texture, clamped to [0, 1]) is the \

@@ -41,6 +41,14 @@ MATERIALS = {
                                        "alpha_u": 0.3, "alpha_v": 0.1, "int_ior": 1.33, "ext_ior": 1.0},
     "thindielectric": {"type": "thindielectric", "int_ior": 1.5, "ext_ior": 1.0},
     "dielectric": {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0},
+    "principled_plain": {"type": "principled", "base_color": {"type": "rgb", "value": [0.8, 0.4, 0.2]},
+                         "roughness": 0.4},
+    "principled_every_lobe": {"type": "principled", "base_color": {"type": "rgb", "value": [0.9, 0.6, 0.3]},
+                              "metallic": 0.3, "roughness": 0.35, "anisotropic": 0.5, "spec_tint": 0.4,
+                              "sheen": 0.3, "sheen_tint": 0.5, "clearcoat": 0.6, "clearcoat_gloss": 0.3,
+                              "flatness": 0.2, "specular": 0.7},
+    "principled_glass": {"type": "principled", "base_color": {"type": "rgb", "value": [0.9, 0.95, 1.0]},
+                         "spec_trans": 0.8, "roughness": 0.25, "eta": 1.45},
 }
 
 
@@ -56,7 +64,7 @@ def main():
     rows = []
     for name, desc in MATERIALS.items():
         bsdf = mi.load_dict(desc)
-        transmits = "dielectric" in name
+        transmits = "dielectric" in name or "glass" in name
         for i in range(24):
             wi = direction(rng, transmits and i % 3 == 2)
             wo = direction(rng, (transmits and i % 2 == 1) or i == 23)
