@@ -998,3 +998,25 @@ fn principled_reads_what_mitsuba_reads() {
         );
     }
 }
+
+/// A scene with participating media is refused where the medium is declared and where a shape
+/// uses it, each said to be a medium (not an unknown tag or a BSDF that was never declared).
+#[test]
+fn media_are_refused_by_name() {
+    let report = check(&format!(
+        r#"{}
+<medium type="homogeneous" id="fog"><float name="sigma_t" value="1"/></medium>
+<shape type="sphere"><ref name="interior" id="fog"/><bsdf type="dielectric"/></shape>{LIGHT}"#,
+        sensor("", 8, 8)
+    ));
+    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+    for line in [3, 4] {
+        assert!(
+            errors
+                .iter()
+                .any(|e| e.contains(&format!("shipped.xml:{line}:"))
+                    && e.contains("participating media are not supported")),
+            "line {line}: {errors:?}"
+        );
+    }
+}

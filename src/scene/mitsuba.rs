@@ -661,6 +661,13 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "emitter" => self.read_emitter(child),
                 "bsdf" => self.read_named_bsdf(child),
                 "texture" => self.read_named_texture(child),
+                "medium" | "phase" | "volume" => Err(self.error(
+                    child,
+                    format!(
+                        "<{}>: participating media are not supported",
+                        child.tag_name().name()
+                    ),
+                )),
                 other => Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
             }
         }
@@ -2715,6 +2722,16 @@ impl<'a, 'input> Reader<'a, 'input> {
                 return Err(self.error(
                     child,
                     format!("{}: a shape has at most one {tag}", describe_object(child)),
+                ));
+            }
+            let medium = matches!(
+                self.attr(child, "name")?.as_deref(),
+                Some("interior" | "exterior")
+            ) || tag == "medium";
+            if medium {
+                return Err(self.error(
+                    child,
+                    "a shape's interior or exterior medium: participating media are not supported",
                 ));
             }
             match tag {
