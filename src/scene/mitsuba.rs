@@ -5,8 +5,8 @@
 //!
 //! Like Mitsuba, an unknown tag, attribute or property is an error with its line and column (and
 //! a did-you-mean), so a typo never silently renders a different scene; so is anything this
-//! renderer would have to ignore to load the file (a projected spot texture, a mirroring
-//! camera). What only changes the algorithm (another integrator or sampler) or only old
+//! renderer would have to ignore to load the file (a mirroring camera, a scaled
+//! projector). What only changes the algorithm (another integrator or sampler) or only old
 //! versions read is a warning. A check reports every problem in the file at once: an element
 //! that fails is reported and reading goes on with the next (see [`check_with`]).
 
