@@ -3178,7 +3178,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let scale = match props.take("scale") {
             Some(n) => {
                 let v = self.float(n)?;
-                if !(v >= 0.0) {
+                if v < 0.0 {
                     return Err(self.attr_error(n, "value", "scale must not be negative"));
                 }
                 v
