@@ -1020,3 +1020,142 @@ fn media_are_refused_by_name() {
         );
     }
 }
+
+/// The light a textured spot or a projector sends to a point, as hppm's loaded light gives it
+/// (intensity towards the point over distance squared, what NEE uses), against Mitsuba 3.9.1
+/// `scalar_rgb`'s `sample_direction` for the same XML at the same points (the figures marked
+/// Mitsuba). A nearest-texel lookup of quadrants_wide.png makes every uv error a different
+/// texel: u or v mirrored, the projector's image upside down, the spot's frame turned, the
+/// 1/cos^3 or pi left out, or the texture's aspect ignored all fail.
+#[test]
+fn textured_spots_and_projectors_light_points_as_mitsuba_does() {
+    let texture = r#"<texture name="NAME" type="bitmap"><string name="filename" value="tests/differential/plugins/projector/quadrants_wide.png"/><string name="filter_type" value="nearest"/></texture>"#;
+    let scene = scene_of(check(&format!(
+        r#"<emitter type="projector"><float name="fov" value="60"/><float name="scale" value="2"/>{}
+            <transform name="to_world"><lookat origin="1, 2, 3" target="1, 0, 3" up="0, 0, 1"/></transform></emitter>
+        <emitter type="spot"><float name="cutoff_angle" value="30"/><float name="beam_width" value="20"/><rgb name="intensity" value="2"/>{}
+            <transform name="to_world"><lookat origin="1, 2, 3" target="1, 0, 3" up="1, 0, 1"/></transform></emitter>
+        <shape type="cube"/>{}"#,
+        texture.replace("NAME", "irradiance"),
+        texture.replace("NAME", "texture"),
+        sensor("", 8, 8)
+    )));
+    assert!(scene.features().textures, "a light's texture is uploaded");
+    let projector = scene.emitters.projectors[0];
+    let spot = scene.emitters.spots[0];
+    assert!((projector.aspect - 4.0 / 3.0).abs() < 1e-6);
+    let tex = |t: Option<u32>| &scene.textures[t.expect("textured") as usize];
+    let close = |got: Vec3, want: [f32; 3], what: &str| {
+        let want = Vec3::from(want);
+        assert!(
+            (got - want).abs().max_element() <= 1e-4 * want.max_element().max(1e-3),
+            "{what}: hppm {got}, Mitsuba {want}"
+        );
+    };
+    // A point and Mitsuba's figure for the projector there.
+    let points = [
+        ([1.3, 0.0, 3.4], [0.0374885, 0.00491453, 0.00294872]),
+        ([0.5, -1.0, 2.6], [0.713857, 0.713857, 0.713857]),
+        ([1.0, 0.0, 3.0], [0.0363692, 0.0363692, 0.0363692]),
+    ];
+    // (0.5, -1, 2.6) is outside the spot's cone: the spot's second point is its own.
+    let spot_points = [[1.3, 0.0, 3.4], [0.5, 0.0, 2.6], [1.0, 0.0, 3.0]];
+    let spot_mitsuba = [
+        [0.00114269, 0.00224797, 0.0108957],
+        [0.453515, 0.0204926, 0.00962314],
+        [0.0115767, 0.0115767, 0.0115767],
+    ];
+    for (p, projector_want) in points {
+        let to = Vec3::from(p) - projector.position;
+        let (dist2, dir) = (to.length_squared(), to.normalize());
+        let cos = dir.dot(projector.frame[2]);
+        let uv = projector.uv(dir).expect("inside the frustum");
+        let got = projector.irradiance * tex(projector.texture).eval(uv) * std::f32::consts::PI
+            / (cos * cos * cos * dist2);
+        close(got, projector_want, &format!("projector at {p:?}"));
+    }
+    for (p, want) in spot_points.into_iter().zip(spot_mitsuba) {
+        let to = Vec3::from(p) - spot.position;
+        let (dist2, dir) = (to.length_squared(), to.normalize());
+        let got = spot.intensity
+            * spot.falloff(dir.dot(spot.axis))
+            * tex(spot.texture).eval(spot.uv(dir))
+            / dist2;
+        close(got, want, &format!("spot at {p:?}"));
+    }
+}
+
+/// Defaults as Mitsuba's: a projector without properties is lit by irradiance 1 through the
+/// 50 mm lens's fov (34.02 degrees on its 1 x 1 image); `fov_axis` y on a 4:3 image widens x.
+/// Its power is pi x the image's area at z = 1 x the mean irradiance, and a spot's texture
+/// scales its power by the texture's mean over the cone (a uniform checkerboard of 0.5 halves
+/// it): a power without the texture, or the area without pi, fails.
+#[test]
+fn projector_defaults_and_light_powers() {
+    let scene = scene_of(check(&format!(
+        r#"<emitter type="projector"/>
+        <emitter type="projector"><float name="fov" value="40"/><string name="fov_axis" value="y"/>
+            <texture name="irradiance" type="bitmap"><string name="filename" value="tests/differential/plugins/projector/quadrants_wide.png"/></texture></emitter>
+        <emitter type="spot"><texture name="texture" type="checkerboard"><rgb name="color0" value="0.5"/><rgb name="color1" value="0.5"/></texture></emitter>
+        <shape type="cube"/>{}"#,
+        sensor("", 8, 8)
+    )));
+    let plain = scene.emitters.projectors[0];
+    assert_eq!(plain.irradiance, Vec3::ONE);
+    assert_eq!(plain.texture, None);
+    assert!((plain.tan_half_fov.atan().to_degrees() * 2.0 - 34.02206).abs() < 1e-3);
+    let area = 4.0 * plain.tan_half_fov * plain.tan_half_fov;
+    let power = plain.power_with(&scene.textures);
+    assert!((power.x - std::f32::consts::PI * area).abs() < 1e-4 * power.x);
+    let wide = scene.emitters.projectors[1];
+    let fov_x = (2.0 * ((20f32).to_radians().tan() * 4.0 / 3.0).atan()).to_degrees();
+    assert!((wide.tan_half_fov.atan().to_degrees() * 2.0 - fov_x).abs() < 1e-3);
+    let spot = scene.emitters.spots[0];
+    let ratio = spot.power_with(&scene.textures) / spot.power();
+    assert!(
+        (ratio - Vec3::splat(0.5)).abs().max_element() < 2e-3,
+        "{ratio}"
+    );
+}
+
+/// What Mitsuba refuses (or hppm cannot render) on these lights is an error at its line: a
+/// spot `texture` that is a colour ("must be spatially varying"), a projector with both `fov`
+/// and `focal_length`, a scaled projector, an unknown `fov_axis`, a negative `scale`.
+#[test]
+fn broken_light_textures_and_projectors_are_errors_at_their_line() {
+    let cases = [
+        (
+            r#"<emitter type="spot"><rgb name="texture" value="0.5"/></emitter>"#,
+            "must be a <texture>",
+        ),
+        (
+            r#"<emitter type="projector"><float name="fov" value="40"/><string name="focal_length" value="35mm"/></emitter>"#,
+            "not both",
+        ),
+        (
+            r#"<emitter type="projector"><transform name="to_world"><scale value="2"/></transform></emitter>"#,
+            "rotation and translation",
+        ),
+        (
+            r#"<emitter type="projector"><float name="fov" value="40"/><string name="fov_axis" value="z"/></emitter>"#,
+            "fov_axis",
+        ),
+        (
+            r#"<emitter type="projector"><float name="scale" value="-1"/></emitter>"#,
+            "negative",
+        ),
+    ];
+    for (emitter, expected) in cases {
+        let report = check(&format!(
+            "{}\n{emitter}<shape type=\"cube\"/>{LIGHT}",
+            sensor("", 8, 8)
+        ));
+        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+        assert!(
+            errors
+                .iter()
+                .any(|e| e.contains(expected) && e.contains("shipped.xml:3:")),
+            "{emitter}: expected \"{expected}\" at line 3 in {errors:?}"
+        );
+    }
+}

@@ -56,16 +56,18 @@ fn shader(path: &str) -> ShaderFile {
 
 /// The light defs, which guard light sampling and emission only: their sets below, against
 /// every subset of the other defs (every subset of all of them is 8x as many compositions).
-const LIGHT_DEFS: [&str; 4] = [
+const LIGHT_DEFS: [&str; 5] = [
     "POINT_LIGHTS",
     "SPOT_LIGHTS",
+    "PROJECTORS",
     "DIRECTIONAL_LIGHTS",
     "ENVIRONMENT",
 ];
-const LIGHT_SETS: [&[&str]; 6] = [
+const LIGHT_SETS: [&[&str]; 7] = [
     &[],
     &["POINT_LIGHTS"],
     &["POINT_LIGHTS", "SPOT_LIGHTS"],
+    &["POINT_LIGHTS", "PROJECTORS"],
     &["DIRECTIONAL_LIGHTS"],
     &["ENVIRONMENT"],
     &LIGHT_DEFS,

@@ -1,6 +1,9 @@
 #define_import_path common::lights
 
-#import common::scene::{scene_info, lights, light_cdf, triangle_at, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, SurfacePoint, triangle_point}
+#import common::scene::{scene_info, lights, light_cdf, triangle_at, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, LIGHT_PROJECTOR, NO_TEXTURE, SurfacePoint, triangle_point}
+#ifdef TEXTURES
+#import common::texture::texture_eval
+#endif
 #ifdef SPHERES
 #import common::scene::{spheres, sphere_point}
 #endif
@@ -90,8 +93,56 @@ fn spot_falloff(light: Light, cos_theta: f32) -> f32 {
     return clamp((light.cutoff - acos(clamp(cos_theta, -1.0, 1.0))) / (light.cutoff - light.beam_width), 0.0, 1.0);
 }
 
-// A point or spot light seen from `from_point`: a delta direction; `pdf` is the light's
-// selection probability.
+// Intensity (W/sr) a point light, spot or projector sends along unit world direction `dir`
+// (leaving it): Mitsuba's eval_direction times distance^2. A textured spot multiplies by its
+// texture at u, v = 1/2 + (x, y) / (2 z tan(cutoff)) of the local direction (spot.cpp's
+// direction_to_uv); a projector sends pi scale E(u, v) / cos^3 into its frustum, with
+// u = 1/2 - x / (2 z t), v = 1/2 - aspect y / (2 z t) (its perspective camera's uv) and
+// nothing outside [0, 1]^2, so that the plane z = 1 receives pi scale E (projector.cpp).
+fn delta_intensity(light: Light, dir: vec3<f32>) -> vec3<f32> {
+    var intensity = light.radiance;
+#ifdef SPOT_LIGHTS
+    if light.kind == LIGHT_SPOT {
+        let cos_theta = dot(dir, light.axis);
+        let falloff = spot_falloff(light, cos_theta);
+        // As Mitsuba, no texture lookup where the falloff is zero (its uv is meaningless there).
+        if falloff <= 0.0 {
+            return vec3<f32>(0.0);
+        }
+        intensity *= falloff;
+#ifdef TEXTURES
+        if light.texture != NO_TEXTURE {
+            let xy = vec2<f32>(dot(dir, light.frame_x), dot(dir, light.frame_y));
+            let uv = vec2<f32>(0.5) + 0.5 * xy / (cos_theta * light.uv_factor);
+            intensity *= texture_eval(light.texture, uv);
+        }
+#endif
+    }
+#endif
+#ifdef PROJECTORS
+    if light.kind == LIGHT_PROJECTOR {
+        let z = dot(dir, light.axis);
+        if z <= 0.0 {
+            return vec3<f32>(0.0);
+        }
+        let k = 0.5 / (z * light.uv_factor);
+        let uv = vec2<f32>(0.5 - dot(dir, light.frame_x) * k, 0.5 - light.aspect * dot(dir, light.frame_y) * k);
+        if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
+            return vec3<f32>(0.0);
+        }
+        intensity /= z * z * z;
+#ifdef TEXTURES
+        if light.texture != NO_TEXTURE {
+            intensity *= texture_eval(light.texture, uv);
+        }
+#endif
+    }
+#endif
+    return intensity;
+}
+
+// A point light, spot or projector seen from `from_point`: a delta direction; `pdf` is the
+// light's selection probability.
 fn sample_point_light(light: Light, from_point: vec3<f32>) -> LightSample {
     var result: LightSample;
     result.valid = false;
@@ -106,12 +157,7 @@ fn sample_point_light(light: Light, from_point: vec3<f32>) -> LightSample {
     result.position = light.position;
     result.normal = vec3<f32>(0.0);
     result.error = vec3<f32>(0.0);
-    result.radiance = light.radiance / dist2;
-#ifdef SPOT_LIGHTS
-    if light.kind == LIGHT_SPOT {
-        result.radiance *= spot_falloff(light, -dot(result.dir, light.axis));
-    }
-#endif
+    result.radiance = delta_intensity(light, -result.dir) / dist2;
     result.pdf = light.select_prob;
     result.is_delta = true;
     result.valid = max(result.radiance.x, max(result.radiance.y, result.radiance.z)) > 0.0;
@@ -153,7 +199,7 @@ fn sample_light(from_point: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
         return result;
     }
 #ifdef POINT_LIGHTS
-    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT {
+    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT || light.kind == LIGHT_PROJECTOR {
         return sample_point_light(light, from_point);
     }
 #endif

@@ -3,7 +3,8 @@
 // Shader defs (src/shaders.rs, from the scene): SPHERES compiles in sphere intersection,
 // DIELECTRIC the smooth and thin dielectric BSDFs, CONDUCTOR the smooth and rough conductors,
 // PLASTIC plastic and rough plastic, ROUGH_DIELECTRIC the rough dielectric, POINT_LIGHTS
-// point and spot lights, SPOT_LIGHTS spot lights, DIRECTIONAL_LIGHTS directional lights,
+// point and spot lights and projectors, SPOT_LIGHTS spot lights, PROJECTORS projectors,
+// DIRECTIONAL_LIGHTS directional lights,
 // ENVIRONMENT a constant or map light seen by escaping rays. Code for what a scene
 // lacks is left out of every kernel.
 
@@ -146,18 +147,19 @@ struct Material {
 }
 
 struct Light {
-    // Point and spot lights: position.
+    // Point and spot lights, projectors: position.
     position: vec3<f32>,
     kind: u32,
-    // Intensity (point, spot), radiance (area, constant; 1 for maps) or irradiance
-    // (directional).
+    // Intensity (point, spot), radiance (area, constant; 1 for maps), irradiance
+    // (directional) or pi x scale x irradiance (projector).
     radiance: vec3<f32>,
     // Area lights: the triangle or sphere.
     prim: u32,
-    // Spot: the axis it shines along. Directional: the direction its light travels.
+    // Spot, projector: the axis it shines along. Directional: the direction its light travels.
     axis: vec3<f32>,
     select_prob: f32,
     // Area lights: their area. Distant lights: the area of the disc their photons leave from.
+    // Projector: the image's area on the plane one unit ahead.
     area: f32,
     // Environment maps: where their table starts in bsdf_tables (common::environment).
     table: u32,
@@ -166,9 +168,17 @@ struct Light {
     beam_width: f32,
     // Probability that a photon leaves this light (select_prob is NEE's).
     emit_prob: f32,
-    pad_a: u32,
-    pad_b: u32,
-    pad_c: u32,
+    // Spot, projector: the texture multiplying the intensity, or NO_TEXTURE.
+    texture: u32,
+    // Spot: tan(cutoff). Projector: tan(fov_x / 2).
+    uv_factor: f32,
+    // Projector: the image's width over height.
+    aspect: f32,
+    // Spot, projector: unit local x and y (the texture's axes).
+    frame_x: vec3<f32>,
+    pad_x: u32,
+    frame_y: vec3<f32>,
+    pad_y: u32,
 }
 
 const MATERIAL_DIFFUSE: u32 = 0u;
@@ -191,6 +201,7 @@ const LIGHT_SPOT: u32 = 3u;
 const LIGHT_DIRECTIONAL: u32 = 4u;
 const LIGHT_CONSTANT: u32 = 5u;
 const LIGHT_ENVMAP: u32 = 6u;
+const LIGHT_PROJECTOR: u32 = 7u;
 const NO_LIGHT: u32 = 0xffffffffu;
 const NO_HIT: u32 = 0xffffffffu;
 const NO_NORMALS: u32 = 0xffffffffu;

@@ -21,7 +21,7 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
-#import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
+#import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_PROJECTOR, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
 #import common::material::material_sample
 #import common::blend::choose_material
 #ifdef BLENDS
@@ -32,8 +32,8 @@
 #import common::material::material_specular_share
 #endif
 #import common::lights::{pick_emitting_light, sample_area_light_point}
-#ifdef SPOT_LIGHTS
-#import common::lights::spot_falloff
+#ifdef POINT_LIGHTS
+#import common::lights::delta_intensity
 #endif
 #ifdef ENVIRONMENT
 #import common::environment::sample_environment_light
@@ -170,9 +170,15 @@ fn normalised(emitted: Photon) -> Photon {
 }
 
 #ifdef POINT_LIGHTS
-// Point lights send photons over the sphere of directions, spot lights over their cutoff cone;
-// when aiming, over the cone towards the specular surfaces instead if that one is narrower
-// (what leaves outside either cone carries no caustic).
+// Point lights send photons over the sphere of directions, spot lights over their cutoff cone,
+// projectors over their image; when aiming, over the cone towards the specular surfaces instead
+// if that one is narrower (what leaves outside either carries no caustic).
+//
+// Directions are uniform (in solid angle, or for a projector in its image's uv) and each photon
+// carries the intensity that way over the density, texture and falloff included: a textured
+// spot as Mitsuba's sample_ray does. Mitsuba's projector samples its image by brightness
+// instead; both are unbiased, and uniform needs no per-light sampling table, paying only in
+// noise when most of the image is dark (the aimed cone has to be uniform anyway).
 fn emit_point_photon(light: Light, u: vec2<f32>) -> Photon {
     var photon: Photon;
     photon.origin = light.position;
@@ -186,22 +192,33 @@ fn emit_point_photon(light: Light, u: vec2<f32>) -> Photon {
         solid_angle = 2.0 * PI * one_minus_cos;
     }
 #endif
+#ifdef PROJECTORS
+    if light.kind == LIGHT_PROJECTOR {
+        // A rectangular pyramid of half-angles a, b: 4 asin(sin a sin b).
+        let tx = light.uv_factor;
+        let ty = light.uv_factor / light.aspect;
+        solid_angle = 4.0 * asin(tx * ty / sqrt((1.0 + tx * tx) * (1.0 + ty * ty)));
+    }
+#endif
     let aim = aim_at_specular(light.position, u);
     if aim.valid && aim.solid_angle < solid_angle {
         photon.dir = aim.dir;
         solid_angle = aim.solid_angle;
+    } else if light.kind == LIGHT_PROJECTOR {
+        // Uniform on the image at z = 1 (area `light.area`): solid-angle density
+        // 1 / (area cos^3), so the photon carries intensity x area x cos^3.
+        let p = light.uv_factor * vec2<f32>(1.0 - 2.0 * u.x, (1.0 - 2.0 * u.y) / light.aspect);
+        photon.dir = normalize(p.x * light.frame_x + p.y * light.frame_y + light.axis);
+        let c = dot(photon.dir, light.axis);
+        photon.flux = delta_intensity(light, photon.dir) * (light.area * c * c * c / light.emit_prob);
+        return photon;
     } else if one_minus_cos < 2.0 {
         photon.dir = sample_cone(light.axis, one_minus_cos, u);
     } else {
         photon.dir = sample_uniform_sphere(u);
     }
     // Intensity I over a solid angle with uniform density: I x solid angle per photon.
-    photon.flux = light.radiance * (solid_angle / light.emit_prob);
-#ifdef SPOT_LIGHTS
-    if light.kind == LIGHT_SPOT {
-        photon.flux *= spot_falloff(light, dot(photon.dir, light.axis));
-    }
-#endif
+    photon.flux = delta_intensity(light, photon.dir) * (solid_angle / light.emit_prob);
     return photon;
 }
 #endif
@@ -247,7 +264,7 @@ fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
     let u_position = rng_next_vec2(rng);
     let u_direction = rng_next_vec2(rng);
 #ifdef POINT_LIGHTS
-    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT {
+    if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT || light.kind == LIGHT_PROJECTOR {
         return normalised(emit_point_photon(light, u_direction));
     }
 #endif

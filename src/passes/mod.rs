@@ -54,6 +54,8 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/pixel_filter.wgsl"),
     shader_file!("shaders/common/camera.wgsl"),
     shader_file!("shaders/common/environment.wgsl"),
+    // Before lights: a spot's or projector's texture.
+    shader_file!("shaders/common/texture.wgsl"),
     shader_file!("shaders/common/lights.wgsl"),
     shader_file!("shaders/common/fresnel.wgsl"),
     shader_file!("shaders/common/microfacet.wgsl"),
@@ -62,7 +64,6 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/plastic.wgsl"),
     shader_file!("shaders/common/rough_dielectric.wgsl"),
     shader_file!("shaders/common/principled.wgsl"),
-    shader_file!("shaders/common/texture.wgsl"),
     shader_file!("shaders/common/normal_map.wgsl"),
     shader_file!("shaders/common/blend.wgsl"),
     shader_file!("shaders/common/material.wgsl"),
@@ -78,6 +79,7 @@ pub const SCENE_DEFS: &[&str] = &[
     "SPHERES",
     "POINT_LIGHTS",
     "SPOT_LIGHTS",
+    "PROJECTORS",
     "DIRECTIONAL_LIGHTS",
     "ENVIRONMENT",
     "CONDUCTOR",
@@ -93,8 +95,9 @@ pub const SCENE_DEFS: &[&str] = &[
 /// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
 /// BSDF, `CONDUCTOR` a conductor with a Fresnel term (smooth or rough), `PLASTIC` a plastic
 /// (smooth or rough), `ROUGH_DIELECTRIC` a rough dielectric, `SPHERES` when it has spheres,
-/// `POINT_LIGHTS` when it has a point or spot light, `SPOT_LIGHTS` a spot light,
-/// `DIRECTIONAL_LIGHTS` a directional light, `ENVIRONMENT` a constant or map light, `TEXTURES` when a material has a texture (the
+/// `POINT_LIGHTS` when it has a point or spot light or a projector, `SPOT_LIGHTS` a spot light,
+/// `PROJECTORS` a projector, `DIRECTIONAL_LIGHTS` a directional light, `ENVIRONMENT` a constant
+/// or map light, `TEXTURES` when a material or a light has a texture (the
 /// scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap (with `TEXTURES`), `BLENDS`
 /// a blendbsdf, mask or null BSDF, `PRINCIPLED` a principled BSDF.
 pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
@@ -106,6 +109,7 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
         ("SPHERES", features.spheres),
         ("POINT_LIGHTS", features.point_lights),
         ("SPOT_LIGHTS", features.spot_lights),
+        ("PROJECTORS", features.projectors),
         ("DIRECTIONAL_LIGHTS", features.directional_lights),
         ("ENVIRONMENT", features.environment),
         ("TEXTURES", features.textures),

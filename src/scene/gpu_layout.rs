@@ -46,6 +46,7 @@ pub const LIGHT_SPOT: u32 = 3;
 pub const LIGHT_DIRECTIONAL: u32 = 4;
 pub const LIGHT_CONSTANT: u32 = 5;
 pub const LIGHT_ENVMAP: u32 = 6;
+pub const LIGHT_PROJECTOR: u32 = 7;
 
 /// `normals` of a triangle without vertex normals.
 pub const NO_NORMALS: u32 = u32::MAX;
@@ -151,22 +152,24 @@ pub struct GpuMaterial {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct GpuLight {
-    /// Point and spot lights: position. Others: unused.
+    /// Point and spot lights, projectors: position. Others: unused.
     pub position: [f32; 3],
     pub kind: u32,
     /// Point and spot lights: intensity (W/sr). Area, constant and map lights: emitted
-    /// radiance (a map's texels carry its own). Directional lights: irradiance.
+    /// radiance (a map's texels carry its own). Directional lights: irradiance. Projectors:
+    /// pi x scale x irradiance (their intensity on the axis).
     pub radiance: [f32; 3],
     /// Triangle or sphere index of an area light.
     pub prim: u32,
-    /// Spot lights: the unit axis they shine along. Directional lights: the unit direction
-    /// the light travels in.
+    /// Spot lights and projectors: the unit axis they shine along (local +z). Directional
+    /// lights: the unit direction the light travels in.
     pub axis: [f32; 3],
     /// Probability that next-event estimation picks this light: Mitsuba's rule, each emitter
     /// (a shape, a point or distant light) alike, and within a shape its parts by power.
     pub select_prob: f32,
     /// Area lights: their area. Constant and map lights: the area of the disc their photons
-    /// leave from (the scene's bounding sphere's cross-section).
+    /// leave from (the scene's bounding sphere's cross-section). Projectors: the image's area
+    /// on the plane one unit ahead.
     pub area: f32,
     /// Environment maps: the first index of their table in `bsdf_tables`.
     pub table: u32,
@@ -176,7 +179,20 @@ pub struct GpuLight {
     /// Probability that a photon leaves this light: its share of the scene's power, so that
     /// photons carry equal flux.
     pub emit_prob: f32,
-    pub _pad: [u32; 3],
+    /// Spot lights and projectors: the texture (an index of `GpuScene::textures`' headers)
+    /// multiplying their intensity, or `NO_TEXTURE`.
+    pub texture: u32,
+    /// Spot lights: tan(cutoff); projectors: tan(fov_x / 2). The local direction (x, y, z)
+    /// meets the texture at (x, y) / (z uv_factor) on [-1, 1]^2 (y scaled by `aspect` too
+    /// for projectors).
+    pub uv_factor: f32,
+    /// Projectors: the image's width over height.
+    pub aspect: f32,
+    /// Spot lights and projectors: their unit local x and y in the world.
+    pub frame_x: [f32; 3],
+    pub _pad_x: u32,
+    pub frame_y: [f32; 3],
+    pub _pad_y: u32,
 }
 
 /// Camera, bounds, counts and integrator settings: one uniform shared by every pass.
@@ -451,6 +467,7 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<LightEntry> {
     let light = |kind, radiance: Vec3| GpuLight {
         kind,
         radiance: radiance.to_array(),
+        texture: NO_TEXTURE,
         ..Zeroable::zeroed()
     };
     // Emitters after the triangles' materials are numbered from here.
@@ -514,9 +531,31 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<LightEntry> {
                 axis: s.axis.to_array(),
                 cutoff: s.cutoff,
                 beam_width: s.beam_width,
+                texture: s.texture.unwrap_or(NO_TEXTURE),
+                uv_factor: s.cutoff.tan(),
+                frame_x: s.frame[0].to_array(),
+                frame_y: s.frame[1].to_array(),
                 ..light(LIGHT_SPOT, s.intensity)
             };
-            lights.push(entry(spot, mean(s.power()), own()));
+            // A textured spot's power includes the texture's mean over its cone.
+            lights.push(entry(spot, mean(s.power_with(&scene.textures)), own()));
+        }
+    }
+    for p in &scene.emitters.projectors {
+        if p.irradiance.max_element() > 0.0 {
+            let projector = GpuLight {
+                position: p.position.to_array(),
+                axis: p.frame[2].to_array(),
+                area: p.sensor_area(),
+                texture: p.texture.unwrap_or(NO_TEXTURE),
+                uv_factor: p.tan_half_fov,
+                aspect: p.aspect,
+                frame_x: p.frame[0].to_array(),
+                frame_y: p.frame[1].to_array(),
+                ..light(LIGHT_PROJECTOR, p.irradiance * std::f32::consts::PI)
+            };
+            let power = mean(p.power_with(&scene.textures));
+            lights.push(entry(projector, power, own()));
         }
     }
     // Distant lights send their photons from a disc as large as the scene's bounding sphere:

@@ -5,8 +5,8 @@
 //!
 //! Like Mitsuba, an unknown tag, attribute or property is an error with its line and column (and
 //! a did-you-mean), so a typo never silently renders a different scene; so is anything this
-//! renderer would have to ignore to load the file (a projected spot texture, a mirroring
-//! camera). What only changes the algorithm (another integrator or sampler) or only old
+//! renderer would have to ignore to load the file (a mirroring camera, a scaled
+//! projector). What only changes the algorithm (another integrator or sampler) or only old
 //! versions read is a warning. A check reports every problem in the file at once: an element
 //! that fails is reported and reading goes on with the next (see [`check_with`]).
 
@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
-use super::emitter::{DirectionalLight, EnvMap, Environment, SpotLight};
+use super::emitter::{DirectionalLight, EnvMap, Environment, Projector, SpotLight};
 use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
@@ -3139,6 +3139,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         match kind.as_str() {
             "point" => self.read_point_light(&mut props, node)?,
             "spot" => self.read_spot_light(&mut props, node)?,
+            "projector" => self.read_projector(&mut props, node)?,
             "directional" => self.read_directional_light(&mut props, node)?,
             "constant" | "envmap" => {
                 if self.scene.emitters.environment.is_some() {
@@ -3229,11 +3230,38 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(())
     }
 
-    /// Mitsuba's `spot`: it shines along `to_world`'s +z from its translation.
-    fn read_spot_light(&mut self, props: &mut Props, node: Node) -> Result<(), SceneError> {
-        if let Some(n) = props.take("texture") {
-            return Err(self.error(n, "a spot light's projected texture is not supported"));
+    /// A light's texture parameter `name`: a `<texture>` or `<ref>` to one (added to the
+    /// scene's textures), as Mitsuba's spot requires ("must be spatially varying"); `None`
+    /// when absent.
+    fn light_texture(
+        &self,
+        props: &mut Props<'a, 'input>,
+        name: &str,
+        what: &str,
+    ) -> Result<Option<u32>, SceneError> {
+        let Some(n) = props.take(name) else {
+            return Ok(None);
+        };
+        match self.texture_node(n, name)? {
+            Some((_, index)) => Ok(Some(index)),
+            None => Err(self.error(
+                n,
+                format!(
+                    "{}: {what}'s {name} must be a <texture> (bitmap or checkerboard) or a                      <ref> to one; Mitsuba refuses a constant here",
+                    describe(n)
+                ),
+            )),
         }
+    }
+
+    /// Mitsuba's `spot`: it shines along `to_world`'s +z from its translation; a `texture`
+    /// is laid across its local x and y.
+    fn read_spot_light(
+        &mut self,
+        props: &mut Props<'a, 'input>,
+        node: Node,
+    ) -> Result<(), SceneError> {
+        let texture = self.light_texture(props, "texture", "a spot light")?;
         let to_world = match props.take("to_world") {
             Some(n) => {
                 let m = self.transform(n)?;
@@ -3260,6 +3288,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
         let position = to_world.transform_point3(Vec3::ZERO);
         let axis = to_world.transform_vector3(Vec3::Z).normalize_or_zero();
+        let frame = [Vec3::X, Vec3::Y].map(|v| to_world.transform_vector3(v).normalize_or_zero());
         self.check_light_reach(node, "this spot light", position)?;
         self.scene.emitters.spots.push(SpotLight {
             position,
@@ -3267,6 +3296,104 @@ impl<'a, 'input> Reader<'a, 'input> {
             intensity,
             cutoff,
             beam_width,
+            frame,
+            texture,
+        });
+        Ok(())
+    }
+
+    /// Mitsuba's `projector`: a pinhole at `to_world`'s translation facing its +z, projecting
+    /// `irradiance` (a colour or a texture) times `scale` through the frustum of the
+    /// perspective camera with the same `fov` / `fov_axis` / `focal_length` and an image of
+    /// the texture's resolution.
+    fn read_projector(
+        &mut self,
+        props: &mut Props<'a, 'input>,
+        node: Node,
+    ) -> Result<(), SceneError> {
+        let scale = match props.take("scale") {
+            Some(n) => {
+                let v = self.float(n)?;
+                if v < 0.0 {
+                    return Err(self.attr_error(n, "value", "scale must not be negative"));
+                }
+                v
+            }
+            None => 1.0,
+        };
+        let (irradiance, texture) = match props.take("irradiance") {
+            None => (Vec3::ONE, None),
+            Some(n) => match self.texture_node(n, "irradiance")? {
+                Some((_, index)) => (Vec3::ONE, Some(index)),
+                None => (self.non_negative_color(n)?, None),
+            },
+        };
+        // Mitsuba's `Texture::resolution`: a bitmap's, (1, 1) for anything else.
+        let aspect = match texture.and_then(|t| self.textures.borrow().get(t as usize).cloned()) {
+            Some(Texture::Bitmap(b)) => b.width as f64 / b.height as f64,
+            _ => 1.0,
+        };
+        let to_world = match props.take("to_world") {
+            Some(n) => {
+                let m = self.transform(n)?;
+                let linear = Mat3::from_mat4(m);
+                // Mitsuba's projector takes the local point's z and the transformed +z (not
+                // normalised) as they come, and its photons' directions unnormalised: only a
+                // unit scale makes the two agree.
+                let unit = is_similarity(linear) && (linear.x_axis.length() - 1.0).abs() < 1e-3;
+                if !unit {
+                    return Err(self.error(
+                        n,
+                        "a projector's to_world must be a rotation and translation (Mitsuba's                          scaled projector disagrees with itself)",
+                    ));
+                }
+                m
+            }
+            None => Mat4::IDENTITY,
+        };
+        let fov = props
+            .take("fov")
+            .map(|n| self.float(n).map(|v| (n, v)))
+            .transpose()?;
+        let fov_axis = props
+            .take("fov_axis")
+            .map(|n| self.string(n).map(|v| (n, v)))
+            .transpose()?;
+        let (fov, axis) = match (fov, props.take("focal_length")) {
+            (Some((n, _)), Some(_)) => {
+                return Err(self.error(
+                    n,
+                    "give either fov or focal_length, not both (Mitsuba refuses both too)",
+                ));
+            }
+            (Some((n, fov)), None) => match fov_axis {
+                Some((axis_node, axis)) => ((axis_node, fov as f64), axis.to_ascii_lowercase()),
+                None => ((n, fov as f64), "x".to_string()),
+            },
+            (None, focal) => {
+                let fov = match focal {
+                    Some(n) => self.focal_length_fov(n)?,
+                    None => focal_length_to_fov(50.0),
+                };
+                ((node, fov), "diagonal".to_string())
+            }
+        };
+        let fov_x = self.horizontal_fov(fov.0, fov.1, &axis, aspect)?;
+        let tan_half_fov = (fov_x.to_radians() * 0.5).tan();
+        if !(tan_half_fov > 0.0 && tan_half_fov.is_finite()) {
+            return Err(self.error(node, "the projector's field of view is empty or too wide"));
+        }
+        let position = to_world.transform_point3(Vec3::ZERO);
+        let frame =
+            [Vec3::X, Vec3::Y, Vec3::Z].map(|v| to_world.transform_vector3(v).normalize_or_zero());
+        self.check_light_reach(node, "this projector", position)?;
+        self.scene.emitters.projectors.push(Projector {
+            position,
+            frame,
+            irradiance: irradiance * scale,
+            texture,
+            tan_half_fov,
+            aspect: aspect as f32,
         });
         Ok(())
     }

@@ -451,12 +451,14 @@ pub struct SceneFeatures {
     /// Point or spot lights (delta positions).
     pub point_lights: bool,
     pub spot_lights: bool,
+    /// Projectors (delta positions too: `point_lights` is then set).
+    pub projectors: bool,
     pub directional_lights: bool,
     /// A `constant` or `envmap` emitter: escaping rays see it.
     pub environment: bool,
     pub triangles: bool,
     pub spheres: bool,
-    /// Some shape's material has a texture.
+    /// Some shape's material or some light has a texture.
     pub textures: bool,
     /// Some shape's material has a `normalmap` or `bumpmap` (textures then too).
     pub normal_maps: bool,
@@ -516,6 +518,7 @@ impl std::fmt::Display for SceneFeatures {
                 ("area", self.area_lights),
                 ("point", self.point_lights && !self.spot_lights),
                 ("point+spot", self.point_lights && self.spot_lights),
+                ("projector", self.projectors),
                 ("directional", self.directional_lights),
                 ("environment", self.environment),
             ]),
@@ -559,7 +562,9 @@ impl Scene {
             hi = hi.max(s.center + s.radius);
         }
         let positions = self.point_lights.iter().map(|p| p.position);
-        for p in positions.chain(self.emitters.spots.iter().map(|s| s.position)) {
+        let spots = self.emitters.spots.iter().map(|s| s.position);
+        let projectors = self.emitters.projectors.iter().map(|p| p.position);
+        for p in positions.chain(spots).chain(projectors) {
             lo = lo.min(p);
             hi = hi.max(p);
         }
@@ -577,6 +582,7 @@ impl Scene {
             && self.spheres.is_empty()
             && self.point_lights.is_empty()
             && self.emitters.spots.is_empty()
+            && self.emitters.projectors.is_empty()
         {
             return None;
         }
@@ -647,6 +653,11 @@ impl Scene {
             spot.position *= s;
             spot.intensity *= s * s;
         }
+        // Intensity pi E / cos^3 at unit distance: E scales like a point light's intensity.
+        for projector in &mut out.emitters.projectors {
+            projector.position *= s;
+            projector.irradiance *= s * s;
+        }
         out.camera.origin *= s;
         out.camera.target *= s;
         if let Some(lens) = &mut out.camera.lens {
@@ -687,8 +698,14 @@ impl Scene {
         let mut f = SceneFeatures {
             triangles: !self.triangles.is_empty(),
             spheres: !self.spheres.is_empty(),
-            point_lights: !self.point_lights.is_empty() || !self.emitters.spots.is_empty(),
+            point_lights: !self.point_lights.is_empty()
+                || !self.emitters.spots.is_empty()
+                || !self.emitters.projectors.is_empty(),
             spot_lights: !self.emitters.spots.is_empty(),
+            projectors: !self.emitters.projectors.is_empty(),
+            // A light's texture is uploaded with the materials' (`gpu_layout`).
+            textures: self.emitters.spots.iter().any(|s| s.texture.is_some())
+                || self.emitters.projectors.iter().any(|p| p.texture.is_some()),
             directional_lights: !self.emitters.directionals.is_empty(),
             environment: self.emitters.environment.is_some(),
             ..SceneFeatures::default()
@@ -867,9 +884,24 @@ impl Scene {
         for (i, l) in self.emitters.spots.iter().enumerate() {
             let angles_ok =
                 l.beam_width >= 0.0 && l.beam_width <= l.cutoff && l.cutoff <= std::f32::consts::PI;
-            if !finite(l.position) || !finite(l.intensity) || !finite(l.axis) || !angles_ok {
+            let frame_ok = l.frame.iter().all(|v| finite(*v)) && texture_ok(l.texture);
+            if !finite(l.position)
+                || !finite(l.intensity)
+                || !finite(l.axis)
+                || !angles_ok
+                || !frame_ok
+            {
                 return fail(format!(
                     "spot light {i} has a non-finite number or bad angles"
+                ));
+            }
+        }
+        for (i, l) in self.emitters.projectors.iter().enumerate() {
+            let frame_ok = l.frame.iter().all(|v| finite(*v)) && texture_ok(l.texture);
+            let shape_ok = l.tan_half_fov > 0.0 && l.aspect > 0.0;
+            if !finite(l.position) || !finite(l.irradiance) || !frame_ok || !shape_ok {
+                return fail(format!(
+                    "projector {i} has a non-finite number or a bad field of view"
                 ));
             }
         }

@@ -446,7 +446,23 @@ pub const PLUGINS: &[Plugin] = &[
             p("texture", ""),
         ],
         notes: "Shines along its +z; Mitsuba's falloff; `to_world` must keep the cone round; \
-                a projected `texture` is refused.",
+                `texture` (a bitmap or checkerboard) multiplies the intensity at Mitsuba's uv, \
+                the direction projected on z = 1 with tan(cutoff_angle) at the square's edge.",
+    },
+    Plugin {
+        object: "emitter",
+        kinds: &["projector"],
+        properties: &[
+            p("irradiance", "1"),
+            p("scale", "1"),
+            p("to_world", "identity"),
+            p("fov", ""),
+            p("fov_axis", "x"),
+            p("focal_length", "50mm"),
+        ],
+        notes: "Mitsuba's intensity pi scale E / cos^3, so a plane at z = 1 gets pi scale E; \
+                the frustum is the perspective camera's for an image of the texture's \
+                resolution (1 x 1 for a colour); `to_world` a rotation and translation.",
     },
     Plugin {
         object: "emitter",
