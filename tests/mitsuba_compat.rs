@@ -24,6 +24,19 @@ fn scene_of(report: Report) -> Scene {
         .unwrap_or_else(|| panic!("refused: {}", errors.join("\n")))
 }
 
+/// `body` (after a sensor on line 2) must be refused with an error at `line` saying `expected`.
+fn assert_error_at(body: &str, line: usize, expected: &str) {
+    let report = check(&format!("{}\n{body}", sensor("", 8, 8)));
+    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+    let place = format!("shipped.xml:{line}:");
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains(expected) && e.contains(&place)),
+        "{body}: expected \"{expected}\" at line {line} in {errors:?}"
+    );
+}
+
 fn warnings(report: &Report) -> Vec<String> {
     report.warnings.iter().map(|w| w.to_string()).collect()
 }
@@ -925,16 +938,10 @@ fn broken_blends_are_errors_at_their_line() {
         ),
     ];
     for (bsdf, expected) in cases {
-        let report = check(&format!(
-            "{}\n<shape type=\"cube\">{bsdf}</shape>{LIGHT}",
-            sensor("", 8, 8)
-        ));
-        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
-        assert!(
-            errors
-                .iter()
-                .any(|e| e.contains(expected) && e.contains("shipped.xml:3:")),
-            "{bsdf}: expected \"{expected}\" at line 3 in {errors:?}"
+        assert_error_at(
+            &format!("<shape type=\"cube\">{bsdf}</shape>{LIGHT}"),
+            3,
+            expected,
         );
     }
 }
@@ -985,16 +992,10 @@ fn principled_reads_what_mitsuba_reads() {
             "a texture for sheen is not supported",
         ),
     ] {
-        let errors: Vec<String> = check(&shape(bsdf))
-            .errors
-            .iter()
-            .map(|e| e.to_string())
-            .collect();
-        assert!(
-            errors
-                .iter()
-                .any(|e| e.contains(expected) && e.contains("shipped.xml:3:")),
-            "{bsdf}: expected \"{expected}\" at line 3 in {errors:?}"
+        assert_error_at(
+            &format!("<shape type=\"cube\"><bsdf type=\"principled\">{bsdf}</bsdf></shape>{LIGHT}"),
+            3,
+            expected,
         );
     }
 }
@@ -1003,21 +1004,12 @@ fn principled_reads_what_mitsuba_reads() {
 /// uses it, each said to be a medium (not an unknown tag or a BSDF that was never declared).
 #[test]
 fn media_are_refused_by_name() {
-    let report = check(&format!(
-        r#"{}
-<medium type="homogeneous" id="fog"><float name="sigma_t" value="1"/></medium>
-<shape type="sphere"><ref name="interior" id="fog"/><bsdf type="dielectric"/></shape>{LIGHT}"#,
-        sensor("", 8, 8)
-    ));
-    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+    let body = format!(
+        r#"<medium type="homogeneous" id="fog"><float name="sigma_t" value="1"/></medium>
+<shape type="sphere"><ref name="interior" id="fog"/><bsdf type="dielectric"/></shape>{LIGHT}"#
+    );
     for line in [3, 4] {
-        assert!(
-            errors
-                .iter()
-                .any(|e| e.contains(&format!("shipped.xml:{line}:"))
-                    && e.contains("participating media are not supported")),
-            "line {line}: {errors:?}"
-        );
+        assert_error_at(&body, line, "participating media are not supported");
     }
 }
 
@@ -1146,16 +1138,10 @@ fn broken_light_textures_and_projectors_are_errors_at_their_line() {
         ),
     ];
     for (emitter, expected) in cases {
-        let report = check(&format!(
-            "{}\n{emitter}<shape type=\"cube\"/>{LIGHT}",
-            sensor("", 8, 8)
-        ));
-        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
-        assert!(
-            errors
-                .iter()
-                .any(|e| e.contains(expected) && e.contains("shipped.xml:3:")),
-            "{emitter}: expected \"{expected}\" at line 3 in {errors:?}"
+        assert_error_at(
+            &format!("{emitter}<shape type=\"cube\"/>{LIGHT}"),
+            3,
+            expected,
         );
     }
 }

@@ -378,6 +378,14 @@ struct Sides {
     textures: MaterialTextures,
 }
 
+/// A view angle as a file gives it: degrees along `axis` (x, y, diagonal, smaller, larger),
+/// and the element a bad axis is reported at.
+struct ViewAngle<'a, 'input> {
+    fov: f64,
+    axis_node: Node<'a, 'input>,
+    axis: String,
+}
+
 /// The parameters that take a texture, for messages.
 const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
     roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic), \
@@ -1305,15 +1313,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             self.read_film(f)?;
         }
         let mut props = self.props(node, &["sampler", "film"])?;
-        let fov = props
-            .take("fov")
-            .map(|n| self.float(n).map(|v| (n, v)))
-            .transpose()?;
-        let fov_axis = props
-            .take("fov_axis")
-            .map(|n| self.string(n).map(|v| (n, v)))
-            .transpose()?;
-        let focal_length = props.take("focal_length");
+        let view = self.view_angle(&mut props, node)?;
         // Checked as Mitsuba checks them, not applied: camera rays are not cut at the clip
         // planes (only what lies within near_clip of the camera or beyond far_clip would show
         // the difference), and nothing moves while the shutter is open.
@@ -1382,30 +1382,52 @@ impl<'a, 'input> Reader<'a, 'input> {
             (c.film_width, c.film_height)
         });
         let aspect = film_w as f64 / film_h as f64;
-        let (fov, axis) = match (fov, focal_length) {
-            (Some((n, _)), Some(_)) => {
-                return Err(self.error(
-                    n,
-                    "give either fov or focal_length, not both (Mitsuba refuses both too)",
-                ));
-            }
+        self.scene.camera.fov_x_deg =
+            self.horizontal_fov(view.axis_node, view.fov, &view.axis, aspect)?;
+        Ok(())
+    }
+
+    /// A camera's or projector's view angle as given: `fov` along `fov_axis` (x by default),
+    /// or a 35 mm `focal_length` (50 mm by default) as a diagonal fov; both together are
+    /// refused, as Mitsuba refuses them.
+    fn view_angle(
+        &self,
+        props: &mut Props<'a, 'input>,
+        node: Node<'a, 'input>,
+    ) -> Result<ViewAngle<'a, 'input>, SceneError> {
+        let fov = props
+            .take("fov")
+            .map(|n| self.float(n).map(|v| (n, v)))
+            .transpose()?;
+        let fov_axis = props
+            .take("fov_axis")
+            .map(|n| self.string(n).map(|v| (n, v)))
+            .transpose()?;
+        match (fov, props.take("focal_length")) {
+            (Some((n, _)), Some(_)) => Err(self.error(
+                n,
+                "give either fov or focal_length, not both (Mitsuba refuses both too)",
+            )),
             (Some((n, fov)), None) => {
-                let axis = match fov_axis {
+                let (axis_node, axis) = match fov_axis {
                     Some((axis_node, axis)) => (axis_node, axis.to_ascii_lowercase()),
                     None => (n, "x".to_string()),
                 };
-                (fov as f64, axis)
+                Ok(ViewAngle {
+                    fov: fov as f64,
+                    axis_node,
+                    axis,
+                })
             }
-            (None, focal) => {
-                let fov = match focal {
+            (None, focal) => Ok(ViewAngle {
+                fov: match focal {
                     Some(n) => self.focal_length_fov(n)?,
                     None => focal_length_to_fov(50.0),
-                };
-                (fov, (node, "diagonal".to_string()))
-            }
-        };
-        self.scene.camera.fov_x_deg = self.horizontal_fov(axis.0, fov, &axis.1, aspect)?;
-        Ok(())
+                },
+                axis_node: node,
+                axis: "diagonal".to_string(),
+            }),
+        }
     }
 
     /// A `thinlens` sensor's lens: `aperture_radius` (which Mitsuba requires) and the focus
@@ -3309,7 +3331,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn read_projector(
         &mut self,
         props: &mut Props<'a, 'input>,
-        node: Node,
+        node: Node<'a, 'input>,
     ) -> Result<(), SceneError> {
         let scale = match props.take("scale") {
             Some(n) => {
@@ -3344,41 +3366,16 @@ impl<'a, 'input> Reader<'a, 'input> {
                 if !unit {
                     return Err(self.error(
                         n,
-                        "a projector's to_world must be a rotation and translation (Mitsuba's                          scaled projector disagrees with itself)",
+                        "a projector's to_world must be a rotation and translation (Mitsuba's \
+                         scaled projector disagrees with itself)",
                     ));
                 }
                 m
             }
             None => Mat4::IDENTITY,
         };
-        let fov = props
-            .take("fov")
-            .map(|n| self.float(n).map(|v| (n, v)))
-            .transpose()?;
-        let fov_axis = props
-            .take("fov_axis")
-            .map(|n| self.string(n).map(|v| (n, v)))
-            .transpose()?;
-        let (fov, axis) = match (fov, props.take("focal_length")) {
-            (Some((n, _)), Some(_)) => {
-                return Err(self.error(
-                    n,
-                    "give either fov or focal_length, not both (Mitsuba refuses both too)",
-                ));
-            }
-            (Some((n, fov)), None) => match fov_axis {
-                Some((axis_node, axis)) => ((axis_node, fov as f64), axis.to_ascii_lowercase()),
-                None => ((n, fov as f64), "x".to_string()),
-            },
-            (None, focal) => {
-                let fov = match focal {
-                    Some(n) => self.focal_length_fov(n)?,
-                    None => focal_length_to_fov(50.0),
-                };
-                ((node, fov), "diagonal".to_string())
-            }
-        };
-        let fov_x = self.horizontal_fov(fov.0, fov.1, &axis, aspect)?;
+        let view = self.view_angle(props, node)?;
+        let fov_x = self.horizontal_fov(view.axis_node, view.fov, &view.axis, aspect)?;
         let tan_half_fov = (fov_x.to_radians() * 0.5).tan();
         if !(tan_half_fov > 0.0 && tan_half_fov.is_finite()) {
             return Err(self.error(node, "the projector's field of view is empty or too wide"));
