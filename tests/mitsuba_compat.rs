@@ -37,6 +37,18 @@ fn assert_error_at(body: &str, line: usize, expected: &str) {
     );
 }
 
+/// The scene is refused, and its first error is at `place` and names `field`.
+fn assert_refused_first(report: &Report, place: &str, field: &str, what: &dyn std::fmt::Debug) {
+    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+    assert!(
+        report.scene.is_none()
+            && errors
+                .first()
+                .is_some_and(|e| e.contains(place) && e.contains(field)),
+        "{what:?}: {errors:#?}"
+    );
+}
+
 fn warnings(report: &Report) -> Vec<String> {
     report.warnings.iter().map(|w| w.to_string()).collect()
 }
@@ -247,15 +259,7 @@ fn a_crop_window_off_the_film_is_refused_where_it_is_given() {
         ),
     ];
     for (props, place, field) in cases {
-        let report = cropped(props);
-        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
-        assert!(
-            report.scene.is_none()
-                && errors
-                    .first()
-                    .is_some_and(|e| e.contains(place) && e.contains(field)),
-            "{props:?}: {errors:#?}"
-        );
+        assert_refused_first(&cropped(props), place, field, &props);
     }
 }
 
@@ -323,15 +327,7 @@ fn the_thinlens_sensor_reads_what_mitsubas_reads() {
         ),
     ];
     for (inner, place, field) in refused {
-        let report = lens(inner);
-        let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
-        assert!(
-            report.scene.is_none()
-                && errors
-                    .first()
-                    .is_some_and(|e| e.contains(place) && e.contains(field)),
-            "{inner}: {errors:#?}"
-        );
+        assert_refused_first(&lens(inner), place, field, &inner);
     }
 }
 

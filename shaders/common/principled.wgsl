@@ -8,10 +8,10 @@
 // sampling rates in int_ior, ext_ior and specular_weight, Mitsuba's m_has_* bits in nonlinear.
 
 #import common::scene::Material
-#import common::bsdf::{BsdfEval, BsdfSample, no_sample}
+#import common::bsdf::{BsdfEval, BsdfSample, no_sample, reflect_about}
 #import common::fresnel::fresnel_full
 #import common::microfacet::{Microfacet, microfacet_d, microfacet_g1, microfacet_pdf, microfacet_sample}
-#import common::sampling::{PI, INV_PI, square_to_cosine_hemisphere}
+#import common::sampling::{PI, INV_PI, square_to_cosine_hemisphere, luminance}
 
 const HAS_ANISOTROPIC: u32 = 1u;
 const HAS_SPEC_TRANS: u32 = 2u;
@@ -85,10 +85,6 @@ fn lobe_probabilities(p: Principled, front: bool, f: f32) -> vec4<f32> {
 
 fn mulsign(a: vec3<f32>, b: f32) -> vec3<f32> {
     return select(a, -a, b < 0.0);
-}
-
-fn luminance(c: vec3<f32>) -> f32 {
-    return 0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z;
 }
 
 fn tint_of(c: vec3<f32>) -> vec3<f32> {
@@ -300,13 +296,13 @@ fn principled_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radianc
         ok = ci * wo.z > 0.0;
     } else if has(p, HAS_CLEARCOAT) && u1 < probs.x + probs.y {
         let mc = gtr1_sample(clearcoat_alpha(p), u2);
-        wo = 2.0 * dot(wi, mc) * mc - wi;
+        wo = reflect_about(wi, mc);
         ok = compatible(mc, wi, wo, ci, true) && ci * wo.z > 0.0;
     } else if has(p, HAS_SPEC_TRANS) && u1 < probs.x + probs.y + probs.z {
         wo = h * (dot(wi, h) * fr.eta_ti + fr.cos_t) - wi * fr.eta_ti;
         ok = compatible(h, wi, wo, ci, false) && ci * wo.z < 0.0;
     } else {
-        wo = 2.0 * dot(wi, h) * h - wi;
+        wo = reflect_about(wi, h);
         ok = compatible(h, wi, wo, ci, true) && ci * wo.z > 0.0;
     }
     if !ok {

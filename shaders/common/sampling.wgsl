@@ -95,3 +95,8 @@ fn square_to_cosine_hemisphere(u: vec2<f32>) -> vec3<f32> {
     let p = square_to_disk_concentric(u);
     return vec3<f32>(p.x, p.y, sqrt(max(1.0 - dot(p, p), 0.0)));
 }
+
+// Rec. 709 luminance of linear RGB (Mitsuba's luminance; src/scene/texture.rs).
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.212671, 0.715160, 0.072169));
+}

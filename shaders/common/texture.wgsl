@@ -5,6 +5,7 @@
 
 #ifdef TEXTURES
 #import common::scene::{Material, NO_TEXTURE, MATERIAL_PRINCIPLED, texture_word}
+#import common::sampling::luminance
 
 const TEXTURE_CHECKERBOARD: u32 = 0u;
 const TEXTURE_BITMAP: u32 = 1u;
@@ -91,10 +92,15 @@ fn upper_half(x: f32) -> bool {
     return x - floor(x) > 0.5;
 }
 
+// `uv` through the texture's to_uv (UvTransform::apply).
+fn to_uv(t: TextureHeader, uv: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+}
+
 // A bitmap's `uv` after to_uv, in texels (Bitmap::texel_space): a NaN coordinate (which equals
 // nothing) reads 0, an infinite one the limit, as on the CPU.
 fn texel_space(t: TextureHeader, uv: vec2<f32>) -> vec2<f32> {
-    var p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+    var p = to_uv(t, uv);
     p = select(p, vec2<f32>(0.0), p != p);
     p = clamp(p, vec2<f32>(-UV_LIMIT), vec2<f32>(UV_LIMIT));
     return p * vec2<f32>(f32(t.width), f32(t.height));
@@ -104,7 +110,7 @@ fn texel_space(t: TextureHeader, uv: vec2<f32>) -> vec2<f32> {
 fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
     let t = texture_header(index);
     if t.kind == TEXTURE_CHECKERBOARD {
-        let p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+        let p = to_uv(t, uv);
         return select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) == upper_half(p.y));
     }
     let p = texel_space(t, uv);
@@ -121,16 +127,12 @@ fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
     return texel(t, x, y) * (w0.x * w0.y) + texel(t, x + 1, y) * (w1.x * w0.y) + texel(t, x, y + 1) * (w0.x * w1.y) + texel(t, x + 1, y + 1) * (w1.x * w1.y);
 }
 
-fn luminance(c: vec3<f32>) -> f32 {
-    return dot(c, vec3<f32>(0.212671, 0.715160, 0.072169));
-}
-
 // The scalar value at `uv` (Mitsuba's eval_1, what a roughness reads): a bitmap's luminance, a
 // checkerboard's with its colours the other way round from texture_eval, as Mitsuba has them.
 fn texture_eval_1(index: u32, uv: vec2<f32>) -> f32 {
     let t = texture_header(index);
     if t.kind == TEXTURE_CHECKERBOARD {
-        let p = vec2<f32>(dot(t.to_u, vec3<f32>(uv, 1.0)), dot(t.to_v, vec3<f32>(uv, 1.0)));
+        let p = to_uv(t, uv);
         return luminance(select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) != upper_half(p.y)));
     }
     return luminance(texture_eval(index, uv));

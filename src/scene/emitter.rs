@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use glam::{Mat3, Vec2, Vec3};
 
-use super::texture::Texture;
+use super::texture::{Texture, luminance};
 
 /// Mitsuba's `spot`: intensity `intensity` along its axis, full out to `beam_width` from it,
 /// falling linearly in angle to zero at `cutoff` (src/emitters/spot.cpp, `falloff_curve`).
@@ -227,11 +227,6 @@ pub struct EnvMap {
     /// Rotation from the map's local frame to the world.
     pub to_world: Mat3,
     pub source: PathBuf,
-}
-
-/// Mitsuba's luminance weights (Rec. 709), which it samples an environment map by.
-fn luminance(c: Vec3) -> f32 {
-    0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
 }
 
 impl EnvMap {

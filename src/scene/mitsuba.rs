@@ -378,6 +378,17 @@ struct Sides {
     textures: MaterialTextures,
 }
 
+impl Sides {
+    fn material(self, emission: Vec3) -> Material {
+        Material {
+            bsdf: self.front,
+            back: self.back,
+            emission,
+            textures: self.textures,
+        }
+    }
+}
+
 /// A view angle as a file gives it: degrees along `axis` (x, y, diagonal, smaller, larger),
 /// and the element a bad axis is reported at.
 struct ViewAngle<'a, 'input> {
@@ -1861,6 +1872,13 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
     }
 
+    /// Adds a material the scene's shapes or blends refer to; its index.
+    fn add_material(&self, material: Material) -> u32 {
+        let mut materials = self.materials.borrow_mut();
+        materials.push(material);
+        materials.len() as u32 - 1
+    }
+
     /// Whether `bsdf`, or any BSDF a blend or mask of it may choose, transmits.
     fn transmits(&self, bsdf: &Bsdf) -> bool {
         match *bsdf {
@@ -1922,10 +1940,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             return Err(self.error(node, format!("{kind} needs {needed} (as in Mitsuba)")));
         }
         let (weight, texture) = match weight_node {
-            Some(n) => match self.texture_node(n, name)? {
-                Some((mean, index)) => (mean, Some(index)),
-                None => (self.float(n)?, None),
-            },
+            Some(n) => self.float_or_texture(n, name)?,
             None if mask => (0.5, None),
             None => {
                 return Err(self.error(
@@ -1945,17 +1960,8 @@ impl<'a, 'input> Reader<'a, 'input> {
                 },
             );
         }
-        let add = |sides: &Sides| {
-            let mut materials = self.materials.borrow_mut();
-            materials.push(Material {
-                bsdf: sides.front,
-                back: sides.back,
-                emission: Vec3::ZERO,
-                textures: sides.textures,
-            });
-            materials.len() as u32 - 1
-        };
-        let (first, second) = (add(&nested[0]), add(&nested[1]));
+        let first = self.add_material(nested[0].material(Vec3::ZERO));
+        let second = self.add_material(nested[1].material(Vec3::ZERO));
         Ok(Sides {
             front: Bsdf::Blend {
                 weight,
@@ -2145,14 +2151,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 textures: material.textures,
             };
             let turned = self.perturbed(nested, frame, node)?;
-            let mut materials = self.materials.borrow_mut();
-            materials.push(Material {
-                bsdf: turned.front,
-                back: turned.back,
-                textures: turned.textures,
-                ..material
-            });
-            *child = materials.len() as u32 - 1;
+            *child = self.add_material(turned.material(material.emission));
         }
         sides.front = Bsdf::Blend {
             weight,
@@ -2297,10 +2296,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 let Some(n) = props.take(name) else {
                     return Ok((default, None));
                 };
-                let (value, texture) = match self.texture_node(n, name)? {
-                    Some((mean, index)) => (mean, Some(index)),
-                    None => (self.float(n)?, None),
-                };
+                let (value, texture) = self.float_or_texture(n, name)?;
                 if texture.is_some() || value != 0.0 {
                     has |= bit;
                 }
@@ -2411,6 +2407,19 @@ impl<'a, 'input> Reader<'a, 'input> {
         match self.texture_node(node, name)? {
             Some((mean, index)) => Ok((Vec3::splat(mean), Some(index))),
             None => Ok((self.non_negative_color(node)?, None)),
+        }
+    }
+
+    /// A scalar parameter `name` given as a number, or as a texture (its mean, and its index in
+    /// the scene's textures).
+    fn float_or_texture(
+        &self,
+        node: Node<'a, 'input>,
+        name: &str,
+    ) -> Result<(f32, Option<u32>), SceneError> {
+        match self.texture_node(node, name)? {
+            Some((mean, index)) => Ok((mean, Some(index))),
+            None => Ok((self.float(node)?, None)),
         }
     }
 
@@ -2768,12 +2777,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             back: None,
             textures: MaterialTextures::default(),
         });
-        Ok(Material {
-            bsdf: sides.front,
-            back: sides.back,
-            emission: emission.unwrap_or(Vec3::ZERO),
-            textures: sides.textures,
-        })
+        Ok(sides.material(emission.unwrap_or(Vec3::ZERO)))
     }
 
     fn bsdf_ref(&self, node: Node) -> Result<Sides, SceneError> {

@@ -10,6 +10,7 @@
 use glam::{Vec2, Vec3};
 
 use super::bsdf::{Mode, fresnel, reflect, refract, square_to_cosine_hemisphere};
+use super::texture::luminance;
 use super::{Distribution, Microfacet};
 
 /// Bits of [`Principled::has`]: Mitsuba's `m_has_*`, set when the file gives the parameter (a
@@ -125,10 +126,6 @@ fn lerp3(a: Vec3, b: Vec3, t: f32) -> Vec3 {
 /// `a` with the sign of `b` flipped in when `b` is negative (drjit's mulsign).
 fn mulsign(a: Vec3, b: f32) -> Vec3 {
     if b.is_sign_negative() { -a } else { a }
-}
-
-pub fn luminance(c: Vec3) -> f32 {
-    0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
 }
 
 fn schlick_weight(cos: f32) -> f32 {

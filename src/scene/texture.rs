@@ -187,8 +187,9 @@ impl Texture {
     }
 }
 
-/// Rec. 709 luminance of linear RGB (Mitsuba's `luminance`).
-fn luminance(c: Vec3) -> f32 {
+/// Rec. 709 luminance of linear RGB (Mitsuba's `luminance`): a texture's scalar lookup, what an
+/// environment map is sampled by, a principled BSDF's tint.
+pub fn luminance(c: Vec3) -> f32 {
     0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z
 }
 
