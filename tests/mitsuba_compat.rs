@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use glam::Vec3;
+use hppm::scene::filter::PixelFilter;
 use hppm::scene::{Bsdf, Report, Scene, mitsuba};
 
 fn check(body: &str) -> Report {
@@ -269,6 +270,44 @@ fn a_crop_window_off_the_film_is_refused_where_it_is_given() {
 /// principal point shift unknown (thinlens reads none), a negative aperture or focus and clip
 /// planes out of order refused. A loader that dropped the lens, took another default focus
 /// or let the principal point through fails.
+/// The filters with negative lobes read as Mitsuba reads them: Lanczos's `lobes` (default 3),
+/// Mitchell's `B` and `C` (default 1/3 each, not swapped), `catmullrom` as B = 0, C = 1/2.
+#[test]
+fn signed_pixel_filters_read_mitsubas_properties() {
+    let film = |rfilter: &str| {
+        let body = format!(
+            r#"<sensor type="perspective"><film type="hdrfilm">{rfilter}</film></sensor>
+               <emitter type="constant"/>"#
+        );
+        scene_of(check(&body)).camera.filter
+    };
+    assert_eq!(
+        film(r#"<rfilter type="lanczos"/>"#),
+        PixelFilter::Lanczos { lobes: 3 }
+    );
+    assert_eq!(
+        film(r#"<rfilter type="lanczos"><integer name="lobes" value="5"/></rfilter>"#),
+        PixelFilter::Lanczos { lobes: 5 }
+    );
+    assert_eq!(
+        film(r#"<rfilter type="mitchell"/>"#),
+        PixelFilter::Mitchell {
+            b: 1.0 / 3.0,
+            c: 1.0 / 3.0
+        }
+    );
+    assert_eq!(
+        film(
+            r#"<rfilter type="mitchell"><float name="B" value="0.2"/><float name="C" value="0.6"/></rfilter>"#
+        ),
+        PixelFilter::Mitchell { b: 0.2, c: 0.6 }
+    );
+    assert_eq!(
+        film(r#"<rfilter type="catmullrom"/>"#),
+        PixelFilter::CATMULL_ROM
+    );
+}
+
 #[test]
 fn the_thinlens_sensor_reads_what_mitsubas_reads() {
     use hppm::scene::Lens;

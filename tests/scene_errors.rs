@@ -60,7 +60,16 @@ const CASES: &[(&str, &str, usize, &[&str])] = &[
         "unknown_rfilter.xml",
         "unknown_rfilter.xml",
         4,
-        &["mitchell", "box, tent, gaussian"],
+        &[
+            "blackman",
+            "box, tent, gaussian, lanczos, mitchell, catmullrom",
+        ],
+    ),
+    (
+        "bad_rfilter_lobes.xml",
+        "bad_rfilter_lobes.xml",
+        5,
+        &["lobes", "0", "1 to 16"],
     ),
     (
         "bad_rfilter_stddev.xml",

@@ -1,7 +1,7 @@
 #define_import_path common::camera
 
 #import common::scene::scene_info
-#import common::pixel_filter::{FILTER_BOX, filter_offset}
+#import common::pixel_filter::{FILTER_BOX, filter_offset, filter_radius, filter_weight, is_signed_filter}
 #import common::sampling::square_to_disk_concentric
 
 // A dispatch covers a grid of scene_info.width x height pixels: the image, or a tile of it
@@ -27,13 +27,20 @@ fn film_size() -> vec2<f32> {
     return vec2<f32>(f32(scene_info.film_width), f32(scene_info.film_height));
 }
 
+// A camera sample's place in the image (pixels from the top left) and the weight it counts:
+// 1, or for a filter with negative lobes f / (q F_W) (src/scene/filter.rs).
+struct FilmSample {
+    position: vec2<f32>,
+    weight: f32,
+}
+
 // Where in the image, in pixels, a camera sample of image pixel `pixel` lands for the uniform
 // pair `u`: offset from the pixel centre with the pixel filter's density (common::pixel_filter),
 // the filter cut at the image's edge unless samples may leave it (Mitsuba's sample_border).
-fn film_position(pixel: vec2<u32>, u: vec2<f32>) -> vec2<f32> {
+fn film_position(pixel: vec2<u32>, u: vec2<f32>) -> FilmSample {
     // The box filter keeps the plain jitter: the same position for the same numbers as before.
     if scene_info.filter_kind == FILTER_BOX {
-        return vec2<f32>(pixel) + u;
+        return FilmSample(vec2<f32>(pixel) + u, 1.0);
     }
     let size = film_size();
     let center = vec2<f32>(pixel) + 0.5;
@@ -44,8 +51,72 @@ fn film_position(pixel: vec2<u32>, u: vec2<f32>) -> vec2<f32> {
         hi = vec2<f32>(1e30);
     }
     let kind = scene_info.filter_kind;
+    if is_signed_filter(kind) {
+        let x = film_offset(u.x, lo.x, hi.x);
+        let y = film_offset(u.y, lo.y, hi.y);
+        return FilmSample(center + vec2<f32>(x.x, y.x), x.y * y.y);
+    }
     let param = scene_info.filter_param;
-    return center + vec2<f32>(filter_offset(kind, param, u.x, lo.x, hi.x), filter_offset(kind, param, u.y, lo.y, hi.y));
+    return FilmSample(center + vec2<f32>(filter_offset(kind, param, u.x, lo.x, hi.x), filter_offset(kind, param, u.y, lo.y, hi.y)), 1.0);
+}
+
+// Node j of the signed filter's table: (integral of |f|, integral of f) from 0 to its x.
+fn filter_node(j: u32) -> vec2<f32> {
+    let v = scene_info.filter_table[j / 2u];
+    return select(v.xy, v.zw, (j & 1u) == 1u);
+}
+
+fn filter_nodes_per_pixel() -> u32 {
+    return 2u * (127u / (2u * u32(scene_filter_radius())));
+}
+
+fn scene_filter_radius() -> f32 {
+    return filter_radius(scene_info.filter_kind, scene_info.filter_param);
+}
+
+// The table's cumulative |f| (k 0) or f (k 1) from 0 to `x`, odd, linear between nodes.
+fn filter_cumulative(x: f32, k: u32) -> f32 {
+    let per_pixel = filter_nodes_per_pixel();
+    let r = scene_filter_radius();
+    let bins = per_pixel * u32(r);
+    let a = min(abs(x), r) * f32(per_pixel);
+    let j = min(u32(a), bins - 1u);
+    let t = a - f32(j);
+    let here = filter_node(j)[k];
+    let next = filter_node(j + 1u)[k];
+    let value = here + t * (next - here);
+    return select(value, -value, x < 0.0);
+}
+
+// A signed filter's offset for `u` in [lo, hi] (cut to its support), drawn from the table's
+// piecewise-constant |f|, and its weight f / (q F_W): (offset, weight). The CPU mirror is
+// WeightedSampler::sample in src/scene/filter.rs.
+fn film_offset(u: f32, window_lo: f32, window_hi: f32) -> vec2<f32> {
+    let r = scene_filter_radius();
+    let per_pixel = filter_nodes_per_pixel();
+    let lo = max(window_lo, -r);
+    let hi = min(window_hi, r);
+    let c_lo = filter_cumulative(lo, 0u);
+    let c_hi = filter_cumulative(hi, 0u);
+    let target_value = c_lo + u * (c_hi - c_lo);
+    let s = abs(target_value);
+    var first = 0u;
+    var last = per_pixel * u32(r);
+    while last - first > 1u {
+        let mid = (first + last) / 2u;
+        if filter_node(mid).x <= s {
+            first = mid;
+        } else {
+            last = mid;
+        }
+    }
+    let mass = max(filter_node(first + 1u).x - filter_node(first).x, 1.17549435e-38);
+    let a = (f32(first) + (s - filter_node(first).x) / mass) / f32(per_pixel);
+    let x = clamp(select(a, -a, target_value < 0.0), lo, hi);
+    let density = mass * f32(per_pixel) / (c_hi - c_lo);
+    let window = filter_cumulative(hi, 1u) - filter_cumulative(lo, 1u);
+    let f = filter_weight(scene_info.filter_kind, vec2<f32>(scene_info.filter_param, scene_info.filter_param_b), x);
+    return vec2<f32>(x, f / (density * window));
 }
 
 // Whether camera rays need a lens sample (a thin lens): then two more numbers per ray.
@@ -56,12 +127,17 @@ fn has_lens() -> bool {
 struct CameraRay {
     origin: vec3<f32>,
     dir: vec3<f32>,
+    // What the sample counts in its pixel (FilmSample's weight; 1 for a splatted sample).
+    weight: f32,
 }
 
 // The primary ray for a camera sample of image pixel `pixel` drawn from the uniform pair `u`
 // (see film_position), through the lens point `lens_u` picks (unused for a pinhole).
 fn camera_ray(pixel: vec2<u32>, u: vec2<f32>, lens_u: vec2<f32>) -> CameraRay {
-    return camera_ray_through(film_position(pixel, u), lens_u);
+    let sample = film_position(pixel, u);
+    var ray = camera_ray_through(sample.position, lens_u);
+    ray.weight = sample.weight;
+    return ray;
 }
 
 // The primary ray through image position `position` (pixels from the top left). A thin lens
@@ -71,9 +147,9 @@ fn camera_ray_through(position: vec2<f32>, lens_u: vec2<f32>) -> CameraRay {
     let plane = scene_info.plane_origin + position * vec2<f32>(scene_info.plane_step_x, scene_info.plane_step_y);
     let toward = scene_info.camera_forward + plane.x * scene_info.camera_right + plane.y * scene_info.camera_up;
     if !has_lens() {
-        return CameraRay(scene_info.camera_origin, normalize(toward));
+        return CameraRay(scene_info.camera_origin, normalize(toward), 1.0);
     }
     let disc = scene_info.aperture_radius * square_to_disk_concentric(lens_u);
     let offset = disc.x * scene_info.camera_right + disc.y * scene_info.camera_up;
-    return CameraRay(scene_info.camera_origin + offset, normalize(toward * scene_info.focus_distance - offset));
+    return CameraRay(scene_info.camera_origin + offset, normalize(toward * scene_info.focus_distance - offset), 1.0);
 }

@@ -1,13 +1,22 @@
 #define_import_path common::pixel_filter
 
+#import common::sampling::PI
+
 // Pixel reconstruction filters (Mitsuba 3's rfilter) sampled by inverting their CDF: a camera
 // sample's offset from its pixel centre has the filter's density, cut to the window [lo, hi]
 // (the film's extent around the pixel), so averaging the samples gives Mitsuba's filtered pixel
-// without splatting. CPU mirror and tests: src/scene/filter.rs.
+// without splatting. CPU mirror and tests: src/scene/filter.rs. Lanczos and the Mitchell
+// cubics have negative lobes: they are splatted with their signed weights, and their
+// filter-distributed samples come from a table in the scene uniform (common::camera).
 
 const FILTER_BOX: u32 = 0u;
 const FILTER_TENT: u32 = 1u;
 const FILTER_GAUSSIAN: u32 = 2u;
+const FILTER_LANCZOS: u32 = 3u;
+const FILTER_MITCHELL: u32 = 4u;
+
+// Below this |x| Lanczos is 1 (Mitsuba's test against its float epsilon).
+const LANCZOS_CENTRE: f32 = 5.9604645e-8;
 
 const GAUSSIAN_INVERSION_STEPS: u32 = 24u;
 
@@ -15,13 +24,58 @@ fn filter_radius(kind: u32, param: f32) -> f32 {
     if kind == FILTER_GAUSSIAN {
         return 4.0 * param;
     }
+    if kind == FILTER_MITCHELL {
+        return 2.0;
+    }
     return param;
 }
 
+fn is_signed_filter(kind: u32) -> bool {
+    return kind == FILTER_LANCZOS || kind == FILTER_MITCHELL;
+}
+
+// sinc(x) sinc(x / lobes) within the lobes (Mitsuba's lanczos).
+fn lanczos(lobes: f32, x: f32) -> f32 {
+    let a = abs(x);
+    if a < LANCZOS_CENTRE {
+        return 1.0;
+    }
+    if a > lobes {
+        return 0.0;
+    }
+    let x1 = PI * a;
+    let x2 = x1 / lobes;
+    return sin(x1) * sin(x2) / (x1 * x2);
+}
+
+// The Mitchell-Netravali cubic with parameters b and c on |x| < 2 (Mitsuba's mitchell and, with
+// b = 0 and c = 1/2, its catmullrom).
+fn mitchell(b: f32, c: f32, x: f32) -> f32 {
+    let a = abs(x);
+    let a2 = a * a;
+    let a3 = a2 * a;
+    var value = (12.0 - 9.0 * b - 6.0 * c) * a3 + (-18.0 + 12.0 * b + 6.0 * c) * a2 + (6.0 - 2.0 * b);
+    if a >= 1.0 {
+        value = (-b - 6.0 * c) * a3 + (6.0 * b + 30.0 * c) * a2 + (-12.0 * b - 48.0 * c) * a + (8.0 * b + 24.0 * c);
+    }
+    return select(0.0, value / 6.0, a < 2.0);
+}
+
 // The 1D filter at `x` pixels from the centre, unnormalised, as Mitsuba defines it (the box
-// [-1/2, 1/2), the tent 1 - |x| / r, the Gaussian less its value at 4 stddev, clamped at 0):
-// the weight of a splatted sample.
-fn filter_weight(kind: u32, param: f32, x: f32) -> f32 {
+// [-1/2, 1/2), the tent 1 - |x| / r, the Gaussian less its value at 4 stddev, clamped at 0,
+// Lanczos and the cubics signed): the weight of a splatted sample. `param` holds the filter's
+// parameters (x: tent radius, Gaussian stddev, Lanczos lobes, Mitchell's B; y: Mitchell's C).
+fn filter_weight(kind: u32, param: vec2<f32>, x: f32) -> f32 {
+    if kind == FILTER_LANCZOS {
+        return lanczos(param.x, x);
+    }
+    if kind == FILTER_MITCHELL {
+        return mitchell(param.x, param.y, x);
+    }
+    return nonnegative_filter_weight(kind, param.x, x);
+}
+
+fn nonnegative_filter_weight(kind: u32, param: f32, x: f32) -> f32 {
     if kind == FILTER_GAUSSIAN {
         let r = 4.0 * param;
         let k = -0.5 / (param * param);

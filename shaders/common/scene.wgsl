@@ -30,7 +30,8 @@ struct SceneUniform {
     num_lights: u32,
     max_depth: u32,
     rr_depth: u32,
-    // common::pixel_filter's FILTER_* kind, its parameter (tent radius, Gaussian stddev), and
+    // common::pixel_filter's FILTER_* kind, its parameter (tent radius, Gaussian stddev, Lanczos
+    // lobes, Mitchell's B; filter_param_b has Mitchell's C), and
     // 1 when samples may leave the film (Mitsuba's sample_border).
     filter_kind: u32,
     filter_param: f32,
@@ -52,8 +53,12 @@ struct SceneUniform {
     // A thin lens: aperture radius (0: a pinhole) and focus distance along the view.
     aperture_radius: f32,
     focus_distance: f32,
-    pad_lens_a: u32,
-    pad_lens_b: u32,
+    // The pixel filter's second parameter (Mitchell's C).
+    filter_param_b: f32,
+    pad_filter: u32,
+    // A signed pixel filter's sampling table (common::camera's film_offset): node j at
+    // j / nodes-per-pixel holds (integral of |f| from 0, integral of f from 0), two a vec4.
+    filter_table: array<vec4<f32>, 64>,
 }
 
 struct BvhNode {

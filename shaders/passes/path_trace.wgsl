@@ -150,6 +150,9 @@ struct HitPointSink {
     pixel: u32,
     // Record hit points for this sample (the first sample of the iteration, when recording).
     enabled: bool,
+    // What the sample counts in its pixel (its camera ray's weight): a hit point's weight
+    // carries it, negative where a pixel filter is.
+    film_weight: f32,
 }
 
 fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f32>, depth: u32, weight: vec3<f32>, travelled: f32) {
@@ -159,7 +162,7 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
     if radius <= 0.0 {
         radius = initial_radius(radii.rule, footprint);
     }
-    hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight, footprint);
+    hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight * sink.film_weight, footprint);
 }
 
 // Next-event estimation at a diffuse vertex: one light sample with a shadow ray. `shading`
@@ -319,9 +322,8 @@ fn primary_ray(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) 
     return camera_ray(on_film, u, lens_u);
 }
 
-// A camera path at the camera, through `pixel`.
-fn start_path(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) -> PathState {
-    let ray = primary_ray(pixel, splatted, rng);
+// A camera path at the camera, along `ray`.
+fn start_path(ray: CameraRay) -> PathState {
     return PathState(ray.origin, ray.dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, false, vec3<f32>(0.0), 1u);
 }
 
@@ -574,14 +576,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     var rays = 0u;
     var s = 0u;
     var rng = rng_stream(film_index(pixel_index), params.sample_base, params.seed);
-    var sink = HitPointSink(pixel_index, recording);
-    var splatted = params.splat != 0u && !sink.enabled;
-    var path = start_path(pixel_of(pixel_index), splatted, &rng);
+    var splatted = params.splat != 0u && !recording;
+    var ray = primary_ray(pixel_of(pixel_index), splatted, &rng);
+    var sink = HitPointSink(pixel_index, recording, ray.weight);
+    var path = start_path(ray);
     loop {
         if extend_path(&path, sink, &rng, &rays) {
             continue;
         }
-        let sample = path.radiance;
+        let sample = path.radiance * ray.weight;
         // One NaN or Inf sample (or one that would overflow the sum) must not poison the
         // pixel: drop it and count it.
         if splatted {
@@ -592,6 +595,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             if params.splat != 0u {
                 film.samples[pixel_index * spp + s] = vec4<f32>(0.0);
             }
+            // The sample's filter weight is in `sample`, and the pixel's count takes its mean,
+            // not the weight itself: a ratio of signed sums blows up where the weights of a
+            // few samples cancel (a pixel is then the plain mean of weighted samples, which a
+            // signed filter leaves noisy in flat regions: weights ±1.85 for Lanczos 3, variance
+            // 2.4 L^2 a sample).
             let next = sum + sample * params.fis_weight;
             if !any_not_finite(next) {
                 sum = next;
@@ -618,9 +626,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             }
         }
         rng = rng_stream(film_index(pixel_index), params.sample_base + s, params.seed);
-        sink = HitPointSink(pixel_index, recording && s == 0u);
-        splatted = params.splat != 0u && !sink.enabled;
-        path = start_path(pixel_of(pixel_index), splatted, &rng);
+        let records = recording && s == 0u;
+        splatted = params.splat != 0u && !records;
+        ray = primary_ray(pixel_of(pixel_index), splatted, &rng);
+        sink = HitPointSink(pixel_index, records, ray.weight);
+        path = start_path(ray);
     }
     add_u64(COUNTER_RAYS, rays);
     add_u64(COUNTER_DISCARDED, discarded);
@@ -634,8 +644,8 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let kind = scene_info.filter_kind;
-    let param = scene_info.filter_param;
-    let reach = i32(ceil(filter_radius(kind, param) - 0.5));
+    let param = vec2<f32>(scene_info.filter_param, scene_info.filter_param_b);
+    let reach = i32(ceil(filter_radius(kind, param.x) - 0.5));
     let size = vec2<i32>(i32(scene_info.width), i32(scene_info.height));
     let spp = params.samples_per_iteration;
     var sum = vec3<f32>(0.0);
@@ -664,7 +674,8 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let pixel_index = id.y * scene_info.width + id.x;
     let total = radiance[pixel_index] + vec4<f32>(sum, weight);
-    if weight > 0.0 && !any_not_finite(total.xyz) {
+    // A filter with negative lobes can sum to any sign; no sample sums to exactly 0.
+    if weight != 0.0 && !any_not_finite(total.xyz) {
         radiance[pixel_index] = total;
     }
 }

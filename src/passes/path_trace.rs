@@ -248,7 +248,11 @@ fn splats(scene: &GpuSceneUniform) -> bool {
 /// The weight a splatted sample brings an interior pixel on average: the filter's integral over
 /// the plane (in pixels, separable), what a filter-distributed sample then counts.
 fn filter_weight_per_sample(scene: &GpuSceneUniform) -> f32 {
-    PixelFilter::from_gpu_code(scene.filter_kind, scene.filter_param).plane_integral() as f32
+    PixelFilter::from_gpu_code(
+        scene.filter_kind,
+        [scene.filter_param, scene.filter_param_b],
+    )
+    .plane_integral() as f32
 }
 
 impl Pass for PathTrace {

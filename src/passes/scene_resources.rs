@@ -28,7 +28,7 @@ pub const LAYOUTS: &[StructLayout] = &[
         height, bounds_min, bounds_max, scene_radius, num_triangles, num_spheres,
         num_lights, max_depth, rr_depth, filter_kind, filter_param, sample_border, specular_center,
         specular_radius, environment, film_width, film_height, tile_x, tile_y, hide_emitters,
-        plane_origin, aperture_radius, focus_distance
+        plane_origin, aperture_radius, focus_distance, filter_param_b, filter_table
     }),
     struct_layout!(BvhNode => "BvhNode" in TRACER, { min, left_or_first, max, count }),
     struct_layout!(GpuTriangle => "Triangle" in TRACER, {

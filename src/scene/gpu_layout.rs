@@ -8,6 +8,7 @@ use glam::Vec3;
 use super::bsdf::Prepared;
 use super::bvh::{self, BvhNode};
 use super::emitter::Environment;
+use super::filter::FILTER_TABLE_NODES;
 use super::split_boxes::split_references;
 use super::texture::{self, NO_TEXTURE};
 use super::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures};
@@ -246,7 +247,11 @@ pub struct GpuSceneUniform {
     /// along the view.
     pub aperture_radius: f32,
     pub focus_distance: f32,
-    pub _pad_lens: [u32; 2],
+    /// The pixel filter's second parameter (Mitchell's C) beside `filter_param`.
+    pub filter_param_b: f32,
+    pub _pad_filter: u32,
+    /// A signed filter's sampling table ([`super::filter::PixelFilter::gpu_table`]); zeros otherwise.
+    pub filter_table: [[f32; 4]; FILTER_TABLE_NODES / 2],
 }
 
 /// Everything the GPU needs to trace rays through a scene. Arrays are never empty (a zeroed
@@ -643,7 +648,7 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
     let tan_half_y = tan_half_x * film_h / film_w.max(f64::MIN_POSITIVE);
     let step_x = 2.0 * tan_half_x / film_w;
     let step_y = -2.0 * tan_half_y / film_h;
-    let (filter_kind, filter_param) = cam.filter.gpu_code();
+    let (filter_kind, [filter_param, filter_param_b]) = cam.filter.gpu_code();
     let (aperture_radius, focus_distance) = cam
         .lens
         .map_or((0.0, 1.0), |l| (l.aperture_radius, l.focus_distance));
@@ -660,6 +665,8 @@ fn camera_uniform(scene: &Scene, width: u32, height: u32) -> GpuSceneUniform {
         film_height: height,
         filter_kind,
         filter_param,
+        filter_param_b,
+        filter_table: cam.filter.gpu_table(),
         sample_border: cam.sample_border as u32,
         plane_origin: [
             (-tan_half_x + offset_x * step_x) as f32,

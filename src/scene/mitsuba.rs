@@ -18,7 +18,10 @@ use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
 use super::emitter::{DirectionalLight, EnvMap, Environment, Projector, SpotLight};
-use super::filter::{DEFAULT_GAUSSIAN_STDDEV, DEFAULT_TENT_RADIUS, PixelFilter};
+use super::filter::{
+    DEFAULT_GAUSSIAN_STDDEV, DEFAULT_LANCZOS_LOBES, DEFAULT_MITCHELL_B_C, DEFAULT_TENT_RADIUS,
+    PixelFilter,
+};
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
     Bsdf, Camera, Crop, Distribution, FramePerturbation, Integrator, Lens, Material,
@@ -1731,7 +1734,8 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(v as u32)
     }
 
-    /// `box`, `tent` (`radius`) or `gaussian` (`stddev`), with Mitsuba 3's defaults.
+    /// `box`, `tent` (`radius`), `gaussian` (`stddev`), `lanczos` (`lobes`), `mitchell` (`B`,
+    /// `C`) or `catmullrom`, with Mitsuba 3's defaults.
     fn read_rfilter(&self, node: Node<'a, 'input>) -> Result<PixelFilter, SceneError> {
         let kind = self.required_attr(node, "type")?;
         let mut props = self.props(node, &[])?;
@@ -1743,16 +1747,50 @@ impl<'a, 'input> Reader<'a, 'input> {
             "gaussian" => PixelFilter::Gaussian {
                 stddev: self.filter_width(&mut props, "stddev", DEFAULT_GAUSSIAN_STDDEV)?,
             },
+            "lanczos" => PixelFilter::Lanczos {
+                lobes: self.lanczos_lobes(&mut props)?,
+            },
+            "mitchell" => {
+                let mut coefficient = |name: &str| match props.take(name) {
+                    Some(n) => self.float(n),
+                    None => Ok(DEFAULT_MITCHELL_B_C),
+                };
+                PixelFilter::Mitchell {
+                    b: coefficient("B")?,
+                    c: coefficient("C")?,
+                }
+            }
+            "catmullrom" => PixelFilter::CATMULL_ROM,
             other => {
                 return Err(self.attr_error(
                     node,
                     "type",
-                    format!("rfilter \"{other}\" is not supported (box, tent, gaussian)"),
+                    format!(
+                        "rfilter \"{other}\" is not supported (box, tent, gaussian, lanczos, \
+                         mitchell, catmullrom)"
+                    ),
                 ));
             }
         };
         self.finish(props, node)?;
         Ok(filter)
+    }
+
+    /// Lanczos's lobes (its radius in pixels): Mitsuba's default 3, at most 16 as for the other
+    /// filters' widths.
+    fn lanczos_lobes(&self, props: &mut Props) -> Result<u32, SceneError> {
+        let Some(n) = props.take("lobes") else {
+            return Ok(DEFAULT_LANCZOS_LOBES);
+        };
+        let v = self.integer(n)?;
+        if !(1..=MAX_FILTER_WIDTH as i64).contains(&v) {
+            return Err(self.attr_error(
+                n,
+                "value",
+                format!("rfilter lobes {v}: expected 1 to {MAX_FILTER_WIDTH} lobes"),
+            ));
+        }
+        Ok(v as u32)
     }
 
     /// A filter's radius or standard deviation: positive, and at most 16 pixels (a sanity

@@ -1,6 +1,9 @@
 """Renders the vertical-step scenes of tests/pixel_filter.rs with Mitsuba 3 and prints each
 column's mean (the values in that test's MITSUBA_COLUMNS). Run with Mitsuba 3.9.1 from PyPI:
-`python edge_columns.py scalar_rgb` (the llvm variants need a working LLVM)."""
+`python edge_columns.py scalar_rgb` (the llvm variants need a working LLVM). The filters with
+negative lobes (MITSUBA_SIGNED_COLUMNS) were rendered with `python edge_columns.py llvm_ad_rgb
+signed` (DRJIT_LIBLLVM_PATH set to Debian's libLLVM-19.so), which evaluates the filter exactly
+where the scalar variants read a 31-step table."""
 import sys, numpy as np
 import mitsuba as mi
 variant = sys.argv[1]
@@ -30,6 +33,14 @@ def scene(width, height, edge_px, rfilter):
 cases = [("", 8.3), ('<rfilter type="gaussian"/>', 1.2), ('<rfilter type="tent"/>', 8.3),
          ('<rfilter type="tent"><float name="radius" value="1.5"/></rfilter>', 0.9),
          ('<rfilter type="tent"><float name="radius" value="1.5"/></rfilter><boolean name="sample_border" value="true"/>', 0.9)]
+signed = [('<rfilter type="lanczos"/>', 8.3), ('<rfilter type="lanczos"/>', 0.9),
+          ('<rfilter type="lanczos"><integer name="lobes" value="2"/></rfilter>', 1.2),
+          ('<rfilter type="lanczos"/><boolean name="sample_border" value="true"/>', 8.3),
+          ('<rfilter type="mitchell"/>', 8.3),
+          ('<rfilter type="mitchell"><float name="B" value="0.2"/><float name="C" value="0.6"/></rfilter>', 0.9),
+          ('<rfilter type="catmullrom"/><boolean name="sample_border" value="true"/>', 0.9)]
+if sys.argv[2:] == ["signed"]:
+    cases = signed
 for rf, edge in cases:
     s = mi.load_string(scene(16, 8, edge, rf))
     img = np.array(mi.render(s, seed=1))
