@@ -160,6 +160,13 @@ fn render_edge(
 /// Renders `xml` with `spp` samples (64 per iteration) and returns each column's mean.
 fn render_columns(xml: &str, spp: u64) -> (Vec<f64>, PixelFilter, bool) {
     let (scene, image) = render_edge(xml, 64, spp, 3);
+    columns_of(scene, image)
+}
+
+fn columns_of(
+    scene: hppm::scene::Scene,
+    image: hppm::image::Image,
+) -> (Vec<f64>, PixelFilter, bool) {
     let (w, h) = (image.width as usize, image.height as usize);
     let columns = (0..w)
         .map(|x| {
@@ -386,6 +393,143 @@ fn signed_filters_match_mitsubas_renders() {
                 (ours - theirs).abs() <= tolerance,
                 "{filter:?}, edge at {edge}: column {i} is {ours:.4}, Mitsuba's {theirs:.4} \
                  (tolerance {tolerance:.4})"
+            );
+        }
+    }
+}
+
+/// The step through the hybrid, whose every sample records hit points: with a filter with
+/// negative lobes those samples are drawn from |f| and splatted with f over the density of all
+/// pixels' draws (path_trace.wgsl), and each column must still be the filtered step. Catches a
+/// drawn sample splatted as if it were uniform in its pixel (the Lanczos ringing column off by
+/// 0.06), a splat that stops at the uniform samples' reach (3 pixels instead of 5: the columns
+/// next to the edge off), and a density that ignores the film's edge (the first columns).
+#[test]
+fn the_hybrids_drawn_samples_splat_to_the_filtered_step() {
+    let (width, height, spp) = (16u32, 8u32, 1024u64);
+    let cases = [
+        (r#"<rfilter type="lanczos"/>"#, 8.3),
+        (r#"<rfilter type="lanczos"/>"#, 0.9),
+        (
+            r#"<rfilter type="mitchell"><float name="B" value="0.2"/><float name="C" value="0.6"/></rfilter>"#,
+            1.3,
+        ),
+    ];
+    for (rfilter, edge) in cases {
+        // max_depth 2 and a glass sphere behind the emitter (neither lit nor seen), so that the
+        // hybrid records hit points, on the emitter's own diffuse surface (which faces nothing
+        // that lights it: the image is the same step).
+        let xml = edge_scene(width, height, edge, rfilter)
+            .replace(
+                r#"<integer name="max_depth" value="1"/>"#,
+                r#"<integer name="max_depth" value="2"/>"#,
+            )
+            .replace(
+                "</scene>",
+                r#"<shape type="sphere"><point name="center" value="0, 0, -10"/><bsdf type="dielectric"/></shape></scene>"#,
+            );
+        assert!(xml.contains(r#"value="2"/>"#));
+        let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
+        let gpu = gpu();
+        let mut r = renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), 3);
+        let image = render_to(&mut r, spp);
+        let (columns, filter, _) = columns_of(scene, image);
+        let mut worst = 0.0f64;
+        for (i, &value) in columns.iter().enumerate() {
+            let centre = i as f64 + 0.5;
+            let (lo, hi) = (-centre, width as f64 - centre);
+            let expected = 1.0 - filter.cdf(edge - centre, lo, hi);
+            let sigma = column_sigma(filter, edge - centre, lo, hi, spp * height as u64);
+            let tolerance = 5.0 * sigma + 2e-3;
+            worst = worst.max((value - expected).abs() / tolerance);
+            assert!(
+                (value - expected).abs() <= tolerance,
+                "{filter:?}, edge at {edge}, hybrid: column {i} is {value:.4}, the filtered step \
+                 {expected:.4} (tolerance {tolerance:.4}); columns {columns:.3?}"
+            );
+        }
+        eprintln!(
+            "{filter:?}, edge at {edge}, hybrid: worst column at {worst:.2} of its tolerance; \
+             deviations {:.4?}",
+            columns
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v
+                    - (1.0
+                        - filter.cdf(
+                            edge - i as f64 - 0.5,
+                            -(i as f64) - 0.5,
+                            width as f64 - i as f64 - 0.5
+                        )))
+                .collect::<Vec<_>>()
+        );
+    }
+}
+
+/// One iteration of the hybrid's camera (one sample a pixel, each recording hit points) with
+/// Lanczos against a CPU splat of the very same samples: each sample drawn from |f| in its
+/// pixel's window (the CPU mirror `WeightedSampler`), splatted into every pixel within the
+/// radius with f(x) f(y) over the density of all pixels' draws at its position, each pixel
+/// the weighted mean. Catches a splat that stops at the uniform samples' reach (3 pixels
+/// instead of 5), a density that ignores the film's edge or a neighbour's window, and a drawn
+/// sample splatted from where a uniform one would be.
+#[test]
+fn one_hybrid_iteration_splats_its_drawn_samples_as_the_cpu_does() {
+    let (width, height, edge) = (16u32, 8u32, 7.37f64);
+    let xml = edge_scene(width, height, edge, r#"<rfilter type="lanczos"/>"#)
+        .replace(
+            r#"<integer name="max_depth" value="1"/>"#,
+            r#"<integer name="max_depth" value="2"/>"#,
+        )
+        .replace(
+            "</scene>",
+            r#"<shape type="sphere"><point name="center" value="0, 0, -10"/><bsdf type="dielectric"/></shape></scene>"#,
+        );
+    let seed = 5;
+    let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
+    let gpu = gpu();
+    let mut r = renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), seed);
+    let image = render_to(&mut r, 1);
+    let filter = scene.camera.filter;
+    let sampler = filter.weighted_sampler();
+    let word = hppm::passes::rng::camera_seed(seed);
+    let (w, h) = (width as f32, height as f32);
+    let draw_density = |t: f32, size: f32| -> f64 {
+        (0..size as u32)
+            .map(|p| {
+                let c = p as f32 + 0.5;
+                sampler.density(t - c, -c, size - c) as f64
+            })
+            .sum()
+    };
+    let mut samples = Vec::new();
+    for y in 0..height {
+        for x in 0..width {
+            let mut stream = Stream::new(y * width + x, 0, word);
+            let (ux, uy) = (stream.next_f32(), stream.next_f32());
+            let (cx, cy) = (x as f32 + 0.5, y as f32 + 0.5);
+            let ox = sampler.sample(ux, -cx, w - cx).0;
+            let oy = sampler.sample(uy, -cy, h - cy).0;
+            let (fx, fy) = (cx + ox, cy + oy);
+            let density = draw_density(fx, w) * draw_density(fy, h);
+            let value = if fx as f64 >= edge { 1.0 } else { 0.0 };
+            samples.push((fx as f64, fy as f64, value, 1.0 / density));
+        }
+    }
+    for y in 0..height {
+        for x in 0..width {
+            let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
+            let (mut sum, mut weight) = (0.0, 0.0);
+            for &(fx, fy, value, per_density) in &samples {
+                let w = filter.eval(fx - cx) * filter.eval(fy - cy) * per_density;
+                sum += w * value;
+                weight += w;
+            }
+            let expected = sum / weight;
+            let got = image.pixels[(y * width + x) as usize][0] as f64;
+            assert!(
+                (got - expected).abs() < 1e-3 * (1.0 + expected.abs()),
+                "pixel ({x}, {y}): {got} against the CPU splat's {expected}"
             );
         }
     }

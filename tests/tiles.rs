@@ -21,11 +21,12 @@ use std::sync::atomic::AtomicBool;
 
 const SIZE: (u32, u32) = (40, 37);
 
-/// The glass-sphere Cornell box with Mitsuba's default Gaussian filter, whose samples splat
-/// across pixel (and band) edges.
-fn splatting_scene() -> Scene {
+/// The glass-sphere Cornell box with `filter`, whose samples splat across pixel (and band)
+/// edges: Mitsuba's default Gaussian, and Lanczos, whose samples drawn for hit points (every
+/// sample of the hybrid) reach twice as far (a halo of 5 rows, not 3).
+fn splatting_scene(filter: PixelFilter) -> Scene {
     let mut scene = load_scene("tests/refs/scenes/cornell_glass_sphere/scene.xml");
-    scene.camera.filter = PixelFilter::MITSUBA_DEFAULT;
+    scene.camera.filter = filter;
     scene
 }
 
@@ -58,8 +59,16 @@ fn max_difference(a: &Image, b: &Image) -> f32 {
 #[test]
 fn an_image_in_bands_is_the_image_rendered_whole() {
     let gpu = gpu();
-    let scene = splatting_scene();
-    for (graph, spp, tolerance) in [("graphs/pt.ron", 4, 0.0), ("graphs/hybrid.ron", 3, 1e-5)] {
+    let filters = [
+        PixelFilter::MITSUBA_DEFAULT,
+        PixelFilter::Lanczos { lobes: 3 },
+    ];
+    let cases = [("graphs/pt.ron", 4, 0.0), ("graphs/hybrid.ron", 3, 1e-5)];
+    for (filter, (graph, spp, tolerance)) in filters
+        .into_iter()
+        .flat_map(|f| cases.into_iter().map(move |c| (f, c)))
+    {
+        let scene = splatting_scene(filter);
         let mut whole_renderer = banded(&gpu, &scene, graph, 1);
         let whole = render_to(&mut whole_renderer, spp);
         for bands in [2, 5] {
@@ -67,10 +76,12 @@ fn an_image_in_bands_is_the_image_rendered_whole() {
             assert_eq!(r.bands(), bands as usize);
             let image = render_to(&mut r, spp);
             let difference = max_difference(&image, &whole);
-            eprintln!("{graph}, {bands} bands: largest pixel difference {difference:e}");
+            eprintln!(
+                "{filter:?}, {graph}, {bands} bands: largest pixel difference {difference:e}"
+            );
             assert!(
                 difference <= tolerance,
-                "{graph} in {bands} bands differs from the whole image by {difference}"
+                "{filter:?}, {graph} in {bands} bands differs from the whole image by {difference}"
             );
             assert_eq!(
                 r.photons_per_iteration(),
@@ -86,7 +97,7 @@ fn an_image_in_bands_is_the_image_rendered_whole() {
 #[test]
 fn a_banded_render_resumes_and_shards_as_a_whole_one() {
     let gpu = gpu();
-    let scene = splatting_scene();
+    let scene = splatting_scene(PixelFilter::MITSUBA_DEFAULT);
     let graph = "graphs/hybrid_pppm.ron";
     let run = |r: &mut Renderer<'_>, spp: u64| {
         let budget = Budget {

@@ -52,12 +52,63 @@ fn film_position(pixel: vec2<u32>, u: vec2<f32>) -> FilmSample {
     }
     let kind = scene_info.filter_kind;
     if is_signed_filter(kind) {
-        let x = film_offset(u.x, lo.x, hi.x);
-        let y = film_offset(u.y, lo.y, hi.y);
-        return FilmSample(center + vec2<f32>(x.x, y.x), x.y * y.y);
+        let drawn = signed_filter_offset(u, lo, hi);
+        return FilmSample(center + drawn.xy, drawn.z);
     }
     let param = scene_info.filter_param;
     return FilmSample(center + vec2<f32>(filter_offset(kind, param, u.x, lo.x, hi.x), filter_offset(kind, param, u.y, lo.y, hi.y)), 1.0);
+}
+
+// A signed filter's offset from a pixel's centre in the window [lo, hi] (offsets) for the uniform pair `u`, and the sample's weight: (offset, weight).
+fn signed_filter_offset(u: vec2<f32>, lo: vec2<f32>, hi: vec2<f32>) -> vec3<f32> {
+    let x = film_offset(u.x, lo.x, hi.x);
+    let y = film_offset(u.y, lo.y, hi.y);
+    return vec3<f32>(x.x, y.x, x.y * y.y);
+}
+
+// The same for a sample kept on the film (no sample_border): the offset only, as the splat
+// kernel finds a neighbour's sample again.
+fn signed_offset_on_film(pixel: vec2<u32>, u: vec2<f32>) -> vec2<f32> {
+    let center = vec2<f32>(pixel) + 0.5;
+    return signed_filter_offset(u, -center, film_size() - center).xy;
+}
+
+// The density, per unit image area, of the signed filter's draws of all pixels at image
+// position `position` (each pixel draws one sample from its table density q_p, cut to its
+// window on the film): sum_p q_p(position - centre_p), separable in x and y. A sample drawn
+// this way and splatted with f / density estimates what a uniformly placed one does
+// (path_trace.wgsl `splat`).
+fn signed_draw_density(position: vec2<f32>) -> f32 {
+    let size = film_size();
+    return draw_density_1d(position.x, size.x) * draw_density_1d(position.y, size.y);
+}
+
+fn draw_density_1d(t: f32, size: f32) -> f32 {
+    let r = scene_filter_radius();
+    let first = max(i32(floor(t - r - 0.5)), 0);
+    let last = min(i32(ceil(t + r - 0.5)), i32(size) - 1);
+    var total = 0.0;
+    for (var p = first; p <= last; p++) {
+        let center = f32(p) + 0.5;
+        total += table_density(t - center, -center, size - center);
+    }
+    return total;
+}
+
+// The table's piecewise-constant density of |f| at `offset`, normalised on the window
+// [lo, hi] cut to the support (0 outside it): what film_offset draws from.
+fn table_density(offset: f32, window_lo: f32, window_hi: f32) -> f32 {
+    let r = scene_filter_radius();
+    let lo = max(window_lo, -r);
+    let hi = min(window_hi, r);
+    if offset < lo || offset > hi {
+        return 0.0;
+    }
+    let per_pixel = filter_nodes_per_pixel();
+    let bins = per_pixel * u32(r);
+    let j = min(u32(abs(offset) * f32(per_pixel)), bins - 1u);
+    let mass = filter_node(j + 1u).x - filter_node(j).x;
+    return mass * f32(per_pixel) / (filter_cumulative(hi, 0u) - filter_cumulative(lo, 0u));
 }
 
 // Node j of the signed filter's table: (integral of |f|, integral of f) from 0 to its x.
@@ -129,6 +180,8 @@ struct CameraRay {
     dir: vec3<f32>,
     // What the sample counts in its pixel (FilmSample's weight; 1 for a splatted sample).
     weight: f32,
+    // Where it crosses the image, in pixels from the top left.
+    film_position: vec2<f32>,
 }
 
 // The primary ray for a camera sample of image pixel `pixel` drawn from the uniform pair `u`
@@ -147,9 +200,9 @@ fn camera_ray_through(position: vec2<f32>, lens_u: vec2<f32>) -> CameraRay {
     let plane = scene_info.plane_origin + position * vec2<f32>(scene_info.plane_step_x, scene_info.plane_step_y);
     let toward = scene_info.camera_forward + plane.x * scene_info.camera_right + plane.y * scene_info.camera_up;
     if !has_lens() {
-        return CameraRay(scene_info.camera_origin, normalize(toward), 1.0);
+        return CameraRay(scene_info.camera_origin, normalize(toward), 1.0, position);
     }
     let disc = scene_info.aperture_radius * square_to_disk_concentric(lens_u);
     let offset = disc.x * scene_info.camera_right + disc.y * scene_info.camera_up;
-    return CameraRay(scene_info.camera_origin + offset, normalize(toward * scene_info.focus_distance - offset), 1.0);
+    return CameraRay(scene_info.camera_origin + offset, normalize(toward * scene_info.focus_distance - offset), 1.0, position);
 }

@@ -22,6 +22,9 @@
 // records hit points keeps the filter-distributed position instead (the caustic's pixel filter
 // is the distribution of its hit points) and counts `fis_weight`, the weight a splatted sample
 // brings a pixel on average, so that both kinds of sample estimate the same filtered pixel.
+// A filter with negative lobes (`splat` 2) splats those samples too: they are drawn from |f|
+// (common::camera), so each is splatted with f over the density of all pixels' draws at its
+// position, and only its hit points carry its signed weight f / (q F_W).
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
@@ -34,7 +37,7 @@
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
 #endif
-#import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel}
+#import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel, signed_draw_density, signed_offset_on_film}
 #import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
 #import common::texture::textured_material
@@ -69,7 +72,8 @@ struct PathTraceParams {
     trace_beyond: u32,
     // 1: look caustics up in the photon grid at diffuse vertices past the hit points.
     lookups: u32,
-    // 1: splat samples through the pixel filter (see the top of the file).
+    // 1: splat samples through the pixel filter (see the top of the file); 2: also splat the
+    // samples that record hit points (a filter with negative lobes).
     splat: u32,
     // What a filter-distributed sample counts when splatting (1 otherwise).
     fis_weight: f32,
@@ -587,9 +591,15 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
         let sample = path.radiance * ray.weight;
         // One NaN or Inf sample (or one that would overflow the sum) must not poison the
         // pixel: drop it and count it.
-        if splatted {
-            let keep = !any_not_finite(sample);
-            film.samples[pixel_index * spp + s] = select(vec4<f32>(0.0), vec4<f32>(sample, 1.0), keep);
+        if splatted || params.splat == 2u {
+            // A uniformly placed sample counts 1 per unit area; a drawn one 1 / density.
+            var splat_sample = vec4<f32>(path.radiance, 1.0);
+            if !splatted {
+                let density = signed_draw_density(ray.film_position);
+                splat_sample.w = select(0.0, 1.0 / density, density > 0.0);
+            }
+            let keep = !any_not_finite(splat_sample.xyz) && !any_not_finite(vec3<f32>(splat_sample.w));
+            film.samples[pixel_index * spp + s] = select(vec4<f32>(0.0), splat_sample, keep);
             accepted += u32(keep);
         } else {
             if params.splat != 0u {
@@ -599,7 +609,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             // not the weight itself: a ratio of signed sums blows up where the weights of a
             // few samples cancel (a pixel is then the plain mean of weighted samples, which a
             // signed filter leaves noisy in flat regions: weights ±1.85 for Lanczos 3, variance
-            // 2.4 L^2 a sample).
+            // 2.4 L^2 a sample; only with sample_border, as `splat` 2 splats the rest).
             let next = sum + sample * params.fis_weight;
             if !any_not_finite(next) {
                 sum = next;
@@ -645,28 +655,45 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let kind = scene_info.filter_kind;
     let param = vec2<f32>(scene_info.filter_param, scene_info.filter_param_b);
-    let reach = i32(ceil(filter_radius(kind, param.x) - 0.5));
+    let radius = filter_radius(kind, param.x);
+    // A sample placed in its pixel reaches pixels `near` away; one drawn from a signed filter
+    // (its pixel's first when `splat` is 2 and hit points are recorded) up to the radius from
+    // its pixel's centre, so pixels `far` away.
+    let near = i32(ceil(radius - 0.5));
+    let recording = params.merge_depth > 0u && params.record != 0u;
+    let drawn_first = params.splat == 2u && recording;
+    let far = select(near, i32(ceil(2.0 * radius)) - 1, drawn_first);
     let size = vec2<i32>(i32(scene_info.width), i32(scene_info.height));
     let spp = params.samples_per_iteration;
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
-    for (var dy = -reach; dy <= reach; dy++) {
-        for (var dx = -reach; dx <= reach; dx++) {
+    for (var dy = -far; dy <= far; dy++) {
+        for (var dx = -far; dx <= far; dx++) {
             let q = vec2<i32>(id.xy) + vec2<i32>(dx, dy);
             if any(q < vec2<i32>(0)) || any(q >= size) {
                 continue;
             }
+            let placed_reach = abs(dx) <= near && abs(dy) <= near;
             let q_index = u32(q.y) * scene_info.width + u32(q.x);
             for (var s = 0u; s < spp; s++) {
+                let drawn = drawn_first && s == 0u;
+                if !drawn && !placed_reach {
+                    continue;
+                }
                 let sample = film.samples[q_index * spp + s];
                 if sample.w == 0.0 {
                     continue;
                 }
                 var rng = rng_stream(film_index(q_index), params.sample_base + s, params.seed);
+                let u = rng_next_vec2(&rng);
                 // From the integer step, not film positions: the same rounding in every pixel
                 // (and in a band of the image as in the whole).
-                let offset = vec2<f32>(f32(dx), f32(dy)) + (rng_next_vec2(&rng) - 0.5);
-                let w = filter_weight(kind, param, offset.x) * filter_weight(kind, param, offset.y);
+                var within = u - 0.5;
+                if drawn {
+                    within = signed_offset_on_film(film_pixel(vec2<u32>(q)), u);
+                }
+                let offset = vec2<f32>(f32(dx), f32(dy)) + within;
+                let w = sample.w * filter_weight(kind, param, offset.x) * filter_weight(kind, param, offset.y);
                 sum += w * sample.xyz;
                 weight += w;
             }

@@ -17,8 +17,10 @@ struct ResolveParams {
 @group(1) @binding(4) var<storage, read_write> combined: array<vec4<f32>>;
 @group(1) @binding(5) var<storage, read_write> radius: array<vec4<f32>>;
 
+// The weighted sum over its weight; a pixel filter with negative lobes can leave a pixel's
+// weight below 0 after few samples, which is still a weight (0 is none).
 fn mean_of(sum: vec4<f32>) -> vec3<f32> {
-    return select(vec3<f32>(0.0), sum.xyz / sum.w, sum.w > 0.0);
+    return select(vec3<f32>(0.0), sum.xyz / sum.w, sum.w != 0.0);
 }
 
 @compute @workgroup_size(8, 8, 1)

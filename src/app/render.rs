@@ -101,10 +101,13 @@ enum Profiling {
 }
 
 /// Rows above and below a band that its pixels' splatted samples come from: the pixel filter's
-/// reach as path_trace.wgsl's `splat` computes it (none for the box filter, which never splats).
+/// reach as path_trace.wgsl's `splat` computes it (none for the box filter, which never splats;
+/// for a filter with negative lobes that of the samples drawn from it, which land up to the
+/// radius from their pixel's centre).
 fn halo_rows(scene: &Scene) -> u32 {
     match scene.camera.filter {
         crate::scene::filter::PixelFilter::Box => 0,
+        filter if filter.is_signed() => ((2.0 * filter.radius()).ceil() - 1.0).max(0.0) as u32,
         filter => (filter.radius() - 0.5).ceil().max(0.0) as u32,
     }
 }

@@ -187,6 +187,8 @@ struct Prepared {
     pipeline: wgpu::ComputePipeline,
     /// The `splat` entry point, when the pixel filter is splatted.
     splat: Option<wgpu::ComputePipeline>,
+    /// The shader's `splat` parameter ([`splat_mode`]).
+    splat_mode: u32,
     /// What a filter-distributed sample counts while splatting.
     fis_weight: f32,
     scene: wgpu::BindGroup,
@@ -237,12 +239,26 @@ impl PathTrace {
     }
 }
 
-/// Whether samples are splatted through the pixel filter as Mitsuba's film does: for a tent or
-/// Gaussian filter with samples kept on the film. (With `sample_border` samples also land
+/// Whether samples are splatted through the pixel filter as Mitsuba's film does: for every
+/// filter but the box with samples kept on the film. (With `sample_border` samples also land
 /// beyond the film, which no pixel's invocation traces: those filters keep their distributed
 /// sample positions.)
 fn splats(scene: &GpuSceneUniform) -> bool {
     scene.filter_kind != FILTER_BOX && scene.sample_border == 0
+}
+
+/// The shader's `splat` mode: 0 none, 1 the samples that record no hit points, 2 all of them
+/// (a filter with negative lobes, whose drawn samples would count signed weights otherwise).
+fn splat_mode(scene: &GpuSceneUniform) -> u32 {
+    let filter = PixelFilter::from_gpu_code(
+        scene.filter_kind,
+        [scene.filter_param, scene.filter_param_b],
+    );
+    match (splats(scene), filter.is_signed()) {
+        (false, _) => 0,
+        (true, false) => 1,
+        (true, true) => 2,
+    }
 }
 
 /// The weight a splatted sample brings an interior pixel on average: the filter's integral over
@@ -394,6 +410,7 @@ impl Pass for PathTrace {
         self.prepared = Some(Prepared {
             pipeline,
             splat: splat_pipeline,
+            splat_mode: splat_mode(&scene.uniform),
             fis_weight: if splat {
                 filter_weight_per_sample(&scene.uniform)
             } else {
@@ -431,7 +448,7 @@ impl Pass for PathTrace {
             record: record as u32,
             trace_beyond: self.params.trace_beyond as u32,
             lookups: p.lookups as u32,
-            splat: p.splat.is_some() as u32,
+            splat: p.splat_mode,
             fis_weight: p.fis_weight,
             glossy_threshold: self.params.glossy_threshold,
         };

@@ -17,9 +17,12 @@
 //! the window. Its mean is then the window's filtered pixel, the value splatting estimates,
 //! with negative samples where the filter is negative; |weight| stays near the constant
 //! ∫|f| / ∫f (over the plane: 1.85 for Lanczos 3, 1.14 for Mitchell, 1.36 for Catmull-Rom)
-//! because q follows |f|. That leaves flat regions noisy where splatting's ratio keeps them
-//! flat (variance (c^2 - 1) L^2 a sample, 2.4 L^2 for Lanczos 3); the camera pass keeps the
-//! plain mean because a ratio of signed sums blows up where a few weights cancel. Window edges fall on table nodes (half-integers and the
+//! because q follows |f|. The caustic's hit points carry that weight. The camera pass splats
+//! such a sample's radiance like any other, with f over the density of all pixels' draws at
+//! its position ([`WeightedSampler::density`] summed over pixels), so flat regions stay flat.
+//! Only with `sample_border` (nothing splatted) does a pixel take the plain mean of weighted
+//! samples, noisy in flat regions (variance (c^2 - 1) L^2 a sample, 2.4 L^2 for Lanczos 3): a
+//! ratio of signed sums would blow up where a few weights cancel. Window edges fall on table nodes (half-integers and the
 //! radius), where F_W is exact.
 
 /// A separable filter; its 2D weight is `eval(x) * eval(y)`, x and y in pixels from the centre.
@@ -141,11 +144,16 @@ impl PixelFilter {
         }
         let per_pixel = table_nodes_per_pixel(self.radius() as u32) as f64;
         let nodes = (per_pixel * self.radius() as f64) as usize + 1;
+        // Every bin gets at least this share of |f|'s mass, so that consecutive f32 nodes differ
+        // (a draw never lands in a bin of density 0) and q > 0 wherever f is not: the
+        // weights f / q stay exact, q only departs from |f| in the tails.
+        let floor =
+            TABLE_BIN_FLOOR * gauss_legendre_sum(|x| self.eval(x).abs(), 0.0, self.radius() as f64);
         let (mut abs_sum, mut sum) = (0.0f64, 0.0f64);
         for j in 0..nodes.min(FILTER_TABLE_NODES) {
             if j > 0 {
                 let (a, b) = ((j - 1) as f64 / per_pixel, j as f64 / per_pixel);
-                abs_sum += gauss_legendre(|x| self.eval(x).abs(), a, b);
+                abs_sum += gauss_legendre(|x| self.eval(x).abs(), a, b).max(floor);
                 sum += gauss_legendre(|x| self.eval(x), a, b);
             }
             table[j / 2][2 * (j % 2)] = abs_sum as f32;
@@ -330,6 +338,20 @@ impl WeightedSampler {
         (here + t * (next - here)).copysign(x)
     }
 
+    /// The density [`sample`](Self::sample) draws a signed filter's offsets with at `offset`
+    /// in the window [lo, hi] (0 outside it): the table's |f| per bin, normalised on the
+    /// window. The same arithmetic as `table_density` in `shaders/common/camera.wgsl`.
+    pub fn density(&self, offset: f32, lo: f32, hi: f32) -> f32 {
+        let r = self.filter.radius();
+        let (lo, hi) = (lo.max(-r), hi.min(r));
+        if offset < lo || offset > hi {
+            return 0.0;
+        }
+        let j = ((offset.abs() * self.per_pixel as f32) as u32).min(self.bins - 1);
+        let mass = self.node(j + 1)[0] - self.node(j)[0];
+        mass * self.per_pixel as f32 / (self.cumulative(hi, 0) - self.cumulative(lo, 0))
+    }
+
     /// The offset for `u` in [0, 1) in the window [lo, hi], and its weight. The same
     /// arithmetic, in f32, as `film_offset` in `shaders/common/camera.wgsl`.
     pub fn sample(&self, u: f32, lo: f32, hi: f32) -> (f32, f32) {
@@ -357,6 +379,19 @@ impl WeightedSampler {
         let window = self.cumulative(hi, 1) - self.cumulative(lo, 1);
         (x, self.filter.eval(x as f64) as f32 / (density * window))
     }
+}
+
+/// A signed filter's table bins hold at least this share of its |f| mass (see `gpu_table`):
+/// 1e-4 of a total near 1 is a thousand f32 steps.
+const TABLE_BIN_FLOOR: f64 = 1e-4;
+
+/// [`gauss_legendre`] over [a, b] in eighths of a pixel.
+fn gauss_legendre_sum(f: impl Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+    let steps = ((b - a) * 8.0).ceil().max(1.0) as usize;
+    let h = (b - a) / steps as f64;
+    (0..steps)
+        .map(|i| gauss_legendre(&f, a + i as f64 * h, a + (i + 1) as f64 * h))
+        .sum()
 }
 
 /// 8-point Gauss-Legendre quadrature of `f` over [a, b] (exact for polynomials of degree 15).

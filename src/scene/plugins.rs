@@ -200,24 +200,24 @@ pub const PLUGINS: &[Plugin] = &[
         kinds: &["lanczos"],
         properties: &[p("lobes", "3")],
         notes: "Radius `lobes` (at most 16). Splats with its signed weights as Mitsuba's film \
-                does; samples that are not splatted (those that record hit points, which in \
-                the hybrid is every sample, and all with `sample_border`) are drawn from |f| \
-                and carry the sign: unbiased, but noisier than splatting in flat regions \
-                (weights ±1.85 for 3 lobes: variance 2.4 L^2 per sample).",
+                does; the samples that record hit points (in the hybrid, all) are drawn from \
+                |f| and splatted too, over the density of all pixels' draws. Their hit points, \
+                and with `sample_border` every sample, carry the sign as a weight of about \
+                ±1.85: unbiased, noisier than splatting in flat regions (2.4 L^2 a sample)",
     },
     Plugin {
         object: "rfilter",
         kinds: &["mitchell"],
         properties: &[p("B", "1/3"), p("C", "1/3")],
-        notes: "Radius 2; signed weights as for `lanczos` (weights ±1.14 at the defaults: \
-                variance 0.31 L^2 per unsplatted sample).",
+        notes: "Radius 2; as `lanczos`, with weights of about ±1.14 at the defaults (0.31 L^2 \
+                a sample)",
     },
     Plugin {
         object: "rfilter",
         kinds: &["catmullrom"],
         properties: &[],
-        notes: "The Mitchell cubic with B = 0, C = 1/2, as in Mitsuba (weights ±1.36: variance 0.85 L^2 \
-                per unsplatted sample).",
+        notes: "The Mitchell cubic with B = 0, C = 1/2, as in Mitsuba (weights of about ±1.36, \
+                0.85 L^2 a sample)",
     },
     Plugin {
         object: "shape",
