@@ -66,13 +66,6 @@ fn signed_filter_offset(u: vec2<f32>, lo: vec2<f32>, hi: vec2<f32>) -> vec3<f32>
     return vec3<f32>(x.x, y.x, x.y * y.y);
 }
 
-// The same for a sample kept on the film (no sample_border): the offset only, as the splat
-// kernel finds a neighbour's sample again.
-fn signed_offset_on_film(pixel: vec2<u32>, u: vec2<f32>) -> vec2<f32> {
-    let center = vec2<f32>(pixel) + 0.5;
-    return signed_filter_offset(u, -center, film_size() - center).xy;
-}
-
 // The density, per unit image area, of the signed filter's draws of all pixels at image
 // position `position` (each pixel draws one sample from its table density q_p, cut to its
 // window on the film): sum_p q_p(position - centre_p), separable in x and y. A sample drawn

@@ -37,7 +37,7 @@
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
 #endif
-#import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel, signed_draw_density, signed_offset_on_film}
+#import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel, signed_draw_density}
 #import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
 #import common::texture::textured_material
@@ -89,8 +89,10 @@ struct PhotonGridIn {
 @group(1) @binding(0) var<uniform> params: PathTraceParams;
 @group(1) @binding(1) var<storage, read_write> radiance: array<vec4<f32>>;
 // The counters, [rays low, rays high, discarded low, discarded high] (64-bit totals from 32-bit
-// atomics), then this iteration's splatted samples (radiance, and 1 in w; 0 for a sample that
-// is not splatted or was dropped), samples_per_iteration per pixel.
+// atomics), then this iteration's splatted samples (radiance, and 1 in w, or 1 / the draw
+// density for a drawn one; 0 for a sample that is not splatted or was dropped),
+// samples_per_iteration per pixel; with `splat` 2 then each pixel's drawn sample's offset from
+// its centre (xy).
 struct Film {
     counters: array<atomic<u32>, 4>,
     samples: array<vec4<f32>>,
@@ -597,6 +599,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             if !splatted {
                 let density = signed_draw_density(ray.film_position);
                 splat_sample.w = select(0.0, 1.0 / density, density > 0.0);
+                // Where it was drawn, for `splat` (cheaper than drawing it again there).
+                let centre = vec2<f32>(film_pixel(pixel_of(pixel_index))) + 0.5;
+                film.samples[pixels * spp + pixel_index] = vec4<f32>(ray.film_position - centre, 0.0, 0.0);
             }
             let keep = !any_not_finite(splat_sample.xyz) && !any_not_finite(vec3<f32>(splat_sample.w));
             film.samples[pixel_index * spp + s] = select(vec4<f32>(0.0), splat_sample, keep);
@@ -690,7 +695,7 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
                 // (and in a band of the image as in the whole).
                 var within = u - 0.5;
                 if drawn {
-                    within = signed_offset_on_film(film_pixel(vec2<u32>(q)), u);
+                    within = film.samples[u32(size.x * size.y) * spp + q_index].xy;
                 }
                 let offset = vec2<f32>(f32(dx), f32(dy)) + within;
                 let w = sample.w * filter_weight(kind, param, offset.x) * filter_weight(kind, param, offset.y);

@@ -293,10 +293,12 @@ impl Pass for PathTrace {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let splat = splats(&scene.uniform);
-        // The counters, then room for one iteration's splatted samples (16 bytes each).
+        // The counters, then room for one iteration's splatted samples (16 bytes each), and with
+        // a signed filter one drawn sample's offset per pixel.
+        let drawn_offsets = (splat_mode(&scene.uniform) == 2) as u64;
         let film_bytes = if splat {
             ctx.pixels()
-                .checked_mul(self.params.samples_per_iteration as u64 * 16)
+                .checked_mul((self.params.samples_per_iteration as u64 + drawn_offsets) * 16)
                 .and_then(|b| b.checked_add(16))
                 .ok_or_else(|| Error::Other("path_trace: the splat buffer overflows".into()))?
         } else {
