@@ -141,6 +141,12 @@ fn found_by_long_runs() {
 /// ignored 16 (48.2x), its 1/cos^3 left out 12 (2.5x, -26%), its image's aspect ignored 5
 /// (3.9x). Photons carrying the bare intensity (no falloff, texture or 1/cos^3; NEE right)
 /// fail both (5.7x and 7.3x): the caustics are the photons'.
+/// `lanczos` and `catmullrom_border`: the filters with negative lobes on a glass sphere's
+/// caustic, a light seen directly and a dark cube, splatted (Lanczos) and with `sample_border`
+/// (Catmull-Rom, nothing splatted). Correct: 0.45x/0.22x and 0.41x/0.27x (pt/hybrid). Hit
+/// points weighted by |f / (q F_W)| (the sign dropped) fail the Lanczos hybrid (1.54x, +38% in
+/// the caustic's block); samples weighted by |f / (q F_W)| fail both `sample_border` graphs
+/// (163x). The filter's shape is tests/pixel_filter.rs's (edge columns against Mitsuba).
 fn plugins_shard(k: usize) {
     let cases = corpus("tests/differential/plugins");
     assert_unbiased(&cases, k, 2);
