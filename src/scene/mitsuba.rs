@@ -1647,6 +1647,14 @@ impl<'a, 'input> Reader<'a, 'input> {
             &["pixel_format", "component_format", "file_format"],
             |r, n| r.string(n).map(drop),
         )?;
+        if let Some(n) = props.take("compensate") {
+            self.boolean(n)?;
+            self.warn(
+                n,
+                "hdrfilm compensate: Mitsuba 3 removed error-compensated accumulation and \
+                 ignores it; so does hppm",
+            );
+        }
         if let Some(n) = props.take("sample_border") {
             self.scene.camera.sample_border = self.boolean(n)?;
         }
@@ -1866,7 +1874,17 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// Mitsuba's `twosided`: one nested BSDF seen from both sides, or two (front, back); they
     /// must not transmit.
     fn read_twosided(&self, node: Node<'a, 'input>) -> Result<Sides, SceneError> {
-        let props = self.props(node, &["bsdf", "ref"])?;
+        let mut props = self.props(node, &["bsdf", "ref"])?;
+        if let Some(n) = props.take("allow_transmission")
+            && self.boolean(n)?
+        {
+            return Err(self.attr_error(
+                n,
+                "value",
+                "twosided allow_transmission: a transmitting BSDF mirrored onto both sides is \
+                 not supported",
+            ));
+        }
         self.finish(props, node)?;
         let mut nested = Vec::new();
         for child in node.children().filter(Node::is_element) {
@@ -2546,6 +2564,21 @@ impl<'a, 'input> Reader<'a, 'input> {
                 if let Some(n) = props.take("accel") {
                     self.boolean(n)?;
                 }
+                // The precision Mitsuba stores the texels in: hppm keeps the file's (8-bit
+                // images as 8 bits, others as f32), at most one 8-bit or f16 step apart.
+                if let Some(n) = props.take("format") {
+                    let format = self.string(n)?;
+                    if !["auto", "variant", "float16", "fp16", "uint8"].contains(&format.as_str()) {
+                        return Err(self.attr_error(
+                            n,
+                            "value",
+                            format!(
+                                "bitmap format \"{format}\": expected auto, variant, float16 or \
+                                 uint8 (as Mitsuba)"
+                            ),
+                        ));
+                    }
+                }
                 let wrap = match props.take("wrap_mode") {
                     None => WrapMode::Repeat,
                     Some(n) => match self.string(n)?.as_str() {
@@ -2958,6 +2991,14 @@ impl<'a, 'input> Reader<'a, 'input> {
                 .transpose()?
                 .unwrap_or(false),
         };
+        // Weights for Mitsuba's differentiable silhouette sampling: no effect on the image.
+        self.ignore(&mut props, &["silhouette_sampling_weight"], |r, n| {
+            r.float(n).map(drop)
+        })?;
+        if kind == "cube" {
+            // Its faces are flat either way.
+            self.ignore(&mut props, &["face_normals"], |r, n| r.boolean(n).map(drop))?;
+        }
         self.materials.borrow_mut().push(material);
         let (triangles, spheres) = (self.scene.triangles.len(), self.scene.spheres.len());
         match kind.as_str() {
@@ -3187,6 +3228,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         let mut props = self.props(node, &[])?;
+        self.ignore_sampling_weight(&mut props)?;
         // Mitsuba's default radiance is 1.
         let radiance = match props.take("radiance") {
             Some(n) => self.non_negative_color(n)?,
@@ -3196,10 +3238,27 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(radiance)
     }
 
+    /// Mitsuba's `sampling_weight` of an emitter: how often its light sampling picks it, which
+    /// changes only its noise. hppm picks lights by power; the value is checked and dropped.
+    fn ignore_sampling_weight(&self, props: &mut Props) -> Result<(), SceneError> {
+        if let Some(n) = props.take("sampling_weight") {
+            let v = self.float(n)?;
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(self.attr_error(
+                    n,
+                    "value",
+                    format!("sampling_weight {v}: expected a number of 0 or more"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// A scene-level emitter: `point`, `spot`, `directional`, `constant` or `envmap`.
     fn read_emitter(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
         let mut props = self.props(node, &[])?;
+        self.ignore_sampling_weight(&mut props)?;
         match kind.as_str() {
             "point" => self.read_point_light(&mut props, node)?,
             "spot" => self.read_spot_light(&mut props, node)?,
@@ -3214,6 +3273,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                     ));
                 }
                 let environment = if kind == "constant" {
+                    // A constant light looks the same turned any way.
+                    if let Some(n) = props.take("to_world") {
+                        self.transform(n)?;
+                    }
                     Environment::Constant {
                         radiance: self.color_or(&mut props, "radiance", Vec3::ONE)?,
                     }

@@ -84,6 +84,7 @@ const MESH_FILE: &[Property] = &[
     p("flip_tex_coords", "true for OBJ, false for PLY"),
     p("to_world", "identity"),
     p("flip_normals", "false"),
+    p("silhouette_sampling_weight", "1"),
 ];
 
 /// Every plugin the loader reads, in the order the README lists them.
@@ -170,11 +171,13 @@ pub const PLUGINS: &[Plugin] = &[
             p("pixel_format", "rgb"),
             p("component_format", "float16"),
             p("file_format", "openexr"),
+            p("compensate", "false"),
         ],
         notes: "A crop window renders that part of the film's view into an image of the \
                 window's size; its samples keep to the window unless `sample_border`, as in \
                 Mitsuba; a window off the film is refused. `--size` scales film and window \
-                together. Output is RGB: the last three are read and ignored.",
+                together. Output is RGB: the pixel, component and file formats are read and ignored; \
+                `compensate` is a warning (Mitsuba 3 removed it).",
     },
     Plugin {
         object: "rfilter",
@@ -221,11 +224,27 @@ pub const PLUGINS: &[Plugin] = &[
     },
     Plugin {
         object: "shape",
-        kinds: &["rectangle", "cube", "disk"],
-        properties: &[p("to_world", "identity"), p("flip_normals", "false")],
+        kinds: &["rectangle", "disk"],
+        properties: &[
+            p("to_world", "identity"),
+            p("flip_normals", "false"),
+            p("silhouette_sampling_weight", "1"),
+        ],
         notes: "A disk is a fan of 256 triangles whose area (and an emitting disk's power) is \
                 exactly Mitsuba's, its outline within 0.01% of the radius. Every shape may \
-                carry a `bsdf` and an `area` emitter.",
+                carry a `bsdf` and an `area` emitter. `silhouette_sampling_weight` (every \
+                shape) serves Mitsuba's differentiable rendering: read, no effect.",
+    },
+    Plugin {
+        object: "shape",
+        kinds: &["cube"],
+        properties: &[
+            p("to_world", "identity"),
+            p("flip_normals", "false"),
+            p("face_normals", "false"),
+            p("silhouette_sampling_weight", "1"),
+        ],
+        notes: "Its faces are flat, so `face_normals` changes nothing.",
     },
     Plugin {
         object: "shape",
@@ -235,6 +254,7 @@ pub const PLUGINS: &[Plugin] = &[
             p("radius", "1"),
             p("to_world", "identity"),
             p("flip_normals", "false"),
+            p("silhouette_sampling_weight", "1"),
         ],
         notes: "Analytic. Its `to_world` may only scale uniformly, rotate and translate.",
     },
@@ -247,6 +267,7 @@ pub const PLUGINS: &[Plugin] = &[
             p("radius", "1"),
             p("to_world", "identity"),
             p("flip_normals", "false"),
+            p("silhouette_sampling_weight", "1"),
         ],
         notes: "An open tube of 256 quads with radial vertex normals, its area exactly \
                 Mitsuba's, in the frame Mitsuba builds about its axis (so its uvs match).",
@@ -267,6 +288,7 @@ pub const PLUGINS: &[Plugin] = &[
             p("face_normals", "false"),
             p("to_world", "identity"),
             p("flip_normals", "false"),
+            p("silhouette_sampling_weight", "1"),
         ],
         notes: "Mitsuba's zlib-compressed mesh format, versions 3 and 4; the file's own \
                 face-normal flag is ignored, as Mitsuba 3 does.",
@@ -335,9 +357,10 @@ pub const PLUGINS: &[Plugin] = &[
     Plugin {
         object: "bsdf",
         kinds: &["twosided"],
-        properties: &[],
+        properties: &[p("allow_transmission", "false")],
         notes: "One nested BSDF (both sides) or two (front, back); they must not transmit, as \
-                in Mitsuba.",
+                in Mitsuba; `allow_transmission` true (which lets Mitsuba mirror a \
+                transmitting one) is refused.",
     },
     Plugin {
         object: "bsdf",
@@ -438,16 +461,20 @@ pub const PLUGINS: &[Plugin] = &[
             p("filter_type", "bilinear"),
             p("to_uv", "identity"),
             p("accel", "true"),
+            p("format", "auto"),
         ],
         notes: "PNG, JPEG (progressive too), BMP decoded from sRGB unless `raw`, OpenEXR \
                 linear; the format from the file's bytes, not its name; alpha dropped; at most \
-                16384 texels a side; `accel` is read and changes nothing.",
+                16384 texels a side; `accel` is read and changes nothing; `format` (auto, variant, \
+                float16, uint8) is Mitsuba's storage precision: hppm keeps the file's.",
     },
     Plugin {
         object: "emitter",
         kinds: &["area"],
-        properties: &[p("radiance", "1")],
-        notes: "Inside a shape; one-sided, by the geometric normal.",
+        properties: &[p("radiance", "1"), p("sampling_weight", "1")],
+        notes: "Inside a shape; one-sided, by the geometric normal. `sampling_weight` (every \
+                emitter) is how often Mitsuba's light sampling picks it, which changes only \
+                noise: read, and hppm picks lights by power.",
     },
     Plugin {
         object: "emitter",
@@ -456,6 +483,7 @@ pub const PLUGINS: &[Plugin] = &[
             p("position", ""),
             p("to_world", "identity"),
             p("intensity", "1"),
+            p("sampling_weight", "1"),
         ],
         notes: "",
     },
@@ -468,6 +496,7 @@ pub const PLUGINS: &[Plugin] = &[
             p("cutoff_angle", "20"),
             p("beam_width", "3/4 of cutoff_angle"),
             p("texture", ""),
+            p("sampling_weight", "1"),
         ],
         notes: "Shines along its +z; Mitsuba's falloff; `to_world` must keep the cone round; \
                 `texture` (a bitmap or checkerboard) multiplies the intensity at Mitsuba's uv, \
@@ -483,6 +512,7 @@ pub const PLUGINS: &[Plugin] = &[
             p("fov", ""),
             p("fov_axis", "x"),
             p("focal_length", "50mm"),
+            p("sampling_weight", "1"),
         ],
         notes: "Mitsuba's intensity pi scale E / cos^3, so a plane at z = 1 gets pi scale E; \
                 the frustum is the perspective camera's for an image of the texture's \
@@ -495,14 +525,20 @@ pub const PLUGINS: &[Plugin] = &[
             p("direction", ""),
             p("to_world", "identity"),
             p("irradiance", "1"),
+            p("sampling_weight", "1"),
         ],
         notes: "",
     },
     Plugin {
         object: "emitter",
         kinds: &["constant"],
-        properties: &[p("radiance", "1")],
-        notes: "At most one environment emitter, as in Mitsuba.",
+        properties: &[
+            p("radiance", "1"),
+            p("to_world", "identity"),
+            p("sampling_weight", "1"),
+        ],
+        notes: "At most one environment emitter, as in Mitsuba; `to_world` is read and \
+                changes nothing.",
     },
     Plugin {
         object: "emitter",
@@ -513,6 +549,7 @@ pub const PLUGINS: &[Plugin] = &[
             p("to_world", "identity"),
             p("filter_type", "bilinear"),
             p("mis_compensation", "false"),
+            p("sampling_weight", "1"),
         ],
         notes: "OpenEXR, Radiance HDR, PNG/JPEG/BMP; Mitsuba's orientation; `to_world` a \
                 rotation; `filter_type` bilinear and `mis_compensation` false only.",
