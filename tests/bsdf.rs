@@ -83,6 +83,18 @@ const MATERIALS: &[(&str, &str)] = &[
         "principled_glass",
         r#"<bsdf type="principled"><rgb name="base_color" value="0.9, 0.95, 1.0"/><float name="spec_trans" value="0.8"/><float name="roughness" value="0.25"/><float name="eta" value="1.45"/></bsdf>"#,
     ),
+    (
+        "dielectric_tinted",
+        r#"<bsdf type="dielectric"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/><rgb name="specular_reflectance" value="0.9, 0.6, 0.3"/><rgb name="specular_transmittance" value="0.2, 0.7, 0.95"/></bsdf>"#,
+    ),
+    (
+        "thindielectric_tinted",
+        r#"<bsdf type="thindielectric"><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/><rgb name="specular_reflectance" value="0.9, 0.6, 0.3"/><rgb name="specular_transmittance" value="0.2, 0.7, 0.95"/></bsdf>"#,
+    ),
+    (
+        "roughdielectric_tinted",
+        r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/><rgb name="specular_reflectance" value="0.9, 0.6, 0.3"/><rgb name="specular_transmittance" value="0.2, 0.7, 0.95"/></bsdf>"#,
+    ),
 ];
 
 /// A one-sphere Mitsuba scene per BSDF snippet, loaded through the XML loader.
@@ -243,6 +255,7 @@ fn test_bsdfs() -> Vec<(&'static str, Bsdf)> {
         "principled_plain",
         "principled_every_lobe",
         "principled_glass",
+        "roughdielectric_tinted",
     ]
     .iter()
     .map(|n| (*n, loaded(n)))

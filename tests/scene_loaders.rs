@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use hppm::scene::{self, Bsdf, Scene, mitsuba, obj, ron_format};
+use hppm::scene::{self, Bsdf, Scene, Tint, mitsuba, obj, ron_format};
 
 fn repo(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
@@ -118,7 +118,8 @@ fn cornell_glass_sphere_spheres_and_materials() {
         s.materials[glass.material as usize].bsdf,
         Bsdf::Dielectric {
             int_ior: 1.5,
-            ext_ior: 1.0
+            ext_ior: 1.0,
+            tint: Tint::NONE,
         }
     );
     let mirror = s.spheres[1];
@@ -296,7 +297,8 @@ fn mitsuba_conventions() {
         s.materials[1].bsdf,
         Bsdf::Dielectric {
             int_ior: 1.5046,
-            ext_ior: 1.000277
+            ext_ior: 1.000277,
+            tint: Tint::NONE,
         }
     );
     assert_eq!(s.spheres[1].center, Vec3::new(1.0, 2.0, 3.0));
@@ -460,7 +462,8 @@ fn ron_conveniences() {
         s.materials[1].bsdf,
         Bsdf::Dielectric {
             int_ior: 1.33,
-            ext_ior: 1.0
+            ext_ior: 1.0,
+            tint: Tint::NONE,
         }
     );
     assert_eq!(s.triangles.len(), 2 + 12);

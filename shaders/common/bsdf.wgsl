@@ -50,8 +50,11 @@ fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
 
 struct SpecularSample {
     dir: vec3<f32>,
-    // Throughput factor of this choice, already divided by its probability.
+    // Throughput factor of this choice, already divided by its probability (without the
+    // material's tint: see `reflected`).
     weight: f32,
+    // Reflected (the tint's specular_reflectance applies) or refracted (its transmittance).
+    reflected: bool,
 }
 
 // Samples reflection or refraction in proportion to Fresnel. `wo` points away from the surface
@@ -68,13 +71,13 @@ fn sample_dielectric(wo: vec3<f32>, normal: vec3<f32>, int_ior: f32, ext_ior: f3
     let cos_i = abs(cos_o);
     let reflectance = fresnel_dielectric(cos_i, eta);
     if u < reflectance {
-        return SpecularSample(reflect_about(wo, n), 1.0);
+        return SpecularSample(reflect_about(wo, n), 1.0, true);
     }
     let sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
     let cos_t = sqrt(max(0.0, 1.0 - sin2_t));
     let dir = normalize(-eta * wo + (eta * cos_i - cos_t) * n);
     let weight = select(1.0, eta * eta, radiance);
-    return SpecularSample(dir, weight);
+    return SpecularSample(dir, weight, false);
 }
 
 // Mitsuba's thindielectric: a slab whose internal reflections are summed, r' = 2r / (1 + r);

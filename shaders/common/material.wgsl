@@ -57,7 +57,10 @@ fn material_has_continuous_lobe(kind: u32) -> bool {
 fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: bool) -> BsdfSample {
 #ifdef DIELECTRIC
     if m.kind == MATERIAL_THIN_DIELECTRIC {
-        return sample_thin_dielectric(wi, m.int_ior, m.ext_ior, u1);
+        // Tinted by specular_reflectance (`specular`) or specular_transmittance (`albedo`).
+        var s = sample_thin_dielectric(wi, m.int_ior, m.ext_ior, u1);
+        s.weight *= select(m.albedo, m.specular, s.wo.z * wi.z > 0.0);
+        return s;
     }
 #endif
 #ifdef CONDUCTOR

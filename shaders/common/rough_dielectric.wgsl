@@ -2,7 +2,9 @@
 
 // Mitsuba 3's roughdielectric (src/bsdfs/roughdielectric.cpp; Walter et al. 2007): reflection
 // and refraction through microfacets sampled by visible normals, chosen by Fresnel. Tracing
-// radiance, refraction scales by (eta_t / eta_i)^2; photons carry no such factor.
+// radiance, refraction scales by (eta_t / eta_i)^2; photons carry no such factor. Reflection
+// is scaled by the material's specular_reflectance (`specular`), refraction by its
+// specular_transmittance (`albedo`), as Mitsuba scales them.
 
 #import common::scene::Material
 #import common::bsdf::{BsdfEval, BsdfSample, no_sample}
@@ -47,7 +49,7 @@ fn rough_dielectric_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bo
     if !(value < 3.0e38) || !(pdf < 3.0e38) {
         return BsdfEval(vec3<f32>(0.0), 0.0);
     }
-    return BsdfEval(vec3<f32>(value), pdf);
+    return BsdfEval(value * select(m.albedo, m.specular, reflect), pdf);
 }
 
 fn rough_dielectric_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: bool) -> BsdfSample {
@@ -66,7 +68,8 @@ fn rough_dielectric_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, r
     var wo: vec3<f32>;
     var weight = 1.0;
     var dwh_dwo: f32;
-    if u1 <= fr.f {
+    let reflected = u1 <= fr.f;
+    if reflected {
         pdf *= fr.f;
         wo = 2.0 * dot(wi, h) * h - wi;
         dwh_dwo = 1.0 / (4.0 * dot(wo, h));
@@ -82,5 +85,5 @@ fn rough_dielectric_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, r
     if !(pdf > 0.0) || !(pdf < 3.0e38) || !(weight > 0.0) {
         return no_sample();
     }
-    return BsdfSample(wo, vec3<f32>(weight), pdf, false, true);
+    return BsdfSample(wo, weight * select(m.albedo, m.specular, reflected), pdf, false, true);
 }

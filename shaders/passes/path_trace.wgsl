@@ -496,7 +496,8 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     } else if material.kind == MATERIAL_DIELECTRIC {
 #ifdef DIELECTRIC
         let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
-        (*path).throughput *= s.weight * frame_factor(shading, s.dir);
+        let tint = select(material.albedo, material.specular, s.reflected);
+        (*path).throughput *= tint * s.weight * frame_factor(shading, s.dir);
         (*path).dir = s.dir;
         (*path).after_delta = true;
 #ifdef GLOSSY

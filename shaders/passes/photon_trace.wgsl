@@ -410,7 +410,8 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
 #ifdef DIELECTRIC
         // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
         let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
-        photon.flux *= s.weight * factor * photon_shading_correction(surface, wi, s.dir);
+        let tint = select(material.albedo, material.specular, s.reflected);
+        photon.flux *= tint * s.weight * factor * photon_shading_correction(surface, wi, s.dir);
         photon.dir = s.dir;
         after_specular = true;
 #else

@@ -486,7 +486,12 @@ pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
             int_ior,
             ext_ior,
             microfacet,
-        } => rough_dielectric_eval(int_ior / ext_ior, microfacet, wi, wo, mode),
+            tint,
+        } => {
+            // Reflection when both directions are on one side.
+            tint.factor(wi.z * wo.z > 0.0)
+                * rough_dielectric_eval(int_ior / ext_ior, microfacet, wi, wo, mode)
+        }
     }
 }
 
@@ -583,6 +588,7 @@ pub fn pdf(p: &Prepared, wi: Vec3, wo: Vec3) -> f32 {
             int_ior,
             ext_ior,
             microfacet,
+            ..
         } => {
             if ci == 0.0 {
                 return 0.0;
@@ -660,7 +666,11 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
                 delta: true,
             })
         }
-        Bsdf::Dielectric { int_ior, ext_ior } => {
+        Bsdf::Dielectric {
+            int_ior,
+            ext_ior,
+            tint,
+        } => {
             if ci == 0.0 {
                 return None;
             }
@@ -668,7 +678,7 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
             if u1 <= f {
                 return Some(Sample {
                     wo: mirror,
-                    weight: Vec3::ONE,
+                    weight: tint.reflectance,
                     pdf: f,
                     delta: true,
                 });
@@ -679,7 +689,7 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
             };
             Some(Sample {
                 wo: Vec3::new(-eta_ti * wi.x, -eta_ti * wi.y, cos_t),
-                weight: Vec3::splat(scale),
+                weight: tint.transmittance * scale,
                 pdf: 1.0 - f,
                 delta: true,
             })
@@ -699,13 +709,17 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
                 delta: false,
             })
         }
-        Bsdf::ThinDielectric { int_ior, ext_ior } => {
+        Bsdf::ThinDielectric {
+            int_ior,
+            ext_ior,
+            tint,
+        } => {
             let mut r = fresnel(ci.abs(), int_ior / ext_ior).0;
             r *= 2.0 / (1.0 + r);
             let reflected = u1 <= r;
             Some(Sample {
                 wo: if reflected { mirror } else { -wi },
-                weight: Vec3::ONE,
+                weight: tint.factor(reflected),
                 pdf: if reflected { r } else { 1.0 - r },
                 delta: true,
             })
@@ -772,6 +786,7 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
             int_ior,
             ext_ior,
             microfacet,
+            tint,
         } => {
             if ci == 0.0 {
                 return None;
@@ -803,7 +818,7 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
             pdf *= dwh_dwo.abs();
             (pdf > 0.0 && pdf.is_finite() && weight > 0.0).then_some(Sample {
                 wo,
-                weight: Vec3::splat(weight),
+                weight: tint.factor(reflected) * weight,
                 pdf,
                 delta: false,
             })

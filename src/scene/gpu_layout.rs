@@ -347,18 +347,32 @@ fn gpu_material(
     };
     match *bsdf {
         Bsdf::Diffuse { reflectance } => m.albedo = reflectance.to_array(),
-        Bsdf::Dielectric { int_ior, ext_ior } => {
+        // A dielectric's tint: reflectance in `specular`, transmittance in `albedo` (where
+        // the specular and diffuse textures replace them).
+        Bsdf::Dielectric {
+            int_ior,
+            ext_ior,
+            tint,
+        } => {
             (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_DIELECTRIC, int_ior, ext_ior);
+            (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
         }
-        Bsdf::ThinDielectric { int_ior, ext_ior } => {
+        Bsdf::ThinDielectric {
+            int_ior,
+            ext_ior,
+            tint,
+        } => {
             (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_THIN_DIELECTRIC, int_ior, ext_ior);
+            (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
         }
         Bsdf::RoughDielectric {
             int_ior,
             ext_ior,
             microfacet,
+            tint,
         } => {
             (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_ROUGH_DIELECTRIC, int_ior, ext_ior);
+            (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
             rough(&mut m, &microfacet);
         }
         Bsdf::Mirror => m.kind = MATERIAL_MIRROR,

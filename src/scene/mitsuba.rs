@@ -26,7 +26,7 @@ use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
     Bsdf, Camera, Crop, Distribution, FramePerturbation, Integrator, Lens, Material,
     MaterialTextures, Microfacet, PerturbationKind, PointLight, Report, Scene, SceneError,
-    SideTextures, Sphere, bsdf, mesh, plugins, spectrum,
+    SideTextures, Sphere, Tint, bsdf, mesh, plugins, spectrum,
 };
 use crate::error::{Location, edit_distance};
 
@@ -402,8 +402,9 @@ struct ViewAngle<'a, 'input> {
 
 /// The parameters that take a texture, for messages.
 const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
-    roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic), \
-    alpha, alpha_u, alpha_v (roughconductor, roughdielectric)";
+    roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic, \
+    dielectric, thindielectric, roughdielectric), specular_transmittance (dielectric, \
+    thindielectric, roughdielectric), alpha, alpha_u, alpha_v (roughconductor, roughdielectric)";
 
 /// Mitsuba's named indices of refraction (include/mitsuba/render/ior.h).
 const NAMED_IORS: &[(&str, f32)] = &[
@@ -2246,10 +2247,12 @@ impl<'a, 'input> Reader<'a, 'input> {
             "dielectric" => Bsdf::Dielectric {
                 int_ior: self.ior(props, "int_ior", 1.5046)?,
                 ext_ior: self.ior(props, "ext_ior", 1.000277)?,
+                tint: self.dielectric_tint(props, &mut textures)?,
             },
             "thindielectric" => Bsdf::ThinDielectric {
                 int_ior: self.ior(props, "int_ior", 1.5046)?,
                 ext_ior: self.ior(props, "ext_ior", 1.000277)?,
+                tint: self.dielectric_tint(props, &mut textures)?,
             },
             "roughdielectric" => {
                 let int_ior = self.ior(props, "int_ior", 1.5046)?;
@@ -2259,6 +2262,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     int_ior,
                     ext_ior,
                     microfacet: self.microfacet(props, node, true, &mut textures)?,
+                    tint: self.dielectric_tint(props, &mut textures)?,
                 }
             }
             "conductor" | "roughconductor" => {
@@ -2451,6 +2455,25 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// `<texture>` (inline, or a `<ref>` to one declared at top level), which is added to the
     /// scene's textures; the constant is then the texture's mean (Mitsuba's `Texture::mean`,
     /// what plastic's sampling weight uses).
+    /// A dielectric's `specular_reflectance` and `specular_transmittance` (1 by default),
+    /// textures in the specular and diffuse slots.
+    fn dielectric_tint(
+        &self,
+        props: &mut Props,
+        textures: &mut SideTextures,
+    ) -> Result<Tint, SceneError> {
+        let (reflectance, reflectance_texture) =
+            self.color_param(props, "specular_reflectance", 1.0)?;
+        let (transmittance, transmittance_texture) =
+            self.color_param(props, "specular_transmittance", 1.0)?;
+        textures.specular = reflectance_texture;
+        textures.diffuse = transmittance_texture;
+        Ok(Tint {
+            reflectance,
+            transmittance,
+        })
+    }
+
     fn color_param(
         &self,
         props: &mut Props,

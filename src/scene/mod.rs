@@ -107,6 +107,33 @@ pub struct Microfacet {
     pub alpha_v: f32,
 }
 
+/// A dielectric's `specular_reflectance` and `specular_transmittance` (Mitsuba's, 1 by
+/// default): factors on the light it reflects and transmits. Not physical (energy is not
+/// conserved when they differ from 1), but scenes use them to tint glass. Textures on them sit
+/// in the material's specular (reflectance) and diffuse (transmittance) texture slots.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tint {
+    pub reflectance: Vec3,
+    pub transmittance: Vec3,
+}
+
+impl Tint {
+    /// Mitsuba's default: no tint.
+    pub const NONE: Tint = Tint {
+        reflectance: Vec3::ONE,
+        transmittance: Vec3::ONE,
+    };
+
+    /// The factor on reflected (`true`) or transmitted light.
+    pub fn factor(&self, reflected: bool) -> Vec3 {
+        if reflected {
+            self.reflectance
+        } else {
+            self.transmittance
+        }
+    }
+}
+
 /// One side's BSDF, as Mitsuba 3 defines each plugin (src/scene/bsdf.rs is the reference).
 /// Reflective BSDFs are one-sided (black from the back) unless the material has a `back`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -114,7 +141,11 @@ pub enum Bsdf {
     /// Lambertian.
     Diffuse { reflectance: Vec3 },
     /// Smooth dielectric with Fresnel-weighted reflection and refraction, no absorption.
-    Dielectric { int_ior: f32, ext_ior: f32 },
+    Dielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        tint: Tint,
+    },
     /// Perfect mirror of reflectance 1 (Mitsuba `conductor` with `material="none"`).
     Mirror,
     /// Smooth conductor: Fresnel reflectance of the complex index eta + i k, times `specular`.
@@ -146,9 +177,14 @@ pub enum Bsdf {
         int_ior: f32,
         ext_ior: f32,
         microfacet: Microfacet,
+        tint: Tint,
     },
     /// A thin slab of dielectric: reflects or passes straight through.
-    ThinDielectric { int_ior: f32, ext_ior: f32 },
+    ThinDielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        tint: Tint,
+    },
     /// Lets light through unchanged (Mitsuba `null`): a vertex that is neither S nor D.
     Null,
     /// One of two materials, `second` with probability `weight` (clamped to [0, 1]; a texture
@@ -221,9 +257,16 @@ impl Bsdf {
         };
         match self {
             Bsdf::Diffuse { reflectance } => finite(*reflectance),
-            Bsdf::Dielectric { int_ior, ext_ior } | Bsdf::ThinDielectric { int_ior, ext_ior } => {
-                ior(*int_ior, *ext_ior)
+            Bsdf::Dielectric {
+                int_ior,
+                ext_ior,
+                tint,
             }
+            | Bsdf::ThinDielectric {
+                int_ior,
+                ext_ior,
+                tint,
+            } => ior(*int_ior, *ext_ior) && finite(tint.reflectance) && finite(tint.transmittance),
             Bsdf::Mirror | Bsdf::Null => true,
             Bsdf::Blend { weight, .. } => weight.is_finite(),
             Bsdf::Principled(p) => {
@@ -275,7 +318,13 @@ impl Bsdf {
                 int_ior,
                 ext_ior,
                 microfacet,
-            } => ior(*int_ior, *ext_ior) && rough(microfacet),
+                tint,
+            } => {
+                ior(*int_ior, *ext_ior)
+                    && rough(microfacet)
+                    && finite(tint.reflectance)
+                    && finite(tint.transmittance)
+            }
         }
     }
 }

@@ -26,7 +26,12 @@ const fn p(name: &'static str, default: &'static str) -> Property {
     Property { name, default }
 }
 
-const IORS: &[Property] = &[p("int_ior", "bk7"), p("ext_ior", "air")];
+const IORS: &[Property] = &[
+    p("int_ior", "bk7"),
+    p("ext_ior", "air"),
+    p("specular_reflectance", "1"),
+    p("specular_transmittance", "1"),
+];
 
 const MICROFACET: &[Property] = &[
     p("int_ior", "bk7"),
@@ -36,6 +41,8 @@ const MICROFACET: &[Property] = &[
     p("alpha_u", ""),
     p("alpha_v", ""),
     p("sample_visible", "true"),
+    p("specular_reflectance", "1"),
+    p("specular_transmittance", "1"),
 ];
 
 const CONDUCTOR: &[Property] = &[
@@ -317,14 +324,16 @@ pub const PLUGINS: &[Plugin] = &[
         kinds: &["dielectric", "thindielectric"],
         properties: IORS,
         notes: "Smooth. An index is a number or one of Mitsuba's named media (`water`, \
-                `acrylic glass`, `diamond`, ...).",
+                `acrylic glass`, `diamond`, ...). `specular_reflectance` and \
+                `specular_transmittance` scale the reflected and transmitted light as in \
+                Mitsuba (tinted glass; not energy-conserving), colours or textures.",
     },
     Plugin {
         object: "bsdf",
         kinds: &["roughdielectric"],
         properties: MICROFACET,
         notes: "`distribution` beckmann or ggx; `alpha` or `alpha_u` + `alpha_v` (numbers or \
-                textures); `sample_visible` true only.",
+                textures); `sample_visible` true only; tints as `dielectric`.",
     },
     Plugin {
         object: "bsdf",

@@ -43,7 +43,9 @@ use glam::{Mat4, Vec3, Vec4};
 use serde::Deserialize;
 
 use super::filter::PixelFilter;
-use super::{Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh};
+use super::{
+    Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, Tint, mesh,
+};
 use crate::error::Location;
 use crate::ron_span::{self, Item, Key, Kind, Outline, Token};
 
@@ -504,7 +506,11 @@ fn bsdf_of(m: &MaterialFile) -> Bsdf {
         MaterialFile::Diffuse { reflectance } => Bsdf::Diffuse {
             reflectance: reflectance.into(),
         },
-        MaterialFile::Dielectric { int_ior, ext_ior } => Bsdf::Dielectric { int_ior, ext_ior },
+        MaterialFile::Dielectric { int_ior, ext_ior } => Bsdf::Dielectric {
+            int_ior,
+            ext_ior,
+            tint: Tint::NONE,
+        },
         MaterialFile::Mirror => Bsdf::Mirror,
     }
 }

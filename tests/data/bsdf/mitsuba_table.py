@@ -49,6 +49,16 @@ MATERIALS = {
                               "flatness": 0.2, "specular": 0.7},
     "principled_glass": {"type": "principled", "base_color": {"type": "rgb", "value": [0.9, 0.95, 1.0]},
                          "spec_trans": 0.8, "roughness": 0.25, "eta": 1.45},
+    "dielectric_tinted": {"type": "dielectric", "int_ior": 1.5, "ext_ior": 1.0,
+                          "specular_reflectance": {"type": "rgb", "value": [0.9, 0.6, 0.3]},
+                          "specular_transmittance": {"type": "rgb", "value": [0.2, 0.7, 0.95]}},
+    "thindielectric_tinted": {"type": "thindielectric", "int_ior": 1.5, "ext_ior": 1.0,
+                              "specular_reflectance": {"type": "rgb", "value": [0.9, 0.6, 0.3]},
+                              "specular_transmittance": {"type": "rgb", "value": [0.2, 0.7, 0.95]}},
+    "roughdielectric_tinted": {"type": "roughdielectric", "distribution": "ggx", "alpha": 0.2,
+                               "int_ior": 1.5, "ext_ior": 1.0,
+                               "specular_reflectance": {"type": "rgb", "value": [0.9, 0.6, 0.3]},
+                               "specular_transmittance": {"type": "rgb", "value": [0.2, 0.7, 0.95]}},
 }
 
 
