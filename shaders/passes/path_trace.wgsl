@@ -686,19 +686,24 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
                 if !drawn && !placed_reach {
                     continue;
                 }
+                // From the integer step, not film positions: the same rounding in every pixel
+                // (and in a band of the image as in the whole).
+                var within: vec2<f32>;
+                if drawn {
+                    within = film.samples[u32(size.x * size.y) * spp + q_index].xy;
+                } else {
+                    var rng = rng_stream(film_index(q_index), params.sample_base + s, params.seed);
+                    within = rng_next_vec2(&rng) - 0.5;
+                }
+                let offset = vec2<f32>(f32(dx), f32(dy)) + within;
+                // Most drawn samples of far neighbours land out of reach.
+                if any(abs(offset) >= vec2<f32>(radius)) {
+                    continue;
+                }
                 let sample = film.samples[q_index * spp + s];
                 if sample.w == 0.0 {
                     continue;
                 }
-                var rng = rng_stream(film_index(q_index), params.sample_base + s, params.seed);
-                let u = rng_next_vec2(&rng);
-                // From the integer step, not film positions: the same rounding in every pixel
-                // (and in a band of the image as in the whole).
-                var within = u - 0.5;
-                if drawn {
-                    within = film.samples[u32(size.x * size.y) * spp + q_index].xy;
-                }
-                let offset = vec2<f32>(f32(dx), f32(dy)) + within;
                 let w = sample.w * filter_weight(kind, param, offset.x) * filter_weight(kind, param, offset.y);
                 sum += w * sample.xyz;
                 weight += w;
