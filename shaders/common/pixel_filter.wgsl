@@ -7,7 +7,7 @@
 // (the film's extent around the pixel), so averaging the samples gives Mitsuba's filtered pixel
 // without splatting. CPU mirror and tests: src/scene/filter.rs. Lanczos and the Mitchell
 // cubics have negative lobes: they are splatted with their signed weights, and their
-// filter-distributed samples come from a table in the scene uniform (common::camera).
+// filter-distributed samples come from a table in the scene uniform (common::signed_filter).
 
 const FILTER_BOX: u32 = 0u;
 const FILTER_TENT: u32 = 1u;

@@ -56,7 +56,7 @@ struct SceneUniform {
     // The pixel filter's second parameter (Mitchell's C).
     filter_param_b: f32,
     pad_filter: u32,
-    // A signed pixel filter's sampling table (common::camera's film_offset): node j at
+    // A signed pixel filter's sampling table (common::signed_filter): node j at
     // j / nodes-per-pixel holds (integral of |f| from 0, integral of f from 0), two a vec4.
     filter_table: array<vec4<f32>, 64>,
 }

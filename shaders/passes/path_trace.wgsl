@@ -23,8 +23,8 @@
 // is the distribution of its hit points) and counts `fis_weight`, the weight a splatted sample
 // brings a pixel on average, so that both kinds of sample estimate the same filtered pixel.
 // A filter with negative lobes (`splat` 2) splats those samples too: they are drawn from |f|
-// (common::camera), so each is splatted with f over the density of all pixels' draws at its
-// position, and only its hit points carry its signed weight f / (q F_W).
+// (common::signed_filter), so each is splatted with f over the density of all pixels' draws
+// at its position, and only its hit points carry its signed weight f / (q F_W).
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
@@ -37,7 +37,8 @@
 #ifdef GLOSSY
 #import common::material::{material_specular_eval, material_specular_share}
 #endif
-#import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel, signed_draw_density}
+#import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel}
+#import common::signed_filter::signed_draw_density
 #import common::pixel_filter::{filter_radius, filter_weight}
 #ifdef TEXTURES
 #import common::texture::textured_material

@@ -52,6 +52,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/sampling.wgsl"),
     shader_file!("shaders/common/scene.wgsl"),
     shader_file!("shaders/common/pixel_filter.wgsl"),
+    shader_file!("shaders/common/signed_filter.wgsl"),
     shader_file!("shaders/common/camera.wgsl"),
     shader_file!("shaders/common/environment.wgsl"),
     // Before lights: a spot's or projector's texture.

@@ -1,6 +1,6 @@
 //! Pixel reconstruction filters (Mitsuba 3's `rfilter`: `box`, `tent`, `gaussian`, `lanczos`,
 //! `mitchell`, `catmullrom`) and the CPU mirror of their sampling in
-//! `shaders/common/pixel_filter.wgsl` and `shaders/common/camera.wgsl`.
+//! `shaders/common/pixel_filter.wgsl` and `shaders/common/signed_filter.wgsl`.
 //!
 //! Mitsuba 3 places camera samples uniformly over the film and splats each one into every pixel
 //! within the filter's radius with weight f(x)f(y), then divides each pixel by its summed weight:
@@ -340,7 +340,7 @@ impl WeightedSampler {
 
     /// The density [`sample`](Self::sample) draws a signed filter's offsets with at `offset`
     /// in the window [lo, hi] (0 outside it): the table's |f| per bin, normalised on the
-    /// window. The same arithmetic as `table_density` in `shaders/common/camera.wgsl`.
+    /// window. The same arithmetic as `table_density` in `shaders/common/signed_filter.wgsl`.
     pub fn density(&self, offset: f32, lo: f32, hi: f32) -> f32 {
         let r = self.filter.radius();
         let (lo, hi) = (lo.max(-r), hi.min(r));
@@ -353,7 +353,7 @@ impl WeightedSampler {
     }
 
     /// The offset for `u` in [0, 1) in the window [lo, hi], and its weight. The same
-    /// arithmetic, in f32, as `film_offset` in `shaders/common/camera.wgsl`.
+    /// arithmetic, in f32, as `table_offset` in `shaders/common/signed_filter.wgsl`.
     pub fn sample(&self, u: f32, lo: f32, hi: f32) -> (f32, f32) {
         if !self.filter.is_signed() {
             return (self.filter.sample(u, lo, hi), 1.0);
