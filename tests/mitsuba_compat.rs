@@ -524,6 +524,36 @@ fn every_problem_is_reported_at_once() {
     assert!(report.scene.is_none());
 }
 
+/// A sensor's sampler, film and filter each report their problems and the sensor is read on:
+/// an unknown sampler property, an unsupported filter, an unknown film property, the film's
+/// `compensate` warning and an unknown sensor property, all at once (a failed filter used to
+/// hide the rest of its sensor).
+#[test]
+fn a_sensors_problems_are_all_reported() {
+    let body = r#"<sensor type="perspective">
+<sampler type="independent"><integer name="sample_cont" value="4"/></sampler>
+<film type="hdrfilm"><rfilter type="blackman"/>
+<boolean name="compensate" value="true"/><integer name="heigth" value="3"/></film>
+<float name="fvo" value="30"/></sensor>"#;
+    let report = check(&format!("{body}{LIGHT}"));
+    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+    let expected: &[(usize, &str)] = &[
+        (3, "did you mean \"sample_count\"?"),
+        (4, "rfilter \"blackman\" is not supported"),
+        (5, "unknown property \"heigth\""),
+        (6, "unknown property \"fvo\""),
+    ];
+    assert_eq!(errors.len(), expected.len(), "{errors:#?}");
+    for (error, (line, words)) in errors.iter().zip(expected) {
+        assert!(
+            error.contains(&format!("shipped.xml:{line}:")) && error.contains(words),
+            "expected line {line} and {words:?} in: {error}"
+        );
+    }
+    assert_eq!(warnings(&report).len(), 1, "compensate's warning");
+    assert!(report.scene.is_none());
+}
+
 /// `<shape type="serialized">` picks the file's shape by `shape_index` (the reader itself is
 /// checked against Mitsuba's in src/scene/serialized.rs): the v4 file's cube (12 triangles,
 /// its normals kept, so it shades smoothly unless `face_normals`) and tetrahedron (4); an index

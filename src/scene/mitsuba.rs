@@ -1321,11 +1321,15 @@ impl<'a, 'input> Reader<'a, 'input> {
         // The film first: the fov conversion needs its aspect ratio.
         let sampler = self.single_child(node, "sampler")?;
         let film = self.single_child(node, "film")?;
+        // A failed sampler or film is reported and the sensor read on, so that its other
+        // problems are listed too.
         if let Some(s) = sampler {
-            self.read_sampler(s)?;
+            let read = self.read_sampler(s);
+            self.keep(read);
         }
         if let Some(f) = film {
-            self.read_film(f)?;
+            let read = self.read_film(f);
+            self.keep(read);
         }
         let mut props = self.props(node, &["sampler", "film"])?;
         let view = self.view_angle(&mut props, node)?;
@@ -1634,7 +1638,11 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         if let Some(filter) = self.single_child(node, "rfilter")? {
-            self.scene.camera.filter = self.read_rfilter(filter)?;
+            match self.read_rfilter(filter) {
+                Ok(filter) => self.scene.camera.filter = filter,
+                // Reported, and the film read on for its other problems.
+                Err(e) => self.report(e),
+            }
         }
         let mut props = self.props(node, &["rfilter"])?;
         if let Some(n) = props.take("width") {
