@@ -50,6 +50,19 @@ fn assert_refused_first(report: &Report, place: &str, field: &str, what: &dyn st
     );
 }
 
+/// The report's errors are exactly `expected`, in order: each at its line of shipped.xml and
+/// containing its words.
+fn assert_errors_in_order(report: &Report, expected: &[(usize, &str)]) {
+    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
+    assert_eq!(errors.len(), expected.len(), "{errors:#?}");
+    for (error, (line, words)) in errors.iter().zip(expected) {
+        assert!(
+            error.contains(&format!("shipped.xml:{line}:")) && error.contains(words),
+            "expected line {line} and {words:?} in: {error}"
+        );
+    }
+}
+
 fn warnings(report: &Report) -> Vec<String> {
     report.warnings.iter().map(|w| w.to_string()).collect()
 }
@@ -504,7 +517,6 @@ fn every_problem_is_reported_at_once() {
 <shape type="cube"><bsdf type="plastic"><float name="int_ior" value="1.5"/><float name="intior" value="1.5"/></bsdf></shape>
 <emitter type="sunsky"/>"#;
     let report = check(&format!("{body}{}{LIGHT}", sensor("", 8, 8)));
-    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
     let expected: &[(usize, &str)] = &[
         (2, "did you mean \"reflectance\"?"),
         (3, "bumpmap needs a <texture"),
@@ -513,13 +525,7 @@ fn every_problem_is_reported_at_once() {
         (7, "did you mean \"int_ior\"?"),
         (8, "sunsky"),
     ];
-    assert_eq!(errors.len(), expected.len(), "{errors:#?}");
-    for (error, (line, words)) in errors.iter().zip(expected) {
-        assert!(
-            error.contains(&format!("shipped.xml:{line}:")) && error.contains(words),
-            "expected line {line} and {words:?} in: {error}"
-        );
-    }
+    assert_errors_in_order(&report, expected);
     assert_eq!(warnings(&report).len(), 1, "bdpt's warning");
     assert!(report.scene.is_none());
 }
@@ -536,20 +542,13 @@ fn a_sensors_problems_are_all_reported() {
 <boolean name="compensate" value="true"/><integer name="heigth" value="3"/></film>
 <float name="fvo" value="30"/></sensor>"#;
     let report = check(&format!("{body}{LIGHT}"));
-    let errors: Vec<String> = report.errors.iter().map(|e| e.to_string()).collect();
     let expected: &[(usize, &str)] = &[
         (3, "did you mean \"sample_count\"?"),
         (4, "rfilter \"blackman\" is not supported"),
         (5, "unknown property \"heigth\""),
         (6, "unknown property \"fvo\""),
     ];
-    assert_eq!(errors.len(), expected.len(), "{errors:#?}");
-    for (error, (line, words)) in errors.iter().zip(expected) {
-        assert!(
-            error.contains(&format!("shipped.xml:{line}:")) && error.contains(words),
-            "expected line {line} and {words:?} in: {error}"
-        );
-    }
+    assert_errors_in_order(&report, expected);
     assert_eq!(warnings(&report).len(), 1, "compensate's warning");
     assert!(report.scene.is_none());
 }
