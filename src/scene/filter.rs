@@ -22,8 +22,8 @@
 //! its position ([`WeightedSampler::density`] summed over pixels), so flat regions stay flat.
 //! Only with `sample_border` (nothing splatted) does a pixel take the plain mean of weighted
 //! samples, noisy in flat regions (variance (c^2 - 1) L^2 a sample, 2.4 L^2 for Lanczos 3): a
-//! ratio of signed sums would blow up where a few weights cancel. Window edges fall on table nodes (half-integers and the
-//! radius), where F_W is exact.
+//! ratio of signed sums would blow up where a few weights cancel. Window edges fall on table
+//! nodes (half-integers and the radius), where F_W is exact.
 
 /// A separable filter; its 2D weight is `eval(x) * eval(y)`, x and y in pixels from the centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,9 +56,6 @@ pub const FILTER_MITCHELL: u32 = 4;
 /// Nodes of a signed filter's sampling table (`SceneUniform::filter_table`, two a vec4): 0 to
 /// the radius in steps of 1 / [`table_nodes_per_pixel`].
 pub const FILTER_TABLE_NODES: usize = 128;
-
-/// The widest filter the table holds at one node per half pixel (Lanczos lobes up to 63).
-pub const MAX_TABLED_RADIUS: u32 = 63;
 
 /// Table nodes per pixel for a filter of integer `radius`: an even number (so half-integers,
 /// where film edges cut the window, are nodes) with at most 128 nodes over [0, radius].

@@ -11,7 +11,7 @@ use super::emitter::Environment;
 use super::filter::FILTER_TABLE_NODES;
 use super::split_boxes::split_references;
 use super::texture::{self, NO_TEXTURE};
-use super::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures};
+use super::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures, Tint};
 
 pub const MATERIAL_DIFFUSE: u32 = 0;
 pub const MATERIAL_DIELECTRIC: u32 = 1;
@@ -345,17 +345,20 @@ fn gpu_material(
             Distribution::Ggx => 1,
         };
     };
+    // A dielectric's tint: reflectance in `specular`, transmittance in `albedo` (where the
+    // specular and diffuse textures replace them).
+    let tinted = |m: &mut GpuMaterial, tint: &Tint| {
+        (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
+    };
     match *bsdf {
         Bsdf::Diffuse { reflectance } => m.albedo = reflectance.to_array(),
-        // A dielectric's tint: reflectance in `specular`, transmittance in `albedo` (where
-        // the specular and diffuse textures replace them).
         Bsdf::Dielectric {
             int_ior,
             ext_ior,
             tint,
         } => {
             (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_DIELECTRIC, int_ior, ext_ior);
-            (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
+            tinted(&mut m, &tint);
         }
         Bsdf::ThinDielectric {
             int_ior,
@@ -363,7 +366,7 @@ fn gpu_material(
             tint,
         } => {
             (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_THIN_DIELECTRIC, int_ior, ext_ior);
-            (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
+            tinted(&mut m, &tint);
         }
         Bsdf::RoughDielectric {
             int_ior,
@@ -372,7 +375,7 @@ fn gpu_material(
             tint,
         } => {
             (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_ROUGH_DIELECTRIC, int_ior, ext_ior);
-            (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
+            tinted(&mut m, &tint);
             rough(&mut m, &microfacet);
         }
         Bsdf::Mirror => m.kind = MATERIAL_MIRROR,
