@@ -162,6 +162,12 @@ struct HitPointSink {
     film_weight: f32,
 }
 
+// Whether this iteration's first sample of each pixel records hit points (`main` draws it, and
+// with `splat` 2 the splat kernel finds it again).
+fn records_hit_points() -> bool {
+    return params.merge_depth > 0u && params.record != 0u;
+}
+
 fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f32>, depth: u32, weight: vec3<f32>, travelled: f32) {
     let index = sink.pixel * params.merge_depth + slot;
     let footprint = travelled * abs(scene_info.plane_step_x);
@@ -572,7 +578,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
     if pixel_index >= pixels {
         return;
     }
-    let recording = params.merge_depth > 0u && params.record != 0u;
+    let recording = records_hit_points();
     for (var p = pixel_index; p < pixels; p += invocations) {
         prepare_hit_points(p, recording);
     }
@@ -667,7 +673,7 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
     // (its pixel's first when `splat` is 2 and hit points are recorded) up to the radius from
     // its pixel's centre, so pixels `far` away.
     let near = i32(ceil(radius - 0.5));
-    let recording = params.merge_depth > 0u && params.record != 0u;
+    let recording = records_hit_points();
     let drawn_first = params.splat == 2u && recording;
     let far = select(near, i32(ceil(2.0 * radius)) - 1, drawn_first);
     let size = vec2<i32>(i32(scene_info.width), i32(scene_info.height));
