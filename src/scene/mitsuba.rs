@@ -1783,8 +1783,8 @@ impl<'a, 'input> Reader<'a, 'input> {
                     node,
                     "type",
                     format!(
-                        "rfilter \"{other}\" is not supported (box, tent, gaussian, lanczos, \
-                         mitchell, catmullrom)"
+                        "rfilter \"{other}\" is not supported ({})",
+                        plugins::kinds_of("rfilter")
                     ),
                 ));
             }
