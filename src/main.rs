@@ -83,8 +83,13 @@ struct RenderArgs {
     /// first.
     #[arg(long)]
     photons: Option<u64>,
+    /// Stop once the estimated relMSE (printed as the render runs) falls below this; --time,
+    /// --spp or --photons caps the render.
+    #[arg(long, value_name = "RELMSE")]
+    target_error: Option<f64>,
     /// Also write every image output of the graph's output node (e.g. `pt`, `caustic`,
-    /// `radius` of `resolve`) next to `--out`, as OUT.SLOT.EXT.
+    /// `radius` of `resolve`) next to `--out`, as OUT.SLOT.EXT, and the per-pixel error
+    /// estimate as OUT.error.exr.
     #[arg(long)]
     aovs: bool,
     /// Image size WxH (default: the scene's film).
@@ -143,9 +148,10 @@ struct CompareArgs {
     /// `<default name="name">` and fills every `$name` (repeat for each).
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
     defines: Vec<(String, String)>,
-    /// Reference image (EXR) the same size as the renders.
+    /// Reference image (EXR) the same size as the renders; without one, the error is only
+    /// estimated (from the render itself).
     #[arg(long)]
-    reference: PathBuf,
+    reference: Option<PathBuf>,
     /// A graph to render (repeat for each).
     #[arg(long = "graph", required = true)]
     graphs: Vec<PathBuf>,
@@ -349,7 +355,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         .shard
         .or(saved.map(|h| (h.shard, h.shards)))
         .unwrap_or((0, 1));
-    let implicit_spp = args.time.is_none() && args.photons.is_none();
+    let implicit_spp = args.time.is_none() && args.photons.is_none() && args.target_error.is_none();
     let budget = Budget {
         spp: args
             .spp
@@ -361,8 +367,16 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             .or(if implicit_spp { Some(64) } else { None }),
         seconds: args.time,
         photons: args.photons,
+        target_error: args.target_error,
     };
     budget.check()?;
+    if args.shard.is_some() && args.target_error.is_some() {
+        return Err(Error::Other(
+            "--shard and --target-error: a shard renders a fixed share of the iterations, so \
+             it cannot stop at an error"
+                .into(),
+        ));
+    }
     if args.shard.is_some() && budget.spp.is_none() && budget.photons.is_none() {
         return Err(Error::Other(
             "--shard needs a budget in --spp or --photons: a time budget ends at a different \
@@ -458,6 +472,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         graph_path.display()
     );
     let bar = progress_bar(budget);
+    if args.shard.is_none() {
+        renderer.watch_error();
+    }
     let mut last_checkpoint = 0.0;
     let mut checkpoint_error = None;
     let summary = renderer.run(budget, &cancel, |r, seconds| {
@@ -475,9 +492,19 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             Some(_) => bar.set_position(spp),
             None => bar.set_position((seconds * 1000.0) as u64),
         }
-        bar.set_message(format!("{:.1} spp/s", spp as f64 / seconds.max(1e-9)));
+        let rate = spp as f64 / seconds.max(1e-9);
+        bar.set_message(match r.latest_error() {
+            Some(e) => format!("{rate:.1} spp/s  estimated relMSE {:.3e}", e.relmse),
+            None => format!("{rate:.1} spp/s"),
+        });
     })?;
     bar.finish_and_clear();
+    // The estimate at the image written, not the last one made on the way.
+    let estimate = match args.shard {
+        Some(_) => None,
+        None => renderer.error_estimate()?,
+    };
+    report_stop(&summary, budget, estimate.as_ref());
     if let Some(e) = checkpoint_error {
         return Err(e);
     }
@@ -497,6 +524,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         .with("hppm_spp", renderer.samples_per_pixel())
         .with("hppm_seed", seed)
         .with("hppm_seconds", format!("{:.3}", summary.seconds));
+    if let Some(e) = &estimate {
+        provenance = provenance
+            .with("hppm_estimated_relmse", format!("{:.6e}", e.relmse))
+            .with("hppm_estimated_variance", format!("{:.6e}", e.variance))
+            .with("hppm_estimated_bias", format!("{:.6e}", e.bias));
+    }
     if !args.defines.is_empty() {
         let defines: Vec<String> = args
             .defines
@@ -515,6 +548,15 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             let path = aov_path(&args.out, slot);
             aov.write(&path, &provenance.clone().with("hppm_aov", slot))?;
             println!("{}: {slot}", path.display());
+        }
+        if let Some(e) = &estimate {
+            let path = aov_path(&args.out.with_extension("exr"), "error");
+            e.per_pixel
+                .write(&path, &provenance.clone().with("hppm_aov", "error"))?;
+            println!(
+                "{}: error (estimated relative squared error)",
+                path.display()
+            );
         }
     }
     let dropped = counters.get("photon_hits_dropped");
@@ -553,6 +595,34 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         gpu.adapter_label()
     );
     Ok(())
+}
+
+/// Says what ended the render and the error estimate at its end.
+fn report_stop(
+    summary: &hppm::app::render::RunSummary,
+    budget: Budget,
+    estimate: Option<&hppm::app::error_estimate::ErrorEstimate>,
+) {
+    use hppm::app::render::Stop;
+    let why = match summary.stop {
+        Stop::Count if budget.spp.is_some() => "the samples asked for (--spp) were rendered",
+        Stop::Count => "the photons asked for (--photons) were emitted",
+        Stop::Time => "the time budget (--time) ran out",
+        Stop::TargetError => "the estimated error fell below --target-error",
+        Stop::Cancelled => "interrupted",
+    };
+    let estimate = estimate.map_or("no error estimate (fewer than 2 iterations)".into(), |e| {
+        format!(
+            "estimated relMSE {:.3e} (noise {:.3e}, kernel bias {:.3e})",
+            e.relmse, e.variance, e.bias
+        )
+    });
+    match budget.target_error {
+        Some(target) if summary.stop != Stop::TargetError => {
+            eprintln!("stopped before --target-error {target:e}: {why}; {estimate}")
+        }
+        _ => eprintln!("stopped: {why}; {estimate}"),
+    }
 }
 
 /// `render.exr` + `pt` -> `render.pt.exr`.
@@ -717,9 +787,12 @@ fn compare(args: CompareArgs) -> Result<(), Error> {
     for run in &report.runs {
         let last = run.snapshots.last();
         println!(
-            "{:<20} relMSE {:.3e} after {:.1} s ({} spp); slope {}",
+            "{:<20} relMSE {} (estimated {}) after {:.1} s ({} spp); slope {}",
             run.label,
-            last.map_or(f64::NAN, |s| s.metrics.relmse),
+            last.and_then(|s| s.metrics)
+                .map_or("-".into(), |m| format!("{:.3e}", m.relmse)),
+            last.and_then(|s| s.estimated)
+                .map_or("-".into(), |e| format!("{:.3e}", e.relmse)),
             last.map_or(0.0, |s| s.seconds),
             last.map_or(0, |s| s.spp),
             run.slope

@@ -55,7 +55,7 @@ impl<'a> Harness<'a> {
         self.pass.run(&mut *pass, 0, 1);
         self.pass.run(&mut *pass, 1, 1);
         let deposits = &out["deposits"];
-        let cells: Vec<[u32; 4]> = gpu
+        let cells: Vec<hppm::passes::hit_points::GpuDepositCell> = gpu
             .read_pod(&deposits.buffer, points.len())
             .expect("deposits readback");
         let grid = &out["grid"];
@@ -67,11 +67,10 @@ impl<'a> Harness<'a> {
             &bytes[GRID_INFO_BYTES as usize..(GRID_INFO_BYTES + 4 * grid.len) as usize],
         );
         Outcome {
-            counts: cells.iter().map(|c| c[0]).collect(),
-            flux: cells
-                .iter()
-                .map(|c| [1, 2, 3].map(|i| f32::from_bits(c[i])))
-                .collect(),
+            counts: cells.iter().map(|c| c.count).collect(),
+            flux: cells.iter().map(|c| c.flux).collect(),
+            inner_counts: cells.iter().map(|c| c.inner_count).collect(),
+            inner_flux: cells.iter().map(|c| c.inner_flux).collect(),
             info,
             words,
         }
@@ -81,6 +80,9 @@ impl<'a> Harness<'a> {
 struct Outcome {
     counts: Vec<u32>,
     flux: Vec<[f32; 3]>,
+    /// The same within half the radius (the kernel-bias estimate's sums).
+    inner_counts: Vec<u32>,
+    inner_flux: Vec<[f32; 3]>,
     info: GridInfo,
     words: Vec<u32>,
 }
@@ -178,6 +180,30 @@ fn check_counts(
         // Flux 1 per photon and weight 1: the flux sum counts the photons again.
         for c in 0..3 {
             assert_eq!(got.flux[i][c], count as f32, "{name}: hit point {i} flux");
+        }
+        // Within half the radius, by the same test: would catch the inner sums taken at the
+        // full radius (a bias estimate of 0) or at R/4 (the square's factor applied twice).
+        let half = GpuHitPoint {
+            radius: 0.5 * hp.radius,
+            ..*hp
+        };
+        let (inner_sure, inner_maybe) =
+            hits.iter()
+                .fold((0u32, 0u32), |(s, m), hit| match takes(&half, hit) {
+                    Some(true) => (s + 1, m),
+                    Some(false) => (s, m),
+                    None => (s, m + 1),
+                });
+        let inner = got.inner_counts[i];
+        assert!(
+            (inner_sure..=inner_sure + inner_maybe).contains(&inner),
+            "{name}: hit point {i} gathered {inner} photons within R/2, brute force              {inner_sure} (+{inner_maybe} on a boundary)"
+        );
+        for c in 0..3 {
+            assert_eq!(
+                got.inner_flux[i][c], inner as f32,
+                "{name}: hit point {i} inner flux"
+            );
         }
         pairs += count as u64;
         undecided += maybe as u64;

@@ -15,7 +15,8 @@ use hppm::graph::exec::Wiring;
 use hppm::graph::pass::{ExecCtx, Pass, Recorder, Resource};
 use hppm::passes::hit_point_bvh_sah::{self, HitPointBvhSah};
 use hppm::passes::hit_points::{
-    DEPOSITS, GpuHitPoint, GpuPhotonHit, NO_PIXEL, PhotonHitsHeader, build_tree,
+    DEPOSIT_BYTES, DEPOSITS, GpuDepositCell, GpuHitPoint, GpuPhotonHit, NO_PIXEL, PhotonHitsHeader,
+    build_tree,
 };
 use hppm::passes::photon_trace::{self, PhotonMode, PhotonTrace, PhotonTraceParams};
 use hppm::passes::rng::Stream;
@@ -28,13 +29,10 @@ use std::collections::HashMap;
 /// (count, RGB flux) per hit point from a deposits buffer; the bytes are the same for both
 /// atomics paths (a u32 count, then the f32 bits of each channel).
 fn read_deposits(gpu: &GpuContext, deposits: &Resource) -> Vec<(u32, [f32; 3])> {
-    let words: Vec<[u32; 4]> = gpu
+    let cells: Vec<GpuDepositCell> = gpu
         .read_pod(&deposits.buffer, deposits.len as usize)
         .expect("readback");
-    words
-        .iter()
-        .map(|w| (w[0], [w[1], w[2], w[3]].map(f32::from_bits)))
-        .collect()
+    cells.iter().map(|c| (c.count, c.flux)).collect()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -538,6 +536,8 @@ struct CpuSlot {
     r: f64,
     tau: [f64; 3],
     photons: u64,
+    /// Sum over iterations of (Phi - 4 Phi_inner) / R^2 at the iteration's radius.
+    bias: [f64; 3],
 }
 
 impl CpuSlot {
@@ -547,6 +547,17 @@ impl CpuSlot {
             r: radius as f64,
             tau: [0.0; 3],
             photons: 0,
+            bias: [0.0; 3],
+        }
+    }
+
+    /// The kernel-bias term of one iteration's deposit (flux within R and within R / 2).
+    fn add_bias(&mut self, m: u32, flux: [f32; 3], inner: [f32; 3]) {
+        if m == 0 || self.r <= 0.0 {
+            return;
+        }
+        for c in 0..3 {
+            self.bias[c] += (flux[c] as f64 - 4.0 * inner[c] as f64) / (self.r * self.r);
         }
     }
 
@@ -566,11 +577,24 @@ impl CpuSlot {
     }
 }
 
-/// Deposit cells as the photon pass leaves them: a count, then the f32 bits of each channel.
-fn deposit_words(deposits: impl Iterator<Item = (u32, [f32; 3])>) -> Vec<[u32; 4]> {
+/// Deposit cells as the photon pass leaves them, with no photon within half the radius.
+fn deposit_words(deposits: impl Iterator<Item = (u32, [f32; 3])>) -> Vec<GpuDepositCell> {
     deposits
-        .map(|(m, f)| [m, f[0].to_bits(), f[1].to_bits(), f[2].to_bits()])
+        .map(|(m, f)| deposit_cell(m, f, [0.0; 3]))
         .collect()
+}
+
+fn deposit_cell(count: u32, flux: [f32; 3], inner_flux: [f32; 3]) -> GpuDepositCell {
+    GpuDepositCell {
+        count,
+        flux,
+        inner_flux,
+        inner_count: if inner_flux == [0.0; 3] {
+            0
+        } else {
+            count / 4 + 1
+        },
+    }
 }
 
 /// A `Merge` (sppm) prepared on `hit_points` and `deposits`, and its outputs.
@@ -618,8 +642,9 @@ fn merge_matches_the_progressive_update_in_f64() {
         .collect();
     points[5].radius = 0.0; // never used: contributes nothing
     points[6].radius = 1.5 * min_radius as f32; // will hit the floor
-    // Iterations of (count, flux) per slot; the last has counts beyond 2^24.
-    let iterations: Vec<Vec<(u32, [f32; 3])>> = (0..4)
+    // Iterations of (count, flux, flux within half the radius) per slot; the last has counts
+    // beyond 2^24.
+    let iterations: Vec<Vec<(u32, [f32; 3], [f32; 3])>> = (0..4)
         .map(|it| {
             (0..count)
                 .map(|i| {
@@ -629,7 +654,8 @@ fn merge_matches_the_progressive_update_in_f64() {
                         _ => 1 + (rng.next() * 40.0) as u32,
                     };
                     let f = [rng.next(), rng.next(), rng.next()].map(|v| v * m as f32 * 0.01);
-                    (m, f)
+                    let inner = f.map(|v| v * 0.5 * rng.next());
+                    (m, f, inner)
                 })
                 .collect()
         })
@@ -642,7 +668,7 @@ fn merge_matches_the_progressive_update_in_f64() {
         let deposits_buffer = gpu
             .create_buffer(
                 "test deposits",
-                count as u64 * 16,
+                count as u64 * DEPOSIT_BYTES,
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             )
             .expect("buffer");
@@ -650,7 +676,10 @@ fn merge_matches_the_progressive_update_in_f64() {
         let mut merge = merge_with(alpha);
         let out = prepare_merge(&h, &mut merge, &hit_points, &deposits);
         for (it, deposit) in iterations.iter().enumerate() {
-            let words = deposit_words(deposit.iter().copied());
+            let words: Vec<GpuDepositCell> = deposit
+                .iter()
+                .map(|&(m, f, inner)| deposit_cell(m, f, inner))
+                .collect();
             gpu.queue
                 .write_buffer(&deposits.buffer, 0, bytemuck::cast_slice(&words));
             h.run(&mut merge, it as u64, 0);
@@ -660,18 +689,22 @@ fn merge_matches_the_progressive_update_in_f64() {
         let radiance: Vec<[f32; 4]> = gpu
             .read_pod(&out["radiance"].buffer, (width * height) as usize)
             .expect("readback");
-        results.push((stats, radii, radiance));
+        let bias: Vec<[f32; 4]> = gpu
+            .read_pod(&out["kernel_bias"].buffer, (width * height) as usize)
+            .expect("readback");
+        results.push((stats, radii, radiance, bias));
     }
 
     // The same update on the CPU in f64.
     let mut cpu: Vec<CpuSlot> = points.iter().map(|p| CpuSlot::new(p.radius)).collect();
     for deposit in &iterations {
-        for (s, &(m, f)) in cpu.iter_mut().zip(deposit) {
+        for (s, &(m, f, inner)) in cpu.iter_mut().zip(deposit) {
+            s.add_bias(m, f, inner);
             s.merge(m, f, alpha, min_radius);
         }
     }
     let close = |a: f64, b: f64| (a - b).abs() <= 2e-5 * b.abs().max(1e-12);
-    for (stats, radii, radiance) in &results {
+    for (stats, radii, radiance, bias) in &results {
         for (i, s) in cpu.iter().enumerate() {
             assert_eq!(stats[i].photons, s.photons, "slot {i}: exact photon total");
             assert!(
@@ -711,6 +744,19 @@ fn merge_matches_the_progressive_update_in_f64() {
                 assert!(
                     close(value as f64, expected),
                     "pixel {p}: {value} vs {expected}"
+                );
+                // The kernel bias, (4/3) (L(R) - L(R/2)) averaged over iterations: would
+                // catch the inner flux unscaled by 4, a missing 4/3, or the radius after
+                // this iteration's shrink in place of the one the photons were gathered in.
+                let expected_bias: f64 = (0..slots as usize)
+                    .map(|j| &cpu[p * slots as usize + j])
+                    .map(|s| 4.0 / 3.0 * s.bias[c] / std::f64::consts::PI / k)
+                    .sum();
+                let got = bias[p][c] as f64;
+                assert!(
+                    // Relative to the terms' size (the difference may cancel).
+                    (got - expected_bias).abs() <= 1e-4 * expected.abs() + 1e-6,
+                    "pixel {p}: kernel bias {got} vs {expected_bias}"
                 );
             }
             assert_eq!(pixel[3], 1.0);

@@ -117,7 +117,7 @@ fn pppm_adds_each_iterations_density_estimate_to_the_pixel_sums() {
             DEPOSITS,
             gpu.create_buffer(
                 "test deposits",
-                count as u64 * 16,
+                count as u64 * hppm::passes::hit_points::DEPOSIT_BYTES,
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             )
             .expect("buffer"),
@@ -145,9 +145,13 @@ fn pppm_adds_each_iterations_density_estimate_to_the_pixel_sums() {
         assert_eq!(rule(&gpu).scale, schedule.scale_at(FIRST), "first scale");
         for (it, (points, deposit)) in plan.iter().enumerate() {
             common::pass_harness::write_hit_points(&gpu, &hit_points, points);
-            let words: Vec<[u32; 4]> = deposit
+            let words: Vec<hppm::passes::hit_points::GpuDepositCell> = deposit
                 .iter()
-                .map(|(m, f)| [*m, f[0].to_bits(), f[1].to_bits(), f[2].to_bits()])
+                .map(|(m, f)| hppm::passes::hit_points::GpuDepositCell {
+                    count: *m,
+                    flux: *f,
+                    ..Default::default()
+                })
                 .collect();
             gpu.queue
                 .write_buffer(&deposits.buffer, 0, bytemuck::cast_slice(&words));
@@ -170,6 +174,23 @@ fn pppm_adds_each_iterations_density_estimate_to_the_pixel_sums() {
                     "float atomics {float_atomics}, pixel {pixel}, channel {c}: {a} vs {b}"
                 );
             }
+        }
+        // No photon lies within half a radius here, so each estimate's kernel bias is 4/3 of
+        // it, summed and counted like the radiance (a bias left unsummed, or counted once per
+        // render, fails).
+        let bias: Vec<[f32; 4]> = gpu
+            .read_pod(&out["kernel_bias"].buffer, pixels)
+            .expect("readback");
+        for (pixel, (b, cpu_sum)) in bias.iter().zip(&expected).enumerate() {
+            for c in 0..3 {
+                let want = 4.0 / 3.0 * cpu_sum[c];
+                assert!(
+                    (b[c] as f64 - want).abs() <= 1e-5 * want.abs().max(1e-6),
+                    "pixel {pixel}, channel {c}: kernel bias {} vs {want}",
+                    b[c]
+                );
+            }
+            assert_eq!(b[3] as f64, cpu_sum[3], "pixel {pixel}: estimates counted");
         }
         let counters = hppm::graph::pass::Pass::counters(&pass, &gpu).expect("counters");
         assert_eq!(counters.get("discarded_samples"), 1, "the NaN estimate");

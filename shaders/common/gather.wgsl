@@ -31,6 +31,23 @@ fn add_deposit_flux(cell: u32, channel: u32, value: f32) {
 #endif
 }
 
+// The same for the photons within half the radius (WGSL passes no pointers to atomics).
+fn add_inner_flux(cell: u32, channel: u32, value: f32) {
+#ifdef FLOAT_ATOMICS
+    atomicAdd(&deposits[cell].inner_flux[channel], value);
+#else
+    var old = atomicLoad(&deposits[cell].inner_flux[channel]);
+    loop {
+        let updated = bitcast<u32>(bitcast<f32>(old) + value);
+        let r = atomicCompareExchangeWeak(&deposits[cell].inner_flux[channel], old, updated);
+        if r.exchanged {
+            break;
+        }
+        old = r.old_value;
+    }
+#endif
+}
+
 // Adds `hit` to hit point `index` when the hit lies inside its sphere; returns whether it did.
 fn gather_at(index: u32, hit: PhotonHit) -> bool {
     let hp = hit_points.points[index];
@@ -55,5 +72,11 @@ fn gather_at(index: u32, hit: PhotonHit) -> bool {
     add_deposit_flux(index, 0u, added.x);
     add_deposit_flux(index, 1u, added.y);
     add_deposit_flux(index, 2u, added.z);
+    if dot(d, d) <= 0.25 * hp.radius * hp.radius {
+        atomicAdd(&deposits[index].inner_count, 1u);
+        add_inner_flux(index, 0u, added.x);
+        add_inner_flux(index, 1u, added.y);
+        add_inner_flux(index, 2u, added.z);
+    }
     return true;
 }

@@ -113,15 +113,22 @@ const TREE_STACK_SIZE: u32 = 64u;
 
 // Photons gathered by one hit point in one iteration. Flux is an RGB sum added with float
 // atomics where the device has them, else with a compare-and-swap loop on the f32 bits.
+//
+// The photons within half the radius are summed again (`inner_*`): the estimate over the half
+// disc against the whole one measures the kernel's bias (docs/error-estimate.md).
 #ifdef FLOAT_ATOMICS
 struct DepositCell {
     count: atomic<u32>,
     flux: array<atomic<f32>, 3>,
+    inner_flux: array<atomic<f32>, 3>,
+    inner_count: atomic<u32>,
 }
 #else
 struct DepositCell {
     count: atomic<u32>,
     flux: array<atomic<u32>, 3>,
+    inner_flux: array<atomic<u32>, 3>,
+    inner_count: atomic<u32>,
 }
 #endif
 

@@ -9,6 +9,10 @@
 // with no accumulated rounding: N = alpha * (exact photon total); tau / R^2 = sum of Phi_i / R_i^2
 // (the recursion unrolled), so the estimate tau / (pi R^2) needs no rescaling; and R shrinks by
 // R (1 - sqrt(1 - x)) computed as R x / (1 + sqrt(1 - x)), which has no cancellation.
+//
+// The same sum over the photons within R / 2 gives the estimate at half the radius, and with it
+// the kernel's bias, (4/3) (L(R) - L(R/2)) per iteration (docs/error-estimate.md): written to
+// `kernel_bias` as the mean over iterations, as the radiance is.
 
 #import common::sampling::{PI, any_not_finite}
 #import common::hit_points::{HitPointBuffer, RadiusBuffer, DepositCell, NO_PIXEL}
@@ -35,11 +39,14 @@ struct SlotStats {
     tau_carry: vec3<f32>,
     // Iterations whose deposit was dropped as NaN/Inf.
     discarded: u32,
+    // Sum of the estimates at half the radius, 4 Phi_inner_i / R_i^2 (pi L(R/2) per iteration).
+    inner_per_r2: vec3<f32>,
     // Photons gathered in total, exact as a 64-bit count.
     photons_low: u32,
     photons_high: u32,
     pad_a: u32,
     pad_b: u32,
+    pad_c: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: MergeParams;
@@ -50,6 +57,7 @@ struct SlotStats {
 // This estimator's state: each slot's radius (0 until the slot first holds a hit point), read
 // by the camera pass in the next iteration.
 @group(1) @binding(5) var<storage, read_write> radii: RadiusBuffer;
+@group(1) @binding(6) var<storage, read_write> kernel_bias: array<vec4<f32>>;
 
 fn deposited_flux(cell: u32) -> vec3<f32> {
 #ifdef FLOAT_ATOMICS
@@ -59,14 +67,27 @@ fn deposited_flux(cell: u32) -> vec3<f32> {
 #endif
 }
 
-// Applies this iteration's deposit to slot `index`; returns its current radiance estimate times
-// the iteration count.
-fn merge_slot(index: u32) -> vec3<f32> {
+fn inner_flux(cell: u32) -> vec3<f32> {
+#ifdef FLOAT_ATOMICS
+    return vec3<f32>(atomicLoad(&deposits[cell].inner_flux[0]), atomicLoad(&deposits[cell].inner_flux[1]), atomicLoad(&deposits[cell].inner_flux[2]));
+#else
+    return vec3<f32>(bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[0])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[1])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[2])));
+#endif
+}
+
+// pi times a slot's estimates summed over iterations, at its radius and at half of it.
+struct SlotSums {
+    whole: vec3<f32>,
+    inner: vec3<f32>,
+}
+
+// Applies this iteration's deposit to slot `index`; returns its sums over iterations.
+fn merge_slot(index: u32) -> SlotSums {
     var radius = radii.radii[index];
     if radius <= 0.0 {
         // A slot's first hit point brings the first radius the camera chose by the rule.
         if hit_points.points[index].pixel == NO_PIXEL || hit_points.points[index].radius <= 0.0 {
-            return vec3<f32>(0.0);
+            return SlotSums(vec3<f32>(0.0), vec3<f32>(0.0));
         }
         radius = hit_points.points[index].radius;
         radii.radii[index] = radius;
@@ -74,8 +95,9 @@ fn merge_slot(index: u32) -> vec3<f32> {
     var s = stats[index];
     let m = atomicLoad(&deposits[index].count);
     let phi = deposited_flux(index);
+    let phi_inner = inner_flux(index);
     if m > 0u {
-        if any_not_finite(phi) {
+        if any_not_finite(phi) || any_not_finite(phi_inner) {
             s.discarded += 1u;
         } else {
             let mf = f32(m);
@@ -94,6 +116,7 @@ fn merge_slot(index: u32) -> vec3<f32> {
             let sum = s.tau_per_r2 + term;
             s.tau_carry = (sum - s.tau_per_r2 * params.one) - term;
             s.tau_per_r2 = sum;
+            s.inner_per_r2 += 4.0 * phi_inner / (radius * radius);
             let low = s.photons_low + m;
             s.photons_high += select(0u, 1u, low < m);
             s.photons_low = low;
@@ -101,7 +124,7 @@ fn merge_slot(index: u32) -> vec3<f32> {
         }
         stats[index] = s;
     }
-    return s.tau_per_r2 / PI;
+    return SlotSums(s.tau_per_r2, s.inner_per_r2);
 }
 
 fn photon_total(s: SlotStats) -> f32 {
@@ -114,9 +137,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let pixel = id.y * params.width + id.x;
-    var sum = vec3<f32>(0.0);
+    var whole = vec3<f32>(0.0);
+    var inner = vec3<f32>(0.0);
     for (var slot = 0u; slot < params.slots_per_pixel; slot++) {
-        sum += merge_slot(pixel * params.slots_per_pixel + slot);
+        let sums = merge_slot(pixel * params.slots_per_pixel + slot);
+        whole += sums.whole;
+        inner += sums.inner;
     }
-    radiance[pixel] = vec4<f32>(sum * params.inv_iterations, 1.0);
+    let mean = params.inv_iterations / PI;
+    radiance[pixel] = vec4<f32>(whole * mean, 1.0);
+    kernel_bias[pixel] = vec4<f32>((4.0 / 3.0) * (whole - inner) * mean, 1.0);
 }

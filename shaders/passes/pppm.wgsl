@@ -24,6 +24,8 @@ struct PppmParams {
 @group(1) @binding(4) var<storage, read_write> radii: RadiusBuffer;
 // Pixel estimates dropped as NaN or Inf.
 @group(1) @binding(5) var<storage, read_write> discarded: atomic<u32>;
+// Per pixel the sum of each estimate's kernel bias, (4/3) (L(R) - L(R/2)), and their count.
+@group(1) @binding(6) var<storage, read_write> kernel_bias: array<vec4<f32>>;
 
 fn deposited_flux(cell: u32) -> vec3<f32> {
 #ifdef FLOAT_ATOMICS
@@ -33,13 +35,28 @@ fn deposited_flux(cell: u32) -> vec3<f32> {
 #endif
 }
 
-// This iteration's density estimate at slot `index`: flux per emitted photon over the disc.
-fn slot_estimate(index: u32) -> vec3<f32> {
+fn inner_flux(cell: u32) -> vec3<f32> {
+#ifdef FLOAT_ATOMICS
+    return vec3<f32>(atomicLoad(&deposits[cell].inner_flux[0]), atomicLoad(&deposits[cell].inner_flux[1]), atomicLoad(&deposits[cell].inner_flux[2]));
+#else
+    return vec3<f32>(bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[0])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[1])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[2])));
+#endif
+}
+
+// This iteration's density estimates at slot `index`, over the disc and over half its radius:
+// flux per emitted photon over the area.
+struct SlotEstimate {
+    whole: vec3<f32>,
+    inner: vec3<f32>,
+}
+
+fn slot_estimate(index: u32) -> SlotEstimate {
     let point = hit_points.points[index];
     if point.pixel == NO_PIXEL || point.radius <= 0.0 || atomicLoad(&deposits[index].count) == 0u {
-        return vec3<f32>(0.0);
+        return SlotEstimate(vec3<f32>(0.0), vec3<f32>(0.0));
     }
-    return deposited_flux(index) / (PI * point.radius * point.radius);
+    let area = PI * point.radius * point.radius;
+    return SlotEstimate(deposited_flux(index) / area, 4.0 * inner_flux(index) / area);
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -53,13 +70,18 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         radii.rule.scale = params.next_scale;
     }
     var estimate = vec3<f32>(0.0);
+    var inner = vec3<f32>(0.0);
     for (var slot = 0u; slot < params.slots_per_pixel; slot++) {
-        estimate += slot_estimate(pixel * params.slots_per_pixel + slot);
+        let e = slot_estimate(pixel * params.slots_per_pixel + slot);
+        estimate += e.whole;
+        inner += e.inner;
     }
     let total = radiance[pixel] + vec4<f32>(estimate, 1.0);
-    if any_not_finite(total.xyz) {
+    let bias = kernel_bias[pixel] + vec4<f32>((4.0 / 3.0) * (estimate - inner), 1.0);
+    if any_not_finite(total.xyz) || any_not_finite(bias.xyz) {
         atomicAdd(&discarded, 1u);
     } else {
         radiance[pixel] = total;
+        kernel_bias[pixel] = bias;
     }
 }

@@ -1,13 +1,14 @@
 //! `hppm compare`: error against run time for several graphs on one scene and one adapter.
 //! Each graph renders for the same wall budget; at log-spaced moments the clock stops, the image
-//! is read back and compared with the reference (relMSE, RMSE, MAE), then the clock resumes.
+//! is read back, its error estimated without a reference (docs/error-estimate.md) and, when a
+//! reference is given, measured against it (relMSE, RMSE, MAE), then the clock resumes.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use crate::Error;
-use crate::app::plot::{self, Series};
+use crate::app::plot::{self, Series, SeriesStyle};
 use crate::app::render::{Budget, NodeTime, Renderer};
 use crate::gpu::GpuContext;
 use crate::image::{ErrorMetrics, Image, Provenance};
@@ -18,7 +19,8 @@ pub struct CompareOptions {
     pub scene: PathBuf,
     /// Mitsuba `-D name=value` scene parameters.
     pub defines: Vec<(String, String)>,
-    pub reference: PathBuf,
+    /// Without one only the estimated error is reported.
+    pub reference: Option<PathBuf>,
     pub graphs: Vec<PathBuf>,
     pub seconds: f64,
     pub snapshots: usize,
@@ -41,7 +43,18 @@ pub struct Snapshot {
     pub iterations: u64,
     pub spp: u64,
     pub photons: u64,
-    pub metrics: ErrorMetrics,
+    /// Against the reference, when there is one.
+    pub metrics: Option<ErrorMetrics>,
+    /// The render's own estimate (none before two iterations).
+    pub estimated: Option<Estimated>,
+}
+
+/// The parts of an error estimate a snapshot keeps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimated {
+    pub relmse: f64,
+    pub variance: f64,
+    pub bias: f64,
 }
 
 /// One graph's run.
@@ -203,18 +216,24 @@ pub fn compare(
     let scene = scene::load_reporting(&options.scene, &options.defines, |w| {
         eprintln!("warning: {w}")
     })?;
-    let reference = Image::read_exr(&options.reference)?;
     let (width, height) = options
         .size
         .unwrap_or((scene.camera.width, scene.camera.height));
-    if (reference.width, reference.height) != (width, height) {
-        return Err(Error::Other(format!(
-            "{}: the reference is {}x{} but the renders are {width}x{height} (set --size)",
-            options.reference.display(),
-            reference.width,
-            reference.height
-        )));
-    }
+    let reference = match &options.reference {
+        Some(path) => {
+            let reference = Image::read_exr(path)?;
+            if (reference.width, reference.height) != (width, height) {
+                return Err(Error::Other(format!(
+                    "{}: the reference is {}x{} but the renders are {width}x{height} (set --size)",
+                    path.display(),
+                    reference.width,
+                    reference.height
+                )));
+            }
+            Some(reference)
+        }
+        None => None,
+    };
     let keep = match &options.mask {
         Some(path) => Some(read_mask(path, width, height)?),
         None => None,
@@ -256,23 +275,33 @@ pub fn compare(
                     spp: None,
                     seconds: Some(at - clock),
                     photons: None,
+                    target_error: None,
                 }
             } else {
                 Budget {
                     spp: Some(renderer.samples_per_pixel() + renderer.spp_per_iteration()),
                     seconds: None,
                     photons: None,
+                    target_error: None,
                 }
             };
             let summary = renderer.run(budget, cancel, |_, _| {})?;
             clock += summary.seconds;
             let image = renderer.image()?;
-            let metrics =
-                image.metrics_where(&reference, |i| keep.as_ref().is_none_or(|k| k[i]))?;
+            let metrics = match &reference {
+                Some(r) => Some(image.metrics_where(r, |i| keep.as_ref().is_none_or(|k| k[i]))?),
+                None => None,
+            };
+            let estimated = renderer.error_estimate()?.map(|e| Estimated {
+                relmse: e.relmse,
+                variance: e.variance,
+                bias: e.bias,
+            });
             progress(&format!(
-                "{label}: {clock:.2} s, {} iterations, relMSE {:.3e}",
+                "{label}: {clock:.2} s, {} iterations, relMSE {}, estimated {}",
                 renderer.iterations(),
-                metrics.relmse
+                metrics.map_or("-".into(), |m| format!("{:.3e}", m.relmse)),
+                estimated.map_or("-".into(), |e| format!("{:.3e}", e.relmse)),
             ));
             snapshots.push(Snapshot {
                 index,
@@ -281,6 +310,7 @@ pub fn compare(
                 spp: renderer.samples_per_pixel(),
                 photons: renderer.photons(),
                 metrics,
+                estimated,
             });
             last_image = Some(image);
             if summary.cancelled {
@@ -300,12 +330,9 @@ pub fn compare(
             .with("hppm_seed", options.seed)
             .with("hppm_seconds", format!("{clock:.3}"));
         final_image.write(&options.out.join(format!("{label}.exr")), &provenance)?;
-        let points: Vec<(f64, f64)> = snapshots
-            .iter()
-            .map(|s| (s.seconds, s.metrics.relmse))
-            .collect();
         runs.push(GraphRun {
-            slope: log_log_slope(&points),
+            slope: log_log_slope(&measured_points(&snapshots))
+                .or_else(|| log_log_slope(&estimated_points(&snapshots))),
             label,
             snapshots,
             node_times: renderer.node_times(),
@@ -354,22 +381,53 @@ fn write_file(path: &Path, text: &str) -> Result<(), Error> {
     crate::image::write_file_atomically(path, text.as_bytes())
 }
 
+/// (seconds, relMSE against the reference) of the snapshots that have one.
+pub fn measured_points(snapshots: &[Snapshot]) -> Vec<(f64, f64)> {
+    snapshots
+        .iter()
+        .filter_map(|s| s.metrics.map(|m| (s.seconds, m.relmse)))
+        .collect()
+}
+
+/// (seconds, estimated relMSE) of the snapshots that have an estimate.
+pub fn estimated_points(snapshots: &[Snapshot]) -> Vec<(f64, f64)> {
+    snapshots
+        .iter()
+        .filter_map(|s| s.estimated.map(|e| (s.seconds, e.relmse)))
+        .collect()
+}
+
+/// One row per snapshot; the measured columns are empty without a reference, the estimated
+/// ones before two iterations.
 pub fn errors_csv_text(runs: &[GraphRun]) -> String {
-    let mut out = String::from("graph,snapshot,seconds,iterations,spp,photons,relmse,rmse,mae\n");
+    let mut out = String::from(
+        "graph,snapshot,seconds,iterations,spp,photons,relmse,rmse,mae,\
+         estimated_relmse,estimated_variance,estimated_bias\n",
+    );
+    let e6 = |v: f64| format!("{v:.6e}");
     for run in runs {
         for s in &run.snapshots {
+            let measured = s
+                .metrics
+                .map_or([String::new(), String::new(), String::new()], |m| {
+                    [e6(m.relmse), e6(m.rmse), e6(m.mae)]
+                });
+            let estimated = s
+                .estimated
+                .map_or([String::new(), String::new(), String::new()], |e| {
+                    [e6(e.relmse), e6(e.variance), e6(e.bias)]
+                });
             let _ = writeln!(
                 out,
-                "{},{},{:.6},{},{},{},{:.6e},{:.6e},{:.6e}",
+                "{},{},{:.6},{},{},{},{},{}",
                 run.label,
                 s.index,
                 s.seconds,
                 s.iterations,
                 s.spp,
                 s.photons,
-                s.metrics.relmse,
-                s.metrics.rmse,
-                s.metrics.mae
+                measured.join(","),
+                estimated.join(",")
             );
         }
     }
@@ -402,27 +460,39 @@ pub fn profile_csv_text(runs: &[GraphRun]) -> String {
     out
 }
 
+/// Per graph its measured error (when there is a reference) and its estimate, dashed in the
+/// same colour; then the peers.
 fn plot_series(runs: &[GraphRun], peers: &[PeerPoint]) -> Vec<Series> {
-    let mut series: Vec<Series> = runs
-        .iter()
-        .map(|run| Series {
-            label: match run.slope {
-                Some(slope) => format!("{} (slope {slope:.2})", run.label),
-                None => run.label.clone(),
-            },
-            points: run
-                .snapshots
-                .iter()
-                .map(|s| (s.seconds, s.metrics.relmse))
-                .collect(),
-            peer: false,
-        })
-        .collect();
-    for (label, points) in peer_groups(peers) {
+    let mut series = Vec::new();
+    for (index, run) in runs.iter().enumerate() {
+        let slope = run
+            .slope
+            .map_or(String::new(), |slope| format!(" (slope {slope:.2})"));
+        let measured = measured_points(&run.snapshots);
+        let estimated = estimated_points(&run.snapshots);
+        if !measured.is_empty() {
+            series.push(Series {
+                label: format!("{}{slope}", run.label),
+                points: measured,
+                style: SeriesStyle::Measured,
+                colour: index,
+            });
+        }
+        if !estimated.is_empty() {
+            series.push(Series {
+                label: format!("{} estimated", run.label),
+                points: estimated,
+                style: SeriesStyle::Estimated,
+                colour: index,
+            });
+        }
+    }
+    for (index, (label, points)) in peer_groups(peers).into_iter().enumerate() {
         series.push(Series {
             label: format!("{label} (peer)"),
             points,
-            peer: true,
+            style: SeriesStyle::Peer,
+            colour: index,
         });
     }
     series

@@ -6,6 +6,7 @@ pub mod bench_gather;
 pub mod bench_hybrid;
 pub mod bench_seed;
 pub mod compare;
+pub mod error_estimate;
 pub mod plot;
 pub mod render;
 pub mod state;

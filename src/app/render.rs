@@ -6,11 +6,14 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use crate::Error;
+use crate::app::error_estimate::{self, ErrorEstimate, Halves};
 use crate::gpu::GpuContext;
+use crate::gpu::odd_iterations::OddIterations;
 use crate::graph::ValidGraph;
 use crate::graph::exec::PreparedGraph;
 use crate::graph::pass::{Counters, IMAGE, Resource, Schedule, Shared};
 use crate::image::Image;
+use crate::passes::hit_points::KERNEL_BIAS;
 use crate::passes::{SceneResources, TablePlacement, paths, scene_meets, shader_library};
 use crate::scene::Scene;
 use crate::scene::gpu_layout::GpuScene;
@@ -24,6 +27,9 @@ pub struct Budget {
     pub seconds: Option<f64>,
     /// Photons emitted in total.
     pub photons: Option<u64>,
+    /// Stop once the estimated relMSE (docs/error-estimate.md) is below this; needs one of the
+    /// others as a cap.
+    pub target_error: Option<f64>,
 }
 
 impl Budget {
@@ -43,8 +49,21 @@ impl Budget {
                 "--time must be a positive, finite number of seconds, got {s}"
             ));
         }
+        if let Some(e) = self.target_error
+            && !(e.is_finite() && e > 0.0)
+        {
+            return refuse(format!(
+                "--target-error must be a positive, finite relMSE, got {e}"
+            ));
+        }
         if self.spp.is_none() && self.seconds.is_none() && self.photons.is_none() {
-            return refuse("no budget: give --spp, --time or --photons".into());
+            let message = if self.target_error.is_some() {
+                "--target-error needs a cap as well: give --time, --spp or --photons (an \
+                 estimate may never reach the target on a scene whose error falls slowly)"
+            } else {
+                "no budget: give --spp, --time or --photons"
+            };
+            return refuse(message.into());
         }
         Ok(())
     }
@@ -58,6 +77,10 @@ struct Tile {
     output: Resource,
     /// Every image output of the output node and every image it reads (its AOVs), by slot.
     aovs: Vec<(&'static str, Resource)>,
+    /// The output and every estimator's kernel bias, with their odd-iteration sums.
+    halves: OddIterations,
+    /// What `halves` tracks, in its order: the output first.
+    tracked: Vec<Resource>,
     grid_y: u32,
     grid_rows: u32,
     keep_y: u32,
@@ -88,6 +111,35 @@ pub struct Renderer<'a> {
     /// Which scene tables are bound as uniform buffers.
     placement: TablePlacement,
     profiling: Profiling,
+    /// Whether `run` estimates the error as it renders (always with a target error).
+    watch_error: bool,
+    /// The latest estimate `run` made.
+    latest_error: Option<ErrorReport>,
+}
+
+/// An error estimate made during a render, without its per-pixel image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ErrorReport {
+    pub seconds: f64,
+    pub iterations: u64,
+    pub relmse: f64,
+    pub variance: f64,
+    pub bias: f64,
+}
+
+/// Least iterations before a target error may end a render: two halves of 4 each, so that one
+/// lucky pair of iterations does not stop it.
+const MIN_ITERATIONS_FOR_TARGET: u64 = 8;
+
+/// What ended a render.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stop {
+    /// The samples or photons asked for were rendered.
+    Count,
+    Time,
+    /// The estimated error fell below the target.
+    TargetError,
+    Cancelled,
 }
 
 /// When the nodes are timed ([`Renderer::profile_from`]).
@@ -192,9 +244,17 @@ impl<'a> Renderer<'a> {
                     band,
                     schedule.first,
                 )?;
+                let tracked = tracked_images(&graph)?;
+                let named: Vec<_> = tracked
+                    .iter()
+                    .map(|(name, r)| (name.clone(), r.buffer.clone(), r.len as u32))
+                    .collect();
+                let halves = OddIterations::new(gpu, &shaders, &named)?;
                 Ok(Tile {
                     output: graph.output()?.clone(),
                     aovs: image_aovs(&graph),
+                    halves,
+                    tracked: tracked.into_iter().map(|(_, r)| r).collect(),
                     graph,
                     grid_y,
                     grid_rows,
@@ -254,6 +314,8 @@ impl<'a> Renderer<'a> {
             placement,
             scene_hash,
             profiling: Profiling::Off,
+            watch_error: false,
+            latest_error: None,
         })
     }
 
@@ -305,11 +367,17 @@ impl<'a> Renderer<'a> {
             )));
         }
         let grid: Vec<[f32; 4]> = self.gpu.read_pod(&r.buffer, r.len as usize)?;
+        self.place_rows(tile, &grid, sums);
+        Ok(())
+    }
+
+    /// Copies the rows `tile` keeps of `grid`, one value per pixel of its rows, into `sums`.
+    fn place_rows(&self, tile: &Tile, grid: &[[f32; 4]], sums: &mut [[f32; 4]]) {
+        let width = self.width as usize;
         let skip = (tile.keep_y - tile.grid_y) as usize * width;
         let kept = tile.keep_rows as usize * width;
         let at = tile.keep_y as usize * width;
         sums[at..at + kept].copy_from_slice(&grid[skip..skip + kept]);
-        Ok(())
     }
 
     /// Every buffer whose contents carry between iterations, read back whole, by name (what a
@@ -333,6 +401,7 @@ impl<'a> Renderer<'a> {
                 tile.graph
                     .state_buffers()
                     .into_iter()
+                    .chain(tile.halves.state_buffers())
                     .map(move |(name, b)| {
                         let name = if several {
                             format!("band{k}/{name}")
@@ -385,17 +454,28 @@ impl<'a> Renderer<'a> {
         for tile in &mut self.tiles {
             tile.graph
                 .iterate(self.gpu, self.schedule, self.iteration, self.seed)?;
+            tile.halves.update(self.gpu, self.iteration + 1);
         }
         self.iteration += 1;
         Ok(())
     }
 
-    /// Nodes removed because the scene had no use for them, with the reason.
+    /// Makes `run` estimate the error as it renders (see [`Renderer::latest_error`]).
+    pub fn watch_error(&mut self) {
+        self.watch_error = true;
+    }
+
+    /// The latest error estimate `run` made, when it watched the error.
+    pub fn latest_error(&self) -> Option<ErrorReport> {
+        self.latest_error
+    }
+
     /// Which scene tables are bound as uniform buffers on this adapter.
     pub fn placement(&self) -> &TablePlacement {
         &self.placement
     }
 
+    /// Nodes removed because the scene had no use for them, with the reason.
     pub fn pruned(&self) -> &[crate::graph::Pruned] {
         &self.pruned
     }
@@ -490,6 +570,44 @@ impl<'a> Renderer<'a> {
         Ok(Image::from_sums(self.width, self.height, &sums))
     }
 
+    /// The estimated error of the image so far (docs/error-estimate.md); `None` before two
+    /// iterations.
+    pub fn error_estimate(&self) -> Result<Option<ErrorEstimate>, Error> {
+        if self.iteration < 2 {
+            return Ok(None);
+        }
+        let Some(first) = self.tiles.first() else {
+            return Ok(None);
+        };
+        // Per tracked image: the whole image's mean and odd-iteration sums.
+        let mut means = Vec::new();
+        let mut odd_sums = Vec::new();
+        for i in 0..first.tracked.len() {
+            let (mut sums, mut odd) = (self.blank(), self.blank());
+            for tile in &self.tiles {
+                let r = tile.tracked.get(i).ok_or_else(|| {
+                    Error::Other("bands track different images for the error estimate".into())
+                })?;
+                self.place(tile, r, &mut sums)?;
+            }
+            for tile in &self.tiles {
+                let grids = tile.halves.odd_sums(self.gpu)?;
+                self.place_rows(tile, &grids[i], &mut odd);
+            }
+            means.push(Image::from_sums(self.width, self.height, &sums));
+            odd_sums.push(odd);
+        }
+        let halves: Vec<Halves<'_>> = means
+            .iter()
+            .zip(&odd_sums)
+            .map(|(mean, odd_sums)| Halves { mean, odd_sums })
+            .collect();
+        let Some((image, biases)) = halves.split_first() else {
+            return Ok(None);
+        };
+        Ok(error_estimate::estimate(self.iteration, image, biases))
+    }
+
     /// Every image slot of the output node, written or read (e.g. `combined`, `pt`,
     /// `caustic`, `radius` of `resolve`), by slot name.
     pub fn aovs(&self) -> Result<Vec<(&'static str, Image)>, Error> {
@@ -558,25 +676,54 @@ impl<'a> Renderer<'a> {
         let target_iterations = self
             .total_iterations(budget)
             .map(|total| self.schedule.local_count(total));
-        loop {
+        let watching = self.watch_error || budget.target_error.is_some();
+        let mut next_estimate = 0.0;
+        let stop = loop {
             let elapsed = start.elapsed().as_secs_f64();
-            let spp_done = target_iterations.is_some_and(|t| self.iteration >= t);
-            let time_done = budget.seconds.is_some_and(|s| elapsed >= s);
-            if spp_done || time_done || cancel.load(Ordering::Relaxed) {
-                break;
+            if cancel.load(Ordering::Relaxed) {
+                break Stop::Cancelled;
+            }
+            if target_iterations.is_some_and(|t| self.iteration >= t) {
+                break Stop::Count;
+            }
+            if budget.seconds.is_some_and(|s| elapsed >= s) {
+                break Stop::Time;
+            }
+            if let (Some(target), Some(latest)) = (budget.target_error, self.latest_error)
+                && latest.iterations >= MIN_ITERATIONS_FOR_TARGET
+                && latest.relmse < target
+            {
+                break Stop::TargetError;
             }
             self.iterate()?;
             // Waiting each iteration keeps the queue short, so the time budget and Ctrl-C are
             // honoured within one iteration.
             self.gpu.wait()?;
+            let elapsed = start.elapsed().as_secs_f64();
+            if watching && elapsed >= next_estimate {
+                // Reading the halves back costs about one small iteration: at most every
+                // half second and a tenth of the time so far, so it adds a few percent.
+                if let Some(e) = self.error_estimate()? {
+                    self.latest_error = Some(ErrorReport {
+                        seconds: elapsed,
+                        iterations: self.iteration,
+                        relmse: e.relmse,
+                        variance: e.variance,
+                        bias: e.bias,
+                    });
+                }
+                let spent = start.elapsed().as_secs_f64();
+                next_estimate = spent + (0.1 * spent).max(0.5);
+            }
             progress(self, start.elapsed().as_secs_f64());
-        }
+        };
         Ok(RunSummary {
             seconds: start.elapsed().as_secs_f64(),
             iterations: self.iteration,
             samples_per_pixel: self.samples_per_pixel(),
             photons: self.photons(),
-            cancelled: cancel.load(Ordering::Relaxed),
+            cancelled: stop == Stop::Cancelled,
+            stop,
         })
     }
 }
@@ -625,6 +772,18 @@ fn available_memory() -> Option<u64> {
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kib * 1024)
+}
+
+/// The images whose halves the error estimate needs, named for checkpoints: the graph's
+/// output, then each estimator's kernel bias.
+fn tracked_images(graph: &PreparedGraph) -> Result<Vec<(String, Resource)>, Error> {
+    let mut tracked = vec![("output".to_string(), graph.output()?.clone())];
+    for (index, node) in graph.graph().nodes.iter().enumerate() {
+        if let Some(r) = graph.resource(index, KERNEL_BIAS) {
+            tracked.push((format!("{}.{KERNEL_BIAS}", node.name), r.clone()));
+        }
+    }
+    Ok(tracked)
 }
 
 /// Every image slot of the graph's output node, written or read, by slot name.
@@ -681,4 +840,5 @@ pub struct RunSummary {
     pub samples_per_pixel: u64,
     pub photons: u64,
     pub cancelled: bool,
+    pub stop: Stop,
 }

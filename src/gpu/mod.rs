@@ -12,6 +12,7 @@ mod adapter;
 pub mod binding;
 pub mod dispatch;
 pub mod layout;
+pub mod odd_iterations;
 pub mod radix_sort;
 pub mod shaders;
 pub mod timer;

@@ -108,12 +108,20 @@ pub const HEADER_BYTES: u64 = std::mem::size_of::<HitPointsHeader>() as u64;
 pub struct GpuDepositCell {
     pub count: u32,
     pub flux: [f32; 3],
+    /// The same sums over the photons within half the radius (for the kernel-bias estimate).
+    pub inner_flux: [f32; 3],
+    pub inner_count: u32,
 }
 
-/// One `DepositCell`: photon count and RGB flux.
+/// One `DepositCell`: photon count and RGB flux, and both within half the radius.
 pub const DEPOSIT_BYTES: u64 = std::mem::size_of::<GpuDepositCell>() as u64;
 /// Bytes before the first node in a tree buffer (the node count and padding).
 pub const TREE_HEADER_BYTES: u64 = 16;
+
+/// The output slot where a photon-mapping estimator writes its estimate's kernel bias (an image
+/// like its radiance: the mean of per-iteration estimates), which the error estimate reads
+/// (docs/error-estimate.md).
+pub const KERNEL_BIAS: &str = "kernel_bias";
 
 /// Camera-path vertices where photon mapping takes over: `slots_per_pixel` per pixel.
 pub const HIT_POINTS: ResourceKind = ResourceKind::new("hit_points", HEADER_BYTES, HIT_POINT_BYTES);
@@ -149,7 +157,7 @@ pub const LAYOUTS: &[StructLayout] = &[
     }),
     struct_layout!(GpuPhotonHit => "PhotonHit" in BVH_GATHER, { position, remaining, wi, flux }),
     struct_layout!(PhotonHitsHeader => "PhotonHitsIn" in BVH_GATHER, { count, dropped } head),
-    struct_layout!(GpuDepositCell => "DepositCell" in BVH_GATHER, { count, flux }),
+    struct_layout!(GpuDepositCell => "DepositCell" in BVH_GATHER, { count, flux, inner_flux, inner_count }),
     struct_layout!(BvhNode => "HitPointNode" in BVH_GATHER, { min, left_or_first, max, count }),
 ];
 

@@ -5,7 +5,7 @@
 //! every iteration.
 
 use crate::graph::pass::{IMAGE, Pass, PassKind, Size, SlotDecl};
-use crate::passes::hit_points::{DEPOSITS, HIT_POINT_RADII, HIT_POINTS};
+use crate::passes::hit_points::{DEPOSITS, HIT_POINT_RADII, HIT_POINTS, KERNEL_BIAS};
 use crate::passes::sppm::{Merge, MergeParams, PARAMS_LAYOUT, SHADER, STATS_LAYOUT};
 
 static SLOTS: &[SlotDecl] = &[
@@ -15,6 +15,7 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points"))
         .persistent()
         .required(),
+    SlotDecl::output(KERNEL_BIAS, IMAGE, Size::Pixels),
 ];
 
 pub const KIND: PassKind = PassKind {

@@ -6,7 +6,9 @@
 //! sum of the estimates and their count, so renders of disjoint iterations (shards, a resumed
 //! render) sum to one render's image. r_1 is the rule of `sppm` (`initial_radius`, else
 //! `radius_pixels` footprints at each hit point); the schedule scales it. The `radii` output
-//! carries only that rule, with the scale for the next iteration, to the camera pass.
+//! carries only that rule, with the scale for the next iteration, to the camera pass. Its
+//! `kernel_bias` output sums each estimate's bias from its kernel in the same way
+//! (docs/error-estimate.md).
 
 use crate::Error;
 use crate::gpu::GpuContext;
@@ -16,7 +18,7 @@ use crate::graph::pass::{
     Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl,
 };
 use crate::passes::SceneResources;
-use crate::passes::hit_points::{DEPOSITS, HIT_POINT_RADII, HIT_POINTS, RadiusRule};
+use crate::passes::hit_points::{DEPOSITS, HIT_POINT_RADII, HIT_POINTS, KERNEL_BIAS, RadiusRule};
 use crate::passes::sppm::MergeParams;
 use crate::shader_file;
 
@@ -30,6 +32,7 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points"))
         .persistent()
         .required(),
+    SlotDecl::output(KERNEL_BIAS, IMAGE, Size::Pixels).persistent(),
 ];
 
 /// `GpuParams` against `PppmParams` in the shader.
@@ -135,6 +138,7 @@ impl Pass for Pppm {
         let deposits = ctx.input("deposits")?;
         let radiance = ctx.output("radiance")?;
         let radii = ctx.output("radii")?;
+        let kernel_bias = ctx.output(KERNEL_BIAS)?;
         let slots_per_pixel = (hit_points.len / ctx.pixels().max(1)) as u32;
         // The camera pass runs before this node in every iteration, so the first iteration's
         // scale is set here; each dispatch then leaves the next one's.
@@ -170,6 +174,7 @@ impl Pass for Pppm {
                 (Access::ReadWrite, &radiance.buffer),
                 (Access::ReadWrite, &radii.buffer),
                 (Access::ReadWrite, &discarded),
+                (Access::ReadWrite, &kernel_bias.buffer),
             ],
         );
         let pipeline =

@@ -2,7 +2,8 @@
 //! Every iteration the camera pass regenerates the hit points; per pixel and photon-mapped
 //! depth this node keeps N, R and tau across iterations and merges each iteration's deposits
 //! with the update of design.md section 2. Its `radiance` output is the photon-mapped radiance
-//! (w = 1); its `radii` output, the radius of every hit-point slot after its rule, is state it
+//! (w = 1), its `kernel_bias` output that estimate's bias from its kernel (docs/error-estimate.md);
+//! its `radii` output, the radius of every hit-point slot after its rule, is state it
 //! owns and the camera pass reads in the next iteration. `ppm` (src/passes/ppm.rs) runs the same
 //! merge on hit points it keeps.
 
@@ -18,7 +19,7 @@ use crate::graph::pass::{
 };
 use crate::passes::SceneResources;
 use crate::passes::hit_points::{
-    DEFAULT_RADIUS_PIXELS, DEPOSITS, HIT_POINT_RADII, HIT_POINTS, RadiusRule,
+    DEFAULT_RADIUS_PIXELS, DEPOSITS, HIT_POINT_RADII, HIT_POINTS, KERNEL_BIAS, RadiusRule,
 };
 use crate::shader_file;
 
@@ -32,9 +33,10 @@ struct GpuSlotStats {
     n: f32,
     tau_carry: [f32; 3],
     discarded: u32,
+    inner_per_r2: [f32; 3],
     photons_low: u32,
     photons_high: u32,
-    _pad: [u32; 2],
+    _pad: [u32; 3],
 }
 
 const SLOT_STATS_BYTES: u64 = std::mem::size_of::<GpuSlotStats>() as u64;
@@ -46,6 +48,7 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("radii", HIT_POINT_RADII, Size::LikeInput("hit_points"))
         .persistent()
         .required(),
+    SlotDecl::output(KERNEL_BIAS, IMAGE, Size::Pixels),
 ];
 
 /// `GpuParams` against `MergeParams` in the shader.
@@ -55,7 +58,7 @@ pub(crate) const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct
 
 /// `GpuSlotStats` against `SlotStats` in the shader.
 pub(crate) const STATS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuSlotStats => "SlotStats" in SHADER, {
-    tau_per_r2, n, tau_carry, discarded, photons_low, photons_high
+    tau_per_r2, n, tau_carry, discarded, inner_per_r2, photons_low, photons_high
 });
 
 pub const KIND: PassKind = PassKind {
@@ -204,6 +207,7 @@ impl Pass for Merge {
         let deposits = ctx.input("deposits")?;
         let radiance = ctx.output("radiance")?;
         let radii = ctx.output("radii")?;
+        let kernel_bias = ctx.output(KERNEL_BIAS)?;
         let slots_per_pixel = (hit_points.len / ctx.pixels().max(1)) as u32;
         let rule = RadiusRule::new(
             self.params.initial_radius.unwrap_or(0.0),
@@ -234,6 +238,7 @@ impl Pass for Merge {
                 (Access::ReadWrite, &stats),
                 (Access::ReadWrite, &radiance.buffer),
                 (Access::ReadWrite, &radii.buffer),
+                (Access::ReadWrite, &kernel_bias.buffer),
             ],
         );
         let pipeline =

@@ -64,6 +64,7 @@ pub fn render_to(renderer: &mut Renderer<'_>, spp: u64) -> Image {
                 spp: Some(spp),
                 seconds: None,
                 photons: None,
+                target_error: None,
             },
             &never,
             |_, _| {},

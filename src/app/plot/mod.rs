@@ -13,8 +13,19 @@ use crate::Error;
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
-    /// Measured by another renderer (`--peer`): drawn with hollow markers.
-    pub peer: bool,
+    pub style: SeriesStyle,
+    /// Index into the style's colours: a graph's measured and estimated lines share one.
+    pub colour: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SeriesStyle {
+    /// Measured against a reference: solid line, filled markers.
+    Measured,
+    /// The render's own estimate: dashed line, hollow markers.
+    Estimated,
+    /// Measured by another renderer (`--peer`): grey, hollow markers.
+    Peer,
 }
 
 const FONT: &[u8] = include_bytes!("DejaVuSans-ascii.ttf");
@@ -90,14 +101,10 @@ pub fn error_vs_time(path: &Path, title: &str, series: &[Series]) -> Result<(), 
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .draw()
         .map_err(|e| failed(&e))?;
-    let (mut ours, mut theirs) = (0, 0);
     for s in series {
-        let color = if s.peer {
-            theirs += 1;
-            PEER_COLOURS[(theirs - 1) % PEER_COLOURS.len()]
-        } else {
-            ours += 1;
-            COLOURS[(ours - 1) % COLOURS.len()]
+        let color = match s.style {
+            SeriesStyle::Peer => PEER_COLOURS[s.colour % PEER_COLOURS.len()],
+            _ => COLOURS[s.colour % COLOURS.len()],
         };
         let points: Vec<(f64, f64)> = s
             .points
@@ -105,12 +112,17 @@ pub fn error_vs_time(path: &Path, title: &str, series: &[Series]) -> Result<(), 
             .copied()
             .filter(|p| p.0 > 0.0 && p.1 > 0.0)
             .collect();
-        let line = LineSeries::new(points.clone(), color.stroke_width(2));
-        let drawn = chart.draw_series(line).map_err(|e| failed(&e))?;
+        let drawn = if s.style == SeriesStyle::Estimated {
+            let line = DashedLineSeries::new(points.clone(), 8, 5, color.stroke_width(2));
+            chart.draw_series(line).map_err(|e| failed(&e))?
+        } else {
+            let line = LineSeries::new(points.clone(), color.stroke_width(2));
+            chart.draw_series(line).map_err(|e| failed(&e))?
+        };
         drawn.label(&s.label).legend(move |(x, y)| {
             PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
         });
-        let filled = !s.peer;
+        let filled = s.style == SeriesStyle::Measured;
         chart
             .draw_series(points.iter().map(|&p| {
                 let style = if filled {

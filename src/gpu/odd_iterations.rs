@@ -1,0 +1,150 @@
+//! Two independent halves of running-mean images: for each image a node keeps as the mean of
+//! per-iteration estimates (a weighted sum and its weight per pixel), the sum of the estimates
+//! of the odd iterations (shaders/gpu/odd_iterations.wgsl). The even half is the rest of the
+//! mean; how far the halves differ measures the mean's noise (src/app/error_estimate.rs).
+
+use std::sync::Arc;
+
+use super::binding::{Access, bind_buffers};
+use super::dispatch::workgroup_grid;
+use super::shaders::{ShaderFile, ShaderLibrary};
+use super::{GpuContext, GpuError};
+
+pub const SHADER: ShaderFile = crate::shader_file!("shaders/gpu/odd_iterations.wgsl");
+const WORKGROUP: u32 = 256;
+const PIXEL_BYTES: u64 = 16;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct SplitParams {
+    pixels: u32,
+    odd: u32,
+    count: f32,
+    previous_count: f32,
+}
+
+/// `SplitParams` against its WGSL twin (tests/shaders.rs checks it).
+pub const LAYOUTS: &[super::layout::StructLayout] = &[crate::struct_layout!(
+    SplitParams => "SplitParams" in SHADER, { pixels, odd, count, previous_count }
+)];
+
+/// One tracked image and its two state buffers.
+struct Tracked {
+    name: String,
+    pixels: u32,
+    previous: wgpu::Buffer,
+    odd_sum: wgpu::Buffer,
+    params: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+/// The odd-iteration sums of a set of images, updated after every iteration.
+pub struct OddIterations {
+    pipeline: Option<wgpu::ComputePipeline>,
+    tracked: Vec<Tracked>,
+}
+
+impl OddIterations {
+    /// Tracks `images`, each named and holding `pixels` (sum, weight) vec4s.
+    pub fn new(
+        gpu: &GpuContext,
+        shaders: &ShaderLibrary,
+        images: &[(String, Arc<wgpu::Buffer>, u32)],
+    ) -> Result<Self, GpuError> {
+        let usage = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
+        let mut tracked = Vec::new();
+        let mut pipeline = None;
+        for (name, image, pixels) in images {
+            let bytes = *pixels as u64 * PIXEL_BYTES;
+            let previous = gpu.create_buffer(&format!("{name} previous mean"), bytes, usage)?;
+            let odd_sum = gpu.create_buffer(&format!("{name} odd iterations"), bytes, usage)?;
+            let params = gpu.create_buffer(
+                "odd iterations params",
+                std::mem::size_of::<SplitParams>() as u64,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            )?;
+            let (layout, bind_group) = bind_buffers(
+                &gpu.device,
+                "odd iterations",
+                &[
+                    (Access::Uniform, &params),
+                    (Access::Read, image),
+                    (Access::ReadWrite, &previous),
+                    (Access::ReadWrite, &odd_sum),
+                ],
+            );
+            if pipeline.is_none() {
+                pipeline = Some(shaders.compute_pipeline(gpu, &SHADER, "main", &[&layout])?);
+            }
+            tracked.push(Tracked {
+                name: name.clone(),
+                pixels: *pixels,
+                previous,
+                odd_sum,
+                params,
+                bind_group,
+            });
+        }
+        Ok(Self { pipeline, tracked })
+    }
+
+    /// Submits the update after iteration `count` (1-based) of the render.
+    pub fn update(&self, gpu: &GpuContext, count: u64) {
+        let Some(pipeline) = &self.pipeline else {
+            return;
+        };
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("odd iterations"),
+            });
+        for t in &self.tracked {
+            let params = SplitParams {
+                pixels: t.pixels,
+                odd: (count % 2) as u32,
+                count: count as f32,
+                previous_count: count.saturating_sub(1) as f32,
+            };
+            gpu.queue
+                .write_buffer(&t.params, 0, bytemuck::bytes_of(&params));
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("odd iterations"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &t.bind_group, &[]);
+            let [x, y, z] = workgroup_grid(t.pixels.div_ceil(WORKGROUP).max(1));
+            pass.dispatch_workgroups(x, y, z);
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The tracked images' names, in order.
+    pub fn names(&self) -> impl Iterator<Item = &str> {
+        self.tracked.iter().map(|t| t.name.as_str())
+    }
+
+    /// Every tracked image's odd-iteration sums (xyz: sum of estimates, w: how many), per
+    /// pixel, in the order of [`OddIterations::names`].
+    pub fn odd_sums(&self, gpu: &GpuContext) -> Result<Vec<Vec<[f32; 4]>>, GpuError> {
+        self.tracked
+            .iter()
+            .map(|t| gpu.read_pod(&t.odd_sum, t.pixels as usize))
+            .collect()
+    }
+
+    /// Buffers carried between iterations, named for a checkpoint.
+    pub fn state_buffers(&self) -> Vec<(String, &wgpu::Buffer)> {
+        self.tracked
+            .iter()
+            .flat_map(|t| {
+                [
+                    (format!("odd_iterations/{}/previous", t.name), &t.previous),
+                    (format!("odd_iterations/{}/odd_sum", t.name), &t.odd_sum),
+                ]
+            })
+            .collect()
+    }
+}
