@@ -355,7 +355,8 @@ fn every_uploaded_struct_matches_its_wgsl_layout() {
         .flat_map(|kind| kind.layouts)
         .chain(hppm::passes::hit_points::LAYOUTS)
         .chain(hppm::passes::scene_resources::LAYOUTS)
-        .chain(hppm::gpu::radix_sort::LAYOUTS);
+        .chain(hppm::gpu::radix_sort::LAYOUTS)
+        .chain(hppm::gpu::odd_iterations::LAYOUTS);
     let mut checked = Vec::new();
     let mut problems = Vec::new();
     for layout in layouts {
