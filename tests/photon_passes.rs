@@ -597,6 +597,9 @@ fn deposit_cell(count: u32, flux: [f32; 3], inner_flux: [f32; 3]) -> GpuDepositC
     }
 }
 
+/// One slot's deposit of one iteration: photon count, flux, flux within half the radius.
+type Deposit = (u32, [f32; 3], [f32; 3]);
+
 /// A `Merge` (sppm) prepared on `hit_points` and `deposits`, and its outputs.
 fn prepare_merge(
     h: &PassHarness<'_>,
@@ -644,7 +647,7 @@ fn merge_matches_the_progressive_update_in_f64() {
     points[6].radius = 1.5 * min_radius as f32; // will hit the floor
     // Iterations of (count, flux, flux within half the radius) per slot; the last has counts
     // beyond 2^24.
-    let iterations: Vec<Vec<(u32, [f32; 3], [f32; 3])>> = (0..4)
+    let iterations: Vec<Vec<Deposit>> = (0..4)
         .map(|it| {
             (0..count)
                 .map(|i| {

@@ -292,10 +292,14 @@ pub fn compare(
                 Some(r) => Some(image.metrics_where(r, |i| keep.as_ref().is_none_or(|k| k[i]))?),
                 None => None,
             };
-            let estimated = renderer.error_estimate()?.map(|e| Estimated {
-                relmse: e.relmse,
-                variance: e.variance,
-                bias: e.bias,
+            // Over the pixels measured, as the error against the reference is.
+            let estimated = renderer.error_estimate()?.map(|e| {
+                let (relmse, variance, bias) = e.over(|i| keep.as_ref().is_none_or(|k| k[i]));
+                Estimated {
+                    relmse,
+                    variance,
+                    bias,
+                }
             });
             progress(&format!(
                 "{label}: {clock:.2} s, {} iterations, relMSE {}, estimated {}",

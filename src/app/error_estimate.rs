@@ -33,11 +33,30 @@ pub struct ErrorEstimate {
     /// Its noise part: the image's variance over (x^2 + 0.01), averaged.
     pub variance: f64,
     /// Its kernel-bias part: the squared bias of the photon-mapped terms over (x^2 + 0.01),
-    /// averaged (an unbiased estimate of a square: it may come out a little below 0 where the
-    /// bias is small, and is reported as it is; `relmse` is kept at or above 0).
+    /// averaged.
     pub bias: f64,
     /// Per pixel and channel: the estimated squared error over (x^2 + 0.01).
     pub per_pixel: Image,
+    /// Per pixel, the parts of `per_pixel` summed over RGB: (noise, kernel bias).
+    parts: Vec<(f64, f64)>,
+}
+
+impl ErrorEstimate {
+    /// The estimate over the pixels `keep` selects (as `hppm compare --mask` measures):
+    /// (relMSE, noise part, kernel-bias part).
+    pub fn over(&self, keep: impl Fn(usize) -> bool) -> (f64, f64, f64) {
+        let (mut variance, mut bias, mut count) = (0.0, 0.0, 0usize);
+        for (i, (v, b)) in self.parts.iter().enumerate() {
+            if keep(i) {
+                variance += v;
+                bias += b;
+                count += 3;
+            }
+        }
+        let count = count.max(1) as f64;
+        let (variance, bias) = (variance / count, bias / count);
+        ((variance + bias).max(0.0), variance, bias)
+    }
 }
 
 /// Estimates the error of `image` after `iterations` iterations (`None` before 2, when there
@@ -76,23 +95,26 @@ pub fn estimate(
             let (debiased_a, debiased_b) = (a - bias_a, b - bias_b);
             *part = PixelParts {
                 variance: (a - b).powi(2) * variance_scale,
-                // E[A_bias B_bias] is the squared bias when the halves are independent.
+                // E[A_bias B_bias] is the squared bias when the halves are independent; not
+                // below 0, where a firefly in one half would cancel its own variance.
                 bias_squared: (bias_a * bias_b).max(0.0),
                 debiased: (odd * debiased_a + even * debiased_b) / n,
                 debiased_variance: (debiased_a - debiased_b).powi(2) * variance_scale,
             };
         }
     }
-    let (mut variance_sum, mut bias_sum) = (0.0, 0.0);
+    let mut pixel_parts = vec![(0.0, 0.0); pixels];
     for (pixel, out) in per_pixel.pixels.iter_mut().enumerate() {
         for c in 0..3 {
             let part = parts[pixel][c];
             let scale = 1.0 / (reference_squared(&parts, width, height, pixel, c) + 0.01);
-            variance_sum += part.variance * scale;
-            bias_sum += part.bias_squared * scale;
+            pixel_parts[pixel].0 += part.variance * scale;
+            pixel_parts[pixel].1 += part.bias_squared * scale;
             out[c] = ((part.variance + part.bias_squared) * scale) as f32;
         }
     }
+    let variance_sum: f64 = pixel_parts.iter().map(|p| p.0).sum();
+    let bias_sum: f64 = pixel_parts.iter().map(|p| p.1).sum();
     let count = (per_pixel.pixels.len() * 3).max(1) as f64;
     let (variance, bias) = (variance_sum / count, bias_sum / count);
     Some(ErrorEstimate {
@@ -100,6 +122,7 @@ pub fn estimate(
         variance,
         bias,
         per_pixel,
+        parts: pixel_parts,
     })
 }
 
@@ -145,67 +168,115 @@ fn reference_squared(
 mod tests {
     use super::*;
 
-    fn image(values: &[f32]) -> Image {
-        Image {
-            width: values.len() as u32,
-            height: 1,
-            pixels: values.iter().map(|&v| [v; 3]).collect(),
+    /// A uniform random number in [0, 1) from a 64-bit LCG (Knuth's MMIX constants).
+    fn uniform(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A running mean over `n` iterations of per-pixel estimates drawn by `draw`, as the GPU
+    /// keeps it: the mean image and its odd iterations' sums.
+    fn simulate(size: u32, n: u64, mut draw: impl FnMut(usize) -> f64) -> (Image, Vec<[f32; 4]>) {
+        let pixels = (size * size) as usize;
+        let mut sum = vec![0.0f64; pixels];
+        let mut odd = vec![[0.0f32; 4]; pixels];
+        for i in 1..=n {
+            for p in 0..pixels {
+                let x = draw(p);
+                sum[p] += x;
+                if i % 2 == 1 {
+                    odd[p] = [odd[p][0] + x as f32; 4];
+                }
+            }
+        }
+        let mean = Image {
+            width: size,
+            height: size,
+            pixels: sum.iter().map(|s| [(s / n as f64) as f32; 3]).collect(),
+        };
+        (mean, odd)
+    }
+
+    /// Estimates of mean 0.5 and standard deviation 0.4 per iteration (a uniform variable),
+    /// 64 iterations: the image's relMSE is 0.16 / 64 / (0.25 + 0.01) = 9.6e-3, and the
+    /// estimate finds it within 5% over 64x64 pixels. Would catch the variance of one
+    /// iteration reported for the mean (64x), or halves of different sizes weighed wrongly.
+    #[test]
+    fn noise_alone_is_estimated_as_the_variance_of_the_mean() {
+        let mut rng = 7u64;
+        let half_width = 0.4 * 3f64.sqrt();
+        for n in [64, 63] {
+            let (mean, odd) = simulate(64, n, |_| {
+                0.5 + half_width * (2.0 * uniform(&mut rng) - 1.0)
+            });
+            let e = estimate(
+                n,
+                &Halves {
+                    mean: &mean,
+                    odd_sums: &odd,
+                },
+                &[],
+            )
+            .expect("halves");
+            let expected = 0.16 / n as f64 / 0.26;
+            assert!(
+                (e.relmse / expected - 1.0).abs() < 0.05,
+                "{n} iterations: estimated {} vs {expected}",
+                e.relmse
+            );
+            assert_eq!(e.bias, 0.0);
         }
     }
 
-    /// Per-iteration estimates x_i of one pixel: the halves' difference gives the mean's
-    /// variance; a constant image has none.
+    /// A firefly: one pixel in 50 gets 100 in one iteration of 32, over a black image. Its
+    /// error is (100/32)^2 / 0.01 where it lands: the estimate finds the mean within 30%.
+    /// With the image's own square as the denominator it would find 1/0.98 of a firefly's
+    /// worth per pixel instead: 1000x too low.
     #[test]
-    fn variance_from_halves() {
-        // Four iterations: 1, 3 (odd) and 2, 4 (even): mean 2.5, A = 2, B = 3.
-        let mean = image(&[2.5, 7.0]);
-        let odd = [[4.0; 4], [14.0; 4]];
+    fn a_firefly_is_measured_against_the_dark_it_lands_in() {
+        let mut rng = 3u64;
+        let n = 32;
+        let (mean, odd) = simulate(64, n, |_| {
+            if uniform(&mut rng) < 1.0 / (50.0 * 32.0) {
+                100.0
+            } else {
+                0.0
+            }
+        });
         let e = estimate(
-            4,
+            n,
             &Halves {
                 mean: &mean,
                 odd_sums: &odd,
             },
             &[],
         )
-        .expect("two halves");
-        // (A - B)^2 / 4 = 0.25, over 2.5^2 + 0.01; the constant pixel adds 0.
-        let expected = 0.25 / (2.5f64 * 2.5 + 0.01) / 2.0;
-        assert!((e.variance - expected).abs() < 1e-9, "{e:?}");
-        assert_eq!(e.bias, 0.0);
-        assert_eq!(e.per_pixel.pixels[1], [0.0; 3]);
+        .expect("halves");
+        // E[(x - 0)^2] = p (100/32)^2 with p = 1/50 per pixel over 32 iterations... per
+        // iteration p_i = 1/1600: Var(mean) = 32 p_i (100/32)^2 (1 - p_i).
+        let p = 1.0 / 1600.0;
+        let expected = n as f64 * p * (100.0f64 / n as f64).powi(2) / 0.01;
+        assert!(
+            (e.relmse / expected - 1.0).abs() < 0.3,
+            "estimated {} vs {expected}",
+            e.relmse
+        );
     }
 
-    /// Halves of unequal size (an odd iteration count) weigh as their counts say: three
-    /// iterations 0, 3, 0 have sample variance 3, so the mean's variance is 1.
+    /// A constant kernel bias of 0.2 under a mean of 0.7 (reference 0.5) with noise in both:
+    /// the bias part is 0.04 / (0.25 + 0.01) within 10%, and the image less its bias stands in
+    /// for the reference. Would catch the bias left out, squared from one half only (its
+    /// noise added), or the biased image as the denominator (0.04 / 0.5 instead).
     #[test]
-    fn unequal_halves() {
-        let mean = image(&[1.0]);
-        let odd = [[0.0; 4]];
+    fn kernel_bias_is_squared_from_independent_halves() {
+        let mut rng = 11u64;
+        let n = 40;
+        let (mean, odd) = simulate(48, n, |_| 0.7 + 0.2 * (2.0 * uniform(&mut rng) - 1.0));
+        let (bias, bias_odd) = simulate(48, n, |_| 0.2 + 0.3 * (2.0 * uniform(&mut rng) - 1.0));
         let e = estimate(
-            3,
-            &Halves {
-                mean: &mean,
-                odd_sums: &odd,
-            },
-            &[],
-        )
-        .expect("two halves");
-        // A = 0 (iterations 1, 3), B = 3: (A-B)^2 / ((1/2 + 1) 3) = 9 / 4.5 = 2: the
-        // two-group estimate of sigma^2 / n (sigma^2 = 6 from two groups, n = 3).
-        assert!((e.variance - 2.0 / 1.01).abs() < 1e-9, "{e:?}");
-    }
-
-    /// The bias part multiplies the halves' bias estimates: equal halves give their square,
-    /// halves of opposite sign (noise around no bias) a negative term.
-    #[test]
-    fn bias_from_halves() {
-        let mean = image(&[1.0, 1.0]);
-        let odd = [[2.0; 4], [2.0; 4]];
-        let bias = image(&[0.5, 0.0]);
-        let bias_odd = [[1.0; 4], [2.0; 4]];
-        let e = estimate(
-            4,
+            n,
             &Halves {
                 mean: &mean,
                 odd_sums: &odd,
@@ -215,22 +286,32 @@ mod tests {
                 odd_sums: &bias_odd,
             }],
         )
-        .expect("two halves");
-        // Pixel 0: both halves 0.5 -> 0.25; pixel 1: +1 and -1 -> -1.
-        let expected = (0.25 - 1.0) / 1.01 / 2.0;
-        assert!((e.bias - expected).abs() < 1e-9, "{e:?}");
-        assert_eq!(e.relmse, 0.0);
+        .expect("halves");
+        let expected = 0.04 / 0.26;
+        assert!(
+            (e.bias / expected - 1.0).abs() < 0.1,
+            "bias part {} vs {expected}",
+            e.bias
+        );
+        // Over half the pixels, the same.
+        let (_, _, half) = e.over(|i| i % 2 == 0);
+        assert!((half / e.bias - 1.0).abs() < 0.1, "{half} vs {}", e.bias);
     }
 
     #[test]
     fn needs_two_iterations() {
-        let mean = image(&[1.0]);
+        let mean = Image {
+            width: 1,
+            height: 1,
+            pixels: vec![[1.0; 3]],
+        };
+        let odd = [[1.0; 4]];
         assert!(
             estimate(
                 1,
                 &Halves {
                     mean: &mean,
-                    odd_sums: &[[1.0; 4]]
+                    odd_sums: &odd
                 },
                 &[]
             )
