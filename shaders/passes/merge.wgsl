@@ -15,7 +15,8 @@
 // `kernel_bias` as the mean over iterations, as the radiance is.
 
 #import common::sampling::{PI, any_not_finite}
-#import common::hit_points::{HitPointBuffer, RadiusBuffer, DepositCell, NO_PIXEL}
+#import common::hit_points::{HitPointBuffer, RadiusBuffer, NO_PIXEL}
+#import common::deposit_sums::{deposited_flux, inner_flux, deposit_count}
 
 struct MergeParams {
     alpha: f32,
@@ -51,29 +52,13 @@ struct SlotStats {
 
 @group(1) @binding(0) var<uniform> params: MergeParams;
 @group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
-@group(1) @binding(2) var<storage, read_write> deposits: array<DepositCell>;
+// Binding 2: the deposits (common::deposit_sums).
 @group(1) @binding(3) var<storage, read_write> stats: array<SlotStats>;
 @group(1) @binding(4) var<storage, read_write> radiance: array<vec4<f32>>;
 // This estimator's state: each slot's radius (0 until the slot first holds a hit point), read
 // by the camera pass in the next iteration.
 @group(1) @binding(5) var<storage, read_write> radii: RadiusBuffer;
 @group(1) @binding(6) var<storage, read_write> kernel_bias: array<vec4<f32>>;
-
-fn deposited_flux(cell: u32) -> vec3<f32> {
-#ifdef FLOAT_ATOMICS
-    return vec3<f32>(atomicLoad(&deposits[cell].flux[0]), atomicLoad(&deposits[cell].flux[1]), atomicLoad(&deposits[cell].flux[2]));
-#else
-    return vec3<f32>(bitcast<f32>(atomicLoad(&deposits[cell].flux[0])), bitcast<f32>(atomicLoad(&deposits[cell].flux[1])), bitcast<f32>(atomicLoad(&deposits[cell].flux[2])));
-#endif
-}
-
-fn inner_flux(cell: u32) -> vec3<f32> {
-#ifdef FLOAT_ATOMICS
-    return vec3<f32>(atomicLoad(&deposits[cell].inner_flux[0]), atomicLoad(&deposits[cell].inner_flux[1]), atomicLoad(&deposits[cell].inner_flux[2]));
-#else
-    return vec3<f32>(bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[0])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[1])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[2])));
-#endif
-}
 
 // pi times a slot's estimates summed over iterations, at its radius and at half of it.
 struct SlotSums {
@@ -93,7 +78,7 @@ fn merge_slot(index: u32) -> SlotSums {
         radii.radii[index] = radius;
     }
     var s = stats[index];
-    let m = atomicLoad(&deposits[index].count);
+    let m = deposit_count(index);
     let phi = deposited_flux(index);
     let phi_inner = inner_flux(index);
     if m > 0u {

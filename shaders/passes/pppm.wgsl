@@ -5,7 +5,8 @@
 // the pixel's running sum, so renders of disjoint iterations add up to one render's sums.
 
 #import common::sampling::{PI, any_not_finite}
-#import common::hit_points::{HitPointBuffer, RadiusBuffer, DepositCell, NO_PIXEL}
+#import common::hit_points::{HitPointBuffer, RadiusBuffer, NO_PIXEL}
+#import common::deposit_sums::{deposited_flux, inner_flux, deposit_count}
 
 struct PppmParams {
     width: u32,
@@ -17,7 +18,7 @@ struct PppmParams {
 
 @group(1) @binding(0) var<uniform> params: PppmParams;
 @group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
-@group(1) @binding(2) var<storage, read_write> deposits: array<DepositCell>;
+// Binding 2: the deposits (common::deposit_sums).
 @group(1) @binding(3) var<storage, read_write> radiance: array<vec4<f32>>;
 // Only the rule is used: its scale is the schedule, its radii stay 0, so the camera pass gives
 // every hit point the rule's radius for its footprint.
@@ -26,22 +27,6 @@ struct PppmParams {
 @group(1) @binding(5) var<storage, read_write> discarded: atomic<u32>;
 // Per pixel the sum of each estimate's kernel bias, (4/3) (L(R) - L(R/2)), and their count.
 @group(1) @binding(6) var<storage, read_write> kernel_bias: array<vec4<f32>>;
-
-fn deposited_flux(cell: u32) -> vec3<f32> {
-#ifdef FLOAT_ATOMICS
-    return vec3<f32>(atomicLoad(&deposits[cell].flux[0]), atomicLoad(&deposits[cell].flux[1]), atomicLoad(&deposits[cell].flux[2]));
-#else
-    return vec3<f32>(bitcast<f32>(atomicLoad(&deposits[cell].flux[0])), bitcast<f32>(atomicLoad(&deposits[cell].flux[1])), bitcast<f32>(atomicLoad(&deposits[cell].flux[2])));
-#endif
-}
-
-fn inner_flux(cell: u32) -> vec3<f32> {
-#ifdef FLOAT_ATOMICS
-    return vec3<f32>(atomicLoad(&deposits[cell].inner_flux[0]), atomicLoad(&deposits[cell].inner_flux[1]), atomicLoad(&deposits[cell].inner_flux[2]));
-#else
-    return vec3<f32>(bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[0])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[1])), bitcast<f32>(atomicLoad(&deposits[cell].inner_flux[2])));
-#endif
-}
 
 // This iteration's density estimates at slot `index`, over the disc and over half its radius:
 // flux per emitted photon over the area.
@@ -52,7 +37,7 @@ struct SlotEstimate {
 
 fn slot_estimate(index: u32) -> SlotEstimate {
     let point = hit_points.points[index];
-    if point.pixel == NO_PIXEL || point.radius <= 0.0 || atomicLoad(&deposits[index].count) == 0u {
+    if point.pixel == NO_PIXEL || point.radius <= 0.0 || deposit_count(index) == 0u {
         return SlotEstimate(vec3<f32>(0.0), vec3<f32>(0.0));
     }
     let area = PI * point.radius * point.radius;

@@ -70,6 +70,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/material.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
+    shader_file!("shaders/common/deposit_sums.wgsl"),
     shader_file!("shaders/common/spatial_hash.wgsl"),
     shader_file!("shaders/common/photon_grid.wgsl"),
 ];
