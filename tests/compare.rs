@@ -160,7 +160,10 @@ fn two_graph_compare_writes_csv_images_and_plot() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("graph,snapshot,seconds,iterations,spp,photons,relmse,rmse,mae")
+        Some(
+            "graph,snapshot,seconds,iterations,spp,photons,relmse,rmse,mae,estimated_relmse,\
+             estimated_variance,estimated_bias"
+        )
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -187,6 +190,9 @@ fn two_graph_compare_writes_csv_images_and_plot() {
                 close(relmse, rmse * rmse / 4.01)
                     || (relmse - rmse * rmse / 4.01).abs() < 1e-6 * relmse
             );
+            // The estimate, from two iterations on (docs/error-estimate.md).
+            let iterations: u64 = r[3].parse().expect("iterations");
+            assert_eq!(r[9].is_empty(), iterations < 2, "{r:?}");
         }
         let final_image = Image::read_exr(&out.join(format!("{graph}.exr"))).expect("final image");
         assert_eq!((final_image.width, final_image.height), (w, h));
@@ -241,5 +247,43 @@ fn a_mask_keeps_its_zero_pixels() {
         .expect_err("keeps nothing")
         .to_string();
     assert!(err.contains("no pixel"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Without `--reference`, compare still reports error against time: the render's own estimate,
+/// with the measured columns empty, and a plot of it.
+#[test]
+fn compare_without_a_reference_reports_the_estimate() {
+    let dir = std::env::temp_dir().join(format!("hppm-compare-estimate-{}", std::process::id()));
+    let out = dir.join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_hppm"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "compare",
+            "scenes/cornell_box.ron",
+            "--graph",
+            "graphs/pt.ron",
+            "--time",
+            "1",
+            "--snapshots",
+            "3",
+            "--size",
+            "16x12",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .expect("run hppm");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let csv = std::fs::read_to_string(out.join("errors.csv")).expect("errors.csv");
+    let last: Vec<&str> = csv.lines().last().expect("a row").split(',').collect();
+    assert!(
+        last[6].is_empty() && last[7].is_empty(),
+        "no reference, no measured error: {csv}"
+    );
+    let estimated: f64 = last[9].parse().expect("an estimate in the last row");
+    assert!(estimated > 0.0 && estimated.is_finite(), "{csv}");
+    assert!(out.join("errors.png").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
