@@ -124,6 +124,18 @@ fn a_banded_render_resumes_and_shards_as_a_whole_one() {
 
     let mut whole = banded(&gpu, &scene, graph, 1);
     run(&mut whole, 4);
+    // The error estimate's halves are kept per band and put together as the image is.
+    let estimate = |r: &Renderer<'_>| {
+        r.error_estimate()
+            .expect("estimate")
+            .expect("two iterations")
+            .relmse
+    };
+    let (banded_estimate, whole_estimate) = (estimate(&straight), estimate(&whole));
+    assert!(
+        (banded_estimate - whole_estimate).abs() <= 1e-3 * whole_estimate,
+        "estimated relMSE {banded_estimate} in bands, {whole_estimate} whole"
+    );
     let terms = straight.read_terms().expect("terms");
     let whole_terms = whole.read_terms().expect("terms");
     assert_eq!(terms.len(), whole_terms.len());

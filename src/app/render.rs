@@ -579,6 +579,12 @@ impl<'a> Renderer<'a> {
         let Some(first) = self.tiles.first() else {
             return Ok(None);
         };
+        // Per band, per tracked image: the odd-iteration sums of its rows.
+        let band_sums = self
+            .tiles
+            .iter()
+            .map(|tile| tile.halves.odd_sums(self.gpu))
+            .collect::<Result<Vec<_>, _>>()?;
         // Per tracked image: the whole image's mean and odd-iteration sums.
         let mut means = Vec::new();
         let mut odd_sums = Vec::new();
@@ -590,9 +596,11 @@ impl<'a> Renderer<'a> {
                 })?;
                 self.place(tile, r, &mut sums)?;
             }
-            for tile in &self.tiles {
-                let grids = tile.halves.odd_sums(self.gpu)?;
-                self.place_rows(tile, &grids[i], &mut odd);
+            for (tile, sums) in self.tiles.iter().zip(&band_sums) {
+                let grid = sums.get(i).ok_or_else(|| {
+                    Error::Other("bands track different images for the error estimate".into())
+                })?;
+                self.place_rows(tile, grid, &mut odd);
             }
             means.push(Image::from_sums(self.width, self.height, &sums));
             odd_sums.push(odd);
