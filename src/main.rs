@@ -87,6 +87,10 @@ struct RenderArgs {
     /// --spp or --photons caps the render.
     #[arg(long, value_name = "RELMSE")]
     target_error: Option<f64>,
+    /// With --target-error: pixels whose estimated error is below the target stop receiving
+    /// samples (path tracing graphs such as graphs/pt.ron; --spp then caps each pixel).
+    #[arg(long)]
+    adaptive: bool,
     /// Also write every image output of the graph's output node (e.g. `pt`, `caustic`,
     /// `radius` of `resolve`) next to `--out`, as OUT.SLOT.EXT, and the per-pixel error
     /// estimate as OUT.error.exr.
@@ -368,6 +372,7 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         seconds: args.time,
         photons: args.photons,
         target_error: args.target_error,
+        adaptive: args.adaptive,
     };
     budget.check()?;
     if args.shard.is_some() && args.target_error.is_some() {
@@ -493,9 +498,16 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             None => bar.set_position((seconds * 1000.0) as u64),
         }
         let rate = spp as f64 / seconds.max(1e-9);
+        let sampling = match budget.adaptive {
+            true => format!("  sampling {:.0}% of pixels", 100.0 * r.sampled_share()),
+            false => String::new(),
+        };
         bar.set_message(match r.latest_error() {
-            Some(e) => format!("{rate:.1} spp/s  estimated relMSE {:.3e}", e.relmse),
-            None => format!("{rate:.1} spp/s"),
+            Some(e) => format!(
+                "{rate:.1} spp/s  estimated relMSE {:.3e}{sampling}",
+                e.relmse
+            ),
+            None => format!("{rate:.1} spp/s{sampling}"),
         });
     })?;
     bar.finish_and_clear();
@@ -524,6 +536,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         .with("hppm_spp", renderer.samples_per_pixel())
         .with("hppm_seed", seed)
         .with("hppm_seconds", format!("{:.3}", summary.seconds));
+    if budget.adaptive {
+        provenance = provenance.with(
+            "hppm_mean_spp",
+            format!("{:.3}", renderer.mean_samples_per_pixel()),
+        );
+    }
     if let Some(e) = &estimate {
         provenance = provenance
             .with("hppm_estimated_relmse", format!("{:.6e}", e.relmse))
@@ -582,12 +600,19 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             )
         );
     }
+    let spp = match budget.adaptive {
+        true => format!(
+            "{:.1} spp on average (at most {})",
+            renderer.mean_samples_per_pixel(),
+            renderer.samples_per_pixel()
+        ),
+        false => format!("{} spp", renderer.samples_per_pixel()),
+    };
     println!(
-        "{}: {}x{}, {} spp and {} photons in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
+        "{}: {}x{}, {spp} and {} photons in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
         args.out.display(),
         width,
         height,
-        renderer.samples_per_pixel(),
         renderer.photons(),
         summary.seconds,
         counters.get("rays") as f64 / summary.seconds.max(1e-9) / 1e6,

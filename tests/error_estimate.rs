@@ -10,6 +10,7 @@ use std::sync::atomic::AtomicBool;
 use common::{gpu, load_graph, load_scene, reference, relmse, render_to, renderer, repo_path};
 use hppm::app::render::{Budget, Stop};
 use hppm::gpu::odd_iterations::OddIterations;
+use hppm::gpu::sample_mask::{SAMPLED, SampleMask, UPDATED};
 use hppm::gpu::shaders::ShaderLibrary;
 
 /// Images kept as running means in all three forms nodes use (a sum and its count, a sum and a
@@ -45,7 +46,8 @@ fn odd_iterations_sum_the_odd_estimates() {
         .enumerate()
         .map(|(k, b)| (format!("image{k}"), b.clone(), pixels))
         .collect();
-    let halves = OddIterations::new(&gpu, &shaders, &named).expect("odd iterations");
+    let mask = SampleMask::new(&gpu, pixels).expect("mask");
+    let halves = OddIterations::new(&gpu, &shaders, &named, &mask).expect("odd iterations");
     // CPU: the three accumulators and the odd sums of the means' per-iteration estimates.
     let mut counted = vec![[0.0f64; 4]; pixels as usize];
     let mut weighted = vec![[0.0f64; 4]; pixels as usize];
@@ -85,14 +87,14 @@ fn odd_iterations_sum_the_odd_estimates() {
             gpu.queue
                 .write_buffer(buffer, 0, bytemuck::cast_slice(image));
         }
-        halves.update(&gpu, i);
+        halves.update(&gpu);
     }
     gpu.wait().expect("wait");
     let sums = halves.odd_sums(&gpu).expect("readback");
     let mut worst = 0.0f64;
     for (k, image) in sums.iter().enumerate() {
         for (p, got) in image.iter().enumerate() {
-            assert_eq!(got[3], 4.0, "image {k} pixel {p}: odd iterations counted");
+            assert_eq!(got[3], 7.0, "image {k} pixel {p}: updates counted");
             for c in 0..3 {
                 let want = odd[p][k][c];
                 let error = (got[c] as f64 - want).abs();
@@ -109,6 +111,74 @@ fn odd_iterations_sum_the_odd_estimates() {
     let direct: f64 = [1, 3, 5, 7].iter().map(|&i| estimate(i, 5, 1) as f64).sum();
     assert!((sums[0][5][1] as f64 - direct).abs() < 1e-4);
     eprintln!("odd-iteration sums of 3 images x {pixels} pixels: worst error {worst:.2e}");
+}
+
+/// Adaptive sampling leaves pixels alone for some iterations: pixel p is updated only where
+/// (i + p) % 3 != 0, and its halves follow its own updates (the c-th update's estimate is
+/// c m_c - (c - 1) m_(c-1), summed where c is odd; w counts them). Would catch a mask that is
+/// not read (every pixel counted 9 times), or the render's iteration count used where the
+/// pixel's belongs (estimates scaled wrong, parities swapped).
+#[test]
+fn a_pixel_the_mask_leaves_alone_keeps_its_halves() {
+    let gpu = gpu();
+    let shaders = ShaderLibrary::new(
+        gpu.has_float_atomics(),
+        Default::default(),
+        hppm::passes::COMMON_MODULES,
+    )
+    .expect("shader library");
+    let pixels = 300u32;
+    let image = Arc::new(
+        gpu.create_buffer(
+            "image",
+            pixels as u64 * 16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        )
+        .expect("buffer"),
+    );
+    let mask = SampleMask::new(&gpu, pixels).expect("mask");
+    let named = [("image".to_string(), image.clone(), pixels)];
+    let halves = OddIterations::new(&gpu, &shaders, &named, &mask).expect("odd iterations");
+    let estimate = |i: u64, p: u32| ((i * 5 + p as u64 * 3) % 7) as f32 * 0.5 + 0.25;
+    let updated = |i: u64, p: u32| !(i + p as u64).is_multiple_of(3);
+    let mut sums = vec![[0.0f32; 4]; pixels as usize];
+    let mut want_odd = vec![0.0f64; pixels as usize];
+    let mut want_count = vec![0u32; pixels as usize];
+    for i in 1..=9u64 {
+        let flags: Vec<u32> = (0..pixels)
+            .map(|p| if updated(i, p) { SAMPLED | UPDATED } else { 0 })
+            .collect();
+        mask.write(&gpu, Some(&flags));
+        for p in 0..pixels {
+            if updated(i, p) {
+                let x = estimate(i, p);
+                sums[p as usize] = [
+                    sums[p as usize][0] + x,
+                    sums[p as usize][1] + x,
+                    sums[p as usize][2] + x,
+                    sums[p as usize][3] + 1.0,
+                ];
+                want_count[p as usize] += 1;
+                if want_count[p as usize] % 2 == 1 {
+                    want_odd[p as usize] += x as f64;
+                }
+            }
+        }
+        gpu.queue
+            .write_buffer(&image, 0, bytemuck::cast_slice(&sums));
+        halves.update(&gpu);
+    }
+    gpu.wait().expect("wait");
+    let got = halves.odd_sums(&gpu).expect("readback");
+    for p in 0..pixels as usize {
+        assert_eq!(got[0][p][3], want_count[p] as f32, "pixel {p}: its updates");
+        assert!(
+            (got[0][p][0] as f64 - want_odd[p]).abs() < 1e-4 * want_odd[p].max(1.0),
+            "pixel {p}: odd sum {} vs {}",
+            got[0][p][0],
+            want_odd[p]
+        );
+    }
 }
 
 /// Renders `scene` through `graph` to `spp` and returns (measured relMSE against `reference`,

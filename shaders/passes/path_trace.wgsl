@@ -57,6 +57,7 @@
 #endif
 #import common::hit_points::{HitPoint, HitPointBuffer, RadiusBuffer, PhotonHitsIn, NO_PIXEL, initial_radius}
 #import common::photon_grid::{PhotonGridInfo, photon_cell, photon_bucket}
+#import gpu::sample_mask::{SampleMask, SAMPLED, mask_allows}
 
 struct PathTraceParams {
     sample_base: u32,
@@ -106,6 +107,8 @@ struct Film {
 // This iteration's caustic photon hits and the grid over them (stand-ins when not looking up).
 @group(1) @binding(5) var<storage, read> photons: PhotonHitsIn;
 @group(1) @binding(6) var<storage, read> photon_grid: PhotonGridIn;
+// Adaptive sampling: the pixels to sample (with hit points recorded, every pixel is).
+@group(1) @binding(7) var<storage, read> sample_mask: SampleMask;
 
 const COUNTER_RAYS: u32 = 0u;
 const COUNTER_DISCARDED: u32 = 2u;
@@ -562,26 +565,51 @@ fn prepare_hit_points(pixel_index: u32, recording: bool) {
     }
 }
 
+// Whether the sample mask leaves `pixel_index` out of this iteration. Hit points are recorded
+// for every pixel: the estimators count each pixel's photons per iteration.
+fn masked() -> bool {
+    return params.merge_depth == 0u && sample_mask.enabled != 0u;
+}
+
+fn skipped(pixel_index: u32) -> bool {
+    return masked() && !mask_allows(sample_mask.enabled, sample_mask.words[pixel_index], SAMPLED);
+}
+
+// The pixels this iteration samples, and the `item`-th of them.
+fn sampled_pixels(pixels: u32) -> u32 {
+    return select(pixels, sample_mask.sampled, masked());
+}
+
+fn sampled_pixel(item: u32, pixels: u32) -> u32 {
+    return select(item, sample_mask.words[pixels + item], masked());
+}
+
 fn pixel_of(pixel_index: u32) -> vec2<u32> {
     return vec2<u32>(pixel_index % scene_info.width, pixel_index / scene_info.width);
 }
 
-// Each invocation renders the samples of pixels first, first + invocations, ... one after
-// another, and starts the next sample in the same lane as soon as a path ends (path
+// Each invocation renders the samples of pixels first, first + invocations, ... (of the
+// sampled ones, with adaptive sampling) one after another, and starts the next sample in the same lane as soon as a path ends (path
 // regeneration, Novak et al. 2010): SIMD lanes whose paths end early would otherwise idle
 // until the longest path of their group ends.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let pixels = scene_info.width * scene_info.height;
     let invocations = groups.x * 64u;
-    var pixel_index = id.x;
-    if pixel_index >= pixels {
+    if id.x >= pixels {
         return;
     }
     let recording = records_hit_points();
-    for (var p = pixel_index; p < pixels; p += invocations) {
+    for (var p = id.x; p < pixels; p += invocations) {
         prepare_hit_points(p, recording);
     }
+    // The invocation's items are the sampled pixels item, item + invocations, ...
+    let items = sampled_pixels(pixels);
+    var item = id.x;
+    if item >= items {
+        return;
+    }
+    var pixel_index = sampled_pixel(item, pixels);
     let spp = params.samples_per_iteration;
     var sum = vec3<f32>(0.0);
     var weight = 0.0;
@@ -643,10 +671,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) g
             weight = 0.0;
             accepted = 0u;
             s = 0u;
-            pixel_index += invocations;
-            if pixel_index >= pixels {
+            item += invocations;
+            if item >= items {
                 break;
             }
+            pixel_index = sampled_pixel(item, pixels);
         }
         rng = rng_stream(film_index(pixel_index), params.sample_base + s, params.seed);
         let records = recording && s == 0u;
@@ -688,6 +717,10 @@ fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
             }
             let placed_reach = abs(dx) <= near && abs(dy) <= near;
             let q_index = u32(q.y) * scene_info.width + u32(q.x);
+            // A pixel the mask skipped holds an earlier iteration's samples.
+            if skipped(q_index) {
+                continue;
+            }
             for (var s = 0u; s < spp; s++) {
                 let drawn = drawn_first && s == 0u;
                 if !drawn && !placed_reach {

@@ -276,6 +276,7 @@ pub fn compare(
                     seconds: Some(at - clock),
                     photons: None,
                     target_error: None,
+                    adaptive: false,
                 }
             } else {
                 Budget {
@@ -283,6 +284,7 @@ pub fn compare(
                     seconds: None,
                     photons: None,
                     target_error: None,
+                    adaptive: false,
                 }
             };
             let summary = renderer.run(budget, cancel, |_, _| {})?;

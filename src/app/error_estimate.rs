@@ -6,22 +6,53 @@
 
 use crate::image::Image;
 
-/// One running-mean image and the sums of its odd iterations' estimates, per pixel.
+/// One running-mean image and, per pixel, the sum of its odd updates' estimates and its count
+/// of updates (every iteration, unless adaptive sampling left the pixel alone).
 pub struct Halves<'a> {
     pub mean: &'a Image,
-    /// xyz: sum of the odd iterations' estimates.
+    /// xyz: sum of the odd updates' estimates; w: the pixel's updates.
     pub odd_sums: &'a [[f32; 4]],
 }
 
+/// One pixel channel's two halves: the means of its odd and of its even updates, and how many
+/// of each.
+#[derive(Debug, Clone, Copy)]
+struct HalfMeans {
+    odd: f64,
+    even: f64,
+    odd_count: f64,
+    even_count: f64,
+}
+
+impl HalfMeans {
+    fn count(&self) -> f64 {
+        self.odd_count + self.even_count
+    }
+
+    /// The variance of the whole mean: Var(A - B) = sigma^2 (1/odd + 1/even) for a per-update
+    /// variance sigma^2, and the mean of all n updates has sigma^2 / n.
+    fn variance_of_mean(&self, difference: f64) -> f64 {
+        difference.powi(2) / ((1.0 / self.odd_count + 1.0 / self.even_count) * self.count())
+    }
+}
+
 impl Halves<'_> {
-    /// The means of the odd and the even iterations at `pixel`, channel `c`, after `n`
-    /// iterations (at least 2).
-    fn at(&self, n: u64, pixel: usize, c: usize) -> (f64, f64) {
-        let odd = n.div_ceil(2) as f64;
-        let even = (n / 2) as f64;
+    /// The halves at `pixel`, channel `c`; `None` before the pixel's second update.
+    fn at(&self, pixel: usize, c: usize) -> Option<HalfMeans> {
+        let [.., updates] = self.odd_sums[pixel];
+        let updates = updates.max(0.0).round() as u64;
+        if updates < 2 {
+            return None;
+        }
+        let (odd_count, even_count) = (updates.div_ceil(2) as f64, (updates / 2) as f64);
         let sum_odd = self.odd_sums[pixel][c] as f64;
-        let total = n as f64 * self.mean.pixels[pixel][c] as f64;
-        (sum_odd / odd, (total - sum_odd) / even)
+        let total = updates as f64 * self.mean.pixels[pixel][c] as f64;
+        Some(HalfMeans {
+            odd: sum_odd / odd_count,
+            even: (total - sum_odd) / even_count,
+            odd_count,
+            even_count,
+        })
     }
 }
 
@@ -59,8 +90,8 @@ impl ErrorEstimate {
     }
 }
 
-/// Estimates the error of `image` after `iterations` iterations (`None` before 2, when there
-/// are no two halves), from its halves and those of each estimator's kernel bias.
+/// Estimates the error of `image` after `iterations` iterations of the render (`None` before
+/// 2, when there are no two halves), from its halves and those of each estimator's kernel bias.
 pub fn estimate(
     iterations: u64,
     image: &Halves<'_>,
@@ -69,12 +100,6 @@ pub fn estimate(
     if iterations < 2 {
         return None;
     }
-    let n = iterations as f64;
-    let odd = iterations.div_ceil(2) as f64;
-    let even = (iterations / 2) as f64;
-    // Var(A - B) = sigma^2 (1/odd + 1/even) for per-iteration variance sigma^2; the mean of
-    // all n iterations has variance sigma^2 / n.
-    let variance_scale = 1.0 / ((1.0 / odd + 1.0 / even) * n);
     let (width, height) = (image.mean.width, image.mean.height);
     let mut per_pixel = Image {
         width,
@@ -87,19 +112,24 @@ pub fn estimate(
     let mut parts = vec![[PixelParts::default(); 3]; pixels];
     for (pixel, out) in parts.iter_mut().enumerate() {
         for (c, part) in out.iter_mut().enumerate() {
-            let (a, b) = image.at(iterations, pixel, c);
+            let Some(halves) = image.at(pixel, c) else {
+                // Not two updates yet: no noise known, the image as the reference.
+                part.debiased = image.mean.pixels[pixel][c] as f64;
+                continue;
+            };
             let (bias_a, bias_b) = biases
                 .iter()
-                .map(|h| h.at(iterations, pixel, c))
-                .fold((0.0, 0.0), |(sa, sb), (a, b)| (sa + a, sb + b));
-            let (debiased_a, debiased_b) = (a - bias_a, b - bias_b);
+                .filter_map(|h| h.at(pixel, c))
+                .fold((0.0, 0.0), |(sa, sb), h| (sa + h.odd, sb + h.even));
+            let (debiased_a, debiased_b) = (halves.odd - bias_a, halves.even - bias_b);
             *part = PixelParts {
-                variance: (a - b).powi(2) * variance_scale,
+                variance: halves.variance_of_mean(halves.odd - halves.even),
                 // E[A_bias B_bias] is the squared bias when the halves are independent; not
                 // below 0, where a firefly in one half would cancel its own variance.
                 bias_squared: (bias_a * bias_b).max(0.0),
-                debiased: (odd * debiased_a + even * debiased_b) / n,
-                debiased_variance: (debiased_a - debiased_b).powi(2) * variance_scale,
+                debiased: (halves.odd_count * debiased_a + halves.even_count * debiased_b)
+                    / halves.count(),
+                debiased_variance: halves.variance_of_mean(debiased_a - debiased_b),
             };
         }
     }
@@ -189,6 +219,7 @@ mod tests {
                 if i % 2 == 1 {
                     odd[p] = [odd[p][0] + x as f32; 4];
                 }
+                odd[p][3] = i as f32;
             }
         }
         let mean = Image {
@@ -305,7 +336,7 @@ mod tests {
             height: 1,
             pixels: vec![[1.0; 3]],
         };
-        let odd = [[1.0; 4]];
+        let odd = [[1.0, 1.0, 1.0, 1.0]];
         assert!(
             estimate(
                 1,

@@ -1,6 +1,7 @@
 //! The application on top of the library: the render loop and its budgets, `hppm compare`,
 //! `hppm bench`, plots and profile tables. The CLI (src/main.rs) calls these.
 
+pub mod adaptive;
 pub mod bench;
 pub mod bench_gather;
 pub mod bench_hybrid;

@@ -9,6 +9,7 @@ use crate::Error;
 use crate::app::error_estimate::{self, ErrorEstimate, Halves};
 use crate::gpu::GpuContext;
 use crate::gpu::odd_iterations::OddIterations;
+use crate::gpu::sample_mask::{SAMPLED, SampleMask};
 use crate::graph::ValidGraph;
 use crate::graph::exec::PreparedGraph;
 use crate::graph::pass::{Counters, IMAGE, Resource, Schedule, Shared};
@@ -30,6 +31,9 @@ pub struct Budget {
     /// Stop once the estimated relMSE (docs/error-estimate.md) is below this; needs one of the
     /// others as a cap.
     pub target_error: Option<f64>,
+    /// Adaptive sampling: pixels whose estimated error is below `target_error` stop receiving
+    /// camera samples (src/app/adaptive.rs).
+    pub adaptive: bool,
 }
 
 impl Budget {
@@ -48,6 +52,13 @@ impl Budget {
             return refuse(format!(
                 "--time must be a positive, finite number of seconds, got {s}"
             ));
+        }
+        if self.adaptive && self.target_error.is_none() {
+            return refuse(
+                "--adaptive needs --target-error: pixels whose estimated error is below the \
+                 target stop receiving samples"
+                    .into(),
+            );
         }
         if let Some(e) = self.target_error
             && !(e.is_finite() && e > 0.0)
@@ -81,6 +92,8 @@ struct Tile {
     halves: OddIterations,
     /// What `halves` tracks, in its order: the output first.
     tracked: Vec<Resource>,
+    /// Adaptive sampling's flags for this band's pixels (disabled unless the render is adaptive).
+    mask: SampleMask,
     grid_y: u32,
     grid_rows: u32,
     keep_y: u32,
@@ -115,6 +128,12 @@ pub struct Renderer<'a> {
     watch_error: bool,
     /// The latest estimate `run` made.
     latest_error: Option<ErrorReport>,
+    /// The pixel filter's reach in pixels, past which a sample does not change a pixel.
+    filter_reach: u32,
+    /// Share of the pixels the camera samples now (1 unless adaptive sampling stopped some).
+    sampled_share: f64,
+    /// Camera samples per pixel so far, averaged over the image.
+    mean_spp: f64,
 }
 
 /// An error estimate made during a render, without its per-pixel image.
@@ -234,8 +253,10 @@ impl<'a> Renderer<'a> {
                     film_pixels: width as u64 * height as u64,
                     lender,
                 };
+                let mask = SampleMask::new(gpu, width * grid_rows)?;
                 let mut shared = Shared::default();
                 shared.insert(tables.with_uniform(gpu, &gpu_scene.uniform)?);
+                shared.insert(mask.clone());
                 let graph = PreparedGraph::new(
                     gpu,
                     &shaders,
@@ -249,12 +270,13 @@ impl<'a> Renderer<'a> {
                     .iter()
                     .map(|(name, r)| (name.clone(), r.buffer.clone(), r.len as u32))
                     .collect();
-                let halves = OddIterations::new(gpu, &shaders, &named)?;
+                let halves = OddIterations::new(gpu, &shaders, &named, &mask)?;
                 Ok(Tile {
                     output: graph.output()?.clone(),
                     aovs: image_aovs(&graph),
                     halves,
                     tracked: tracked.into_iter().map(|(_, r)| r).collect(),
+                    mask,
                     graph,
                     grid_y,
                     grid_rows,
@@ -316,6 +338,9 @@ impl<'a> Renderer<'a> {
             profiling: Profiling::Off,
             watch_error: false,
             latest_error: None,
+            filter_reach: halo,
+            sampled_share: 1.0,
+            mean_spp: 0.0,
         })
     }
 
@@ -443,6 +468,9 @@ impl<'a> Renderer<'a> {
         }
         self.gpu.wait()?;
         self.iteration = iterations;
+        // A checkpoint keeps no sample mask: the resumed render samples every pixel until its
+        // first estimate, and counts the earlier iterations as if it had.
+        self.mean_spp = iterations as f64 * self.spp_per_iteration as f64;
         Ok(())
     }
 
@@ -454,9 +482,10 @@ impl<'a> Renderer<'a> {
         for tile in &mut self.tiles {
             tile.graph
                 .iterate(self.gpu, self.schedule, self.iteration, self.seed)?;
-            tile.halves.update(self.gpu, self.iteration + 1);
+            tile.halves.update(self.gpu);
         }
         self.iteration += 1;
+        self.mean_spp += self.sampled_share * self.spp_per_iteration as f64;
         Ok(())
     }
 
@@ -544,8 +573,59 @@ impl<'a> Renderer<'a> {
         self.tiles.first().and_then(|t| t.graph.shard_refusal())
     }
 
+    /// Camera samples per pixel so far: every pixel's, or with adaptive sampling the most
+    /// any pixel has.
     pub fn samples_per_pixel(&self) -> u64 {
         self.iteration * self.spp_per_iteration
+    }
+
+    /// Camera samples per pixel so far, averaged over the image (less than
+    /// [`Renderer::samples_per_pixel`] once adaptive sampling stops pixels).
+    pub fn mean_samples_per_pixel(&self) -> f64 {
+        self.mean_spp
+    }
+
+    /// Share of the pixels the camera samples in the next iteration.
+    pub fn sampled_share(&self) -> f64 {
+        self.sampled_share
+    }
+
+    /// Why this render cannot sample adaptively (a node that needs every pixel every
+    /// iteration), naming the node.
+    pub fn adaptive_refusal(&self) -> Option<String> {
+        let first = self.tiles.first()?;
+        first.graph.adaptive_refusal().map(|(node, why)| {
+            format!(
+                "--adaptive: {node} cannot skip converged pixels: {why}; adaptive sampling \
+                 works with path tracing alone (graphs/pt.ron)"
+            )
+        })
+    }
+
+    /// Stops sampling the pixels whose estimated error (`per_pixel`, the whole image's) is
+    /// below `target`, or samples every pixel again (`None`).
+    pub fn set_sample_mask(&mut self, per_pixel: Option<(&Image, f64)>) {
+        let Some((per_pixel, target)) = per_pixel else {
+            for tile in &self.tiles {
+                tile.mask.write(self.gpu, None);
+            }
+            self.sampled_share = 1.0;
+            return;
+        };
+        let flags = crate::app::adaptive::sample_flags(per_pixel, target, self.filter_reach);
+        let sampled = flags.iter().filter(|&&f| f & SAMPLED != 0).count();
+        if sampled == 0 {
+            // Every window below the target while the mean is not (the windows weigh edge
+            // pixels differently): sample them all rather than stall.
+            return self.set_sample_mask(None);
+        }
+        let width = self.width as usize;
+        for tile in &self.tiles {
+            let rows = tile.grid_y as usize..(tile.grid_y + tile.grid_rows) as usize;
+            tile.mask
+                .write(self.gpu, Some(&flags[rows.start * width..rows.end * width]));
+        }
+        self.sampled_share = sampled as f64 / flags.len().max(1) as f64;
     }
 
     pub fn spp_per_iteration(&self) -> u64 {
@@ -684,6 +764,11 @@ impl<'a> Renderer<'a> {
         let target_iterations = self
             .total_iterations(budget)
             .map(|total| self.schedule.local_count(total));
+        if budget.adaptive
+            && let Some(why) = self.adaptive_refusal()
+        {
+            return Err(Error::Other(why));
+        }
         let watching = self.watch_error || budget.target_error.is_some();
         let mut next_estimate = 0.0;
         let stop = loop {
@@ -719,6 +804,12 @@ impl<'a> Renderer<'a> {
                         variance: e.variance,
                         bias: e.bias,
                     });
+                    if let Some(target) = budget.target_error
+                        && budget.adaptive
+                        && self.iteration >= MIN_ITERATIONS_FOR_TARGET
+                    {
+                        self.set_sample_mask(Some((&e.per_pixel, target)));
+                    }
                 }
                 let spent = start.elapsed().as_secs_f64();
                 next_estimate = spent + (0.1 * spent).max(0.5);

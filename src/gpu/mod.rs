@@ -14,6 +14,7 @@ pub mod dispatch;
 pub mod layout;
 pub mod odd_iterations;
 pub mod radix_sort;
+pub mod sample_mask;
 pub mod shaders;
 pub mod timer;
 

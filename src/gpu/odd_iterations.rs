@@ -1,12 +1,15 @@
 //! Two independent halves of running-mean images: for each image a node keeps as the mean of
 //! per-iteration estimates (a weighted sum and its weight per pixel), the sum of the estimates
-//! of the odd iterations (shaders/gpu/odd_iterations.wgsl). The even half is the rest of the
-//! mean; how far the halves differ measures the mean's noise (src/app/error_estimate.rs).
+//! of each pixel's odd updates and how many updates it had (shaders/gpu/odd_iterations.wgsl).
+//! The even half is the rest of the mean; how far the halves differ measures the mean's noise
+//! (src/app/error_estimate.rs). Every pixel is updated every iteration unless the band's
+//! sample mask (adaptive sampling) leaves it alone.
 
 use std::sync::Arc;
 
 use super::binding::{Access, bind_buffers};
 use super::dispatch::workgroup_grid;
+use super::sample_mask::SampleMask;
 use super::shaders::{ShaderFile, ShaderLibrary};
 use super::{GpuContext, GpuError};
 
@@ -18,14 +21,12 @@ const PIXEL_BYTES: u64 = 16;
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct SplitParams {
     pixels: u32,
-    odd: u32,
-    count: f32,
-    previous_count: f32,
+    _pad: [u32; 3],
 }
 
 /// `SplitParams` against its WGSL twin (tests/shaders.rs checks it).
 pub const LAYOUTS: &[super::layout::StructLayout] = &[crate::struct_layout!(
-    SplitParams => "SplitParams" in SHADER, { pixels, odd, count, previous_count }
+    SplitParams => "SplitParams" in SHADER, { pixels }
 )];
 
 /// One tracked image and its two state buffers.
@@ -34,7 +35,8 @@ struct Tracked {
     pixels: u32,
     previous: wgpu::Buffer,
     odd_sum: wgpu::Buffer,
-    params: wgpu::Buffer,
+    /// Held with the bind group that reads it.
+    _params: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
 }
 
@@ -45,11 +47,13 @@ pub struct OddIterations {
 }
 
 impl OddIterations {
-    /// Tracks `images`, each named and holding `pixels` (sum, weight) vec4s.
+    /// Tracks `images`, each named and holding `pixels` (sum, weight) vec4s, updating the
+    /// pixels `mask` lets change.
     pub fn new(
         gpu: &GpuContext,
         shaders: &ShaderLibrary,
         images: &[(String, Arc<wgpu::Buffer>, u32)],
+        mask: &SampleMask,
     ) -> Result<Self, GpuError> {
         let usage = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
@@ -60,10 +64,14 @@ impl OddIterations {
             let bytes = *pixels as u64 * PIXEL_BYTES;
             let previous = gpu.create_buffer(&format!("{name} previous mean"), bytes, usage)?;
             let odd_sum = gpu.create_buffer(&format!("{name} odd iterations"), bytes, usage)?;
-            let params = gpu.create_buffer(
+            let split = SplitParams {
+                pixels: *pixels,
+                _pad: [0; 3],
+            };
+            let params = gpu.create_buffer_init(
                 "odd iterations params",
-                std::mem::size_of::<SplitParams>() as u64,
-                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                bytemuck::bytes_of(&split),
+                wgpu::BufferUsages::UNIFORM,
             )?;
             let (layout, bind_group) = bind_buffers(
                 &gpu.device,
@@ -73,6 +81,7 @@ impl OddIterations {
                     (Access::Read, image),
                     (Access::ReadWrite, &previous),
                     (Access::ReadWrite, &odd_sum),
+                    (Access::Read, &mask.buffer),
                 ],
             );
             if pipeline.is_none() {
@@ -83,15 +92,15 @@ impl OddIterations {
                 pixels: *pixels,
                 previous,
                 odd_sum,
-                params,
+                _params: params,
                 bind_group,
             });
         }
         Ok(Self { pipeline, tracked })
     }
 
-    /// Submits the update after iteration `count` (1-based) of the render.
-    pub fn update(&self, gpu: &GpuContext, count: u64) {
+    /// Submits the update after an iteration.
+    pub fn update(&self, gpu: &GpuContext) {
         let Some(pipeline) = &self.pipeline else {
             return;
         };
@@ -101,14 +110,6 @@ impl OddIterations {
                 label: Some("odd iterations"),
             });
         for t in &self.tracked {
-            let params = SplitParams {
-                pixels: t.pixels,
-                odd: (count % 2) as u32,
-                count: count as f32,
-                previous_count: count.saturating_sub(1) as f32,
-            };
-            gpu.queue
-                .write_buffer(&t.params, 0, bytemuck::bytes_of(&params));
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("odd iterations"),
                 timestamp_writes: None,
@@ -126,8 +127,8 @@ impl OddIterations {
         self.tracked.iter().map(|t| t.name.as_str())
     }
 
-    /// Every tracked image's odd-iteration sums (xyz: sum of estimates, w: how many), per
-    /// pixel, in the order of [`OddIterations::names`].
+    /// Every tracked image's odd-update sums (xyz: sum of estimates, w: the pixel's updates,
+    /// odd and even), per pixel, in the order of [`OddIterations::names`].
     pub fn odd_sums(&self, gpu: &GpuContext) -> Result<Vec<Vec<[f32; 4]>>, GpuError> {
         self.tracked
             .iter()
@@ -142,7 +143,11 @@ impl OddIterations {
             .flat_map(|t| {
                 [
                     (format!("odd_iterations/{}/previous", t.name), &t.previous),
-                    (format!("odd_iterations/{}/odd_sum", t.name), &t.odd_sum),
+                    // Named apart from the format that counted odd updates only in w.
+                    (
+                        format!("odd_iterations/{}/odd_sum_updates", t.name),
+                        &t.odd_sum,
+                    ),
                 ]
             })
             .collect()

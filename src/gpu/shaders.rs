@@ -35,7 +35,10 @@ macro_rules! shader_file {
 }
 
 /// This layer's importable modules (`gpu::*`), added before any caller's module.
-pub const GPU_MODULES: &[ShaderFile] = &[crate::shader_file!("shaders/gpu/dispatch.wgsl")];
+pub const GPU_MODULES: &[ShaderFile] = &[
+    crate::shader_file!("shaders/gpu/dispatch.wgsl"),
+    crate::shader_file!("shaders/gpu/sample_mask.wgsl"),
+];
 
 impl ShaderFile {
     /// The text to compile: from `$HPPM_SHADER_DIR/path` when that variable is set, else the

@@ -455,6 +455,15 @@ impl PreparedGraph {
         })
     }
 
+    /// The first reason a node gives why it cannot follow an adaptive sample mask.
+    pub fn adaptive_refusal(&self) -> Option<(String, &'static str)> {
+        self.graph.nodes.iter().find_map(|n| {
+            n.pass
+                .adaptive_refusal()
+                .map(|why| (format!("node \"{}\" ({})", n.name, n.kind.name), why))
+        })
+    }
+
     /// Counters summed over every node.
     pub fn counters(&self, gpu: &GpuContext) -> Result<Counters, Error> {
         let mut total = Counters::default();

@@ -483,6 +483,14 @@ pub trait Pass {
         None
     }
 
+    /// Why this pass cannot follow an adaptive sample mask (src/gpu/sample_mask.rs), which
+    /// leaves converged pixels unsampled for some iterations; `None`: it skips them and its
+    /// per-pixel images stay the mean of each pixel's own samples. Every pass refuses unless
+    /// it says otherwise.
+    fn adaptive_refusal(&self) -> Option<&'static str> {
+        Some("its per-pixel statistics assume every pixel is updated every iteration")
+    }
+
     /// Photons this pass emits each iteration (known after `prepare`).
     fn photons_per_iteration(&self) -> u64 {
         0

@@ -15,6 +15,7 @@ use serde::Deserialize;
 use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu::sample_mask::SampleMask;
 use crate::graph::pass::{
     Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, params_error,
     parse_params,
@@ -366,6 +367,15 @@ impl Pass for PathTrace {
                 (&no_lookups.0, &no_lookups.1)
             }
         };
+        // Without a renderer's mask (a pass run alone), a disabled one.
+        let own_mask;
+        let mask = match ctx.shared.get::<SampleMask>() {
+            Ok(mask) => mask,
+            Err(_) => {
+                own_mask = SampleMask::new(gpu, 1)?;
+                &own_mask
+            }
+        };
         let (layout, bind_group) = bind_buffers(
             &gpu.device,
             "path_trace",
@@ -377,6 +387,7 @@ impl Pass for PathTrace {
                 (Access::Read, radii),
                 (Access::Read, photon_hits),
                 (Access::Read, photon_grid),
+                (Access::Read, &mask.buffer),
             ],
         );
         let defs = glossy_defs(self.params.glossy_threshold, scene);
@@ -476,6 +487,16 @@ impl Pass for PathTrace {
 
     fn samples_per_iteration(&self) -> u32 {
         self.params.samples_per_iteration
+    }
+
+    fn adaptive_refusal(&self) -> Option<&'static str> {
+        match &self.prepared {
+            Some(p) if p.merge_slots == 0 => None,
+            _ => Some(
+                "it records hit points, and the photon-mapping estimators count every pixel's \
+                 photons in every iteration",
+            ),
+        }
     }
 
     fn transport(&self, slot: &str, ctx: &TransportCtx<'_>) -> Option<Transport> {

@@ -65,6 +65,7 @@ pub fn render_to(renderer: &mut Renderer<'_>, spp: u64) -> Image {
                 seconds: None,
                 photons: None,
                 target_error: None,
+                adaptive: false,
             },
             &never,
             |_, _| {},
