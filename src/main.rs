@@ -470,6 +470,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             renderer.bands()
         );
     }
+    if let Some(warning) = renderer.unsampled_light_warning() {
+        eprintln!("{warning}");
+    }
     let cancel = cancel_flag();
     // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
     eprintln!(

@@ -561,3 +561,25 @@ fn check_lists_every_problem_and_render_prints_warnings() {
         "{printed}"
     );
 }
+
+/// A point light behind glass with `pt`: the caustic cannot be path traced, and the render says
+/// so before it starts; the hybrid (which traces photons) and an area-lit glass scene do not
+/// warn. Would catch the warning lost, or raised for every glass scene.
+#[test]
+fn pt_warns_of_a_point_lights_caustic_it_cannot_sample() {
+    let dir = std::env::temp_dir().join(format!("hppm-cli-delta-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let out_path = dir.join("out.exr").to_string_lossy().into_owned();
+    let render = |scene: &str, graph: &str| {
+        let out = hppm(&[
+            "render", scene, "--graph", graph, "--spp", "2", "--size", "16x16", "--out", &out_path,
+        ]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        stderr(&out).contains("cannot be path traced")
+    };
+    let point = "tests/refs/scenes/point_light_caustic/scene.xml";
+    let area = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
+    assert!(render(point, "graphs/pt.ron"));
+    assert!(!render(point, "graphs/hybrid.ron"));
+    assert!(!render(area, "graphs/pt.ron"));
+}

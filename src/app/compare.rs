@@ -262,6 +262,9 @@ pub fn compare(
     {
         progress(&format!("{label}: preparing {}", path.display()));
         let mut renderer = Renderer::new(gpu, &scene, graph, width, height, options.seed)?;
+        if let Some(warning) = renderer.unsampled_light_warning() {
+            progress(&format!("{label}: {warning}"));
+        }
         if options.profile {
             renderer.enable_profiling()?;
         }

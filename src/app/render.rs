@@ -134,6 +134,9 @@ pub struct Renderer<'a> {
     sampled_share: f64,
     /// Camera samples per pixel so far, averaged over the image.
     mean_spp: f64,
+    /// The scene has lights at a point or from one direction and delta surfaces: their
+    /// caustics exist only where a graph traces photons.
+    delta_caustics: bool,
 }
 
 /// An error estimate made during a render, without its per-pixel image.
@@ -341,6 +344,8 @@ impl<'a> Renderer<'a> {
             filter_reach: halo,
             sampled_share: 1.0,
             mean_spp: 0.0,
+            delta_caustics: features.delta
+                && (features.point_lights || features.spot_lights || features.directional_lights),
         })
     }
 
@@ -577,6 +582,21 @@ impl<'a> Renderer<'a> {
     /// any pixel has.
     pub fn samples_per_pixel(&self) -> u64 {
         self.iteration * self.spp_per_iteration
+    }
+
+    /// Light this render cannot reach, said before it starts: a path tracer never samples a
+    /// point, spot or directional light through a delta surface (glass, mirror) onto a diffuse
+    /// one, so without photons those caustics are black, and the error estimate, built from
+    /// the render alone, cannot see them.
+    pub fn unsampled_light_warning(&self) -> Option<String> {
+        (self.delta_caustics && self.photons_per_iteration == 0).then(|| {
+            "warning: the scene has point, spot or directional lights and specular (delta) \
+             surfaces, and this graph traces no photons: light from those lights through or off \
+             the specular surfaces onto diffuse ones (their caustics) cannot be path traced and \
+             is missing from the image, and from its error estimate; a graph with photons \
+             (graphs/hybrid.ron) renders it"
+                .to_string()
+        })
     }
 
     /// Camera samples per pixel so far, averaged over the image (less than
