@@ -168,11 +168,12 @@ struct PixelParts {
 /// estimates the reference, and E[y^2] - Var(y) its square: x^2 alone would hide a firefly's
 /// error behind the firefly, and a blurred caustic's behind the blur. One pixel's variance
 /// estimate has one degree of freedom, and where it comes out large the square drops to 0 and
-/// the pixel's error is inflated 1/0.01-fold; so the reference is taken over the pixel's 3x3
-/// neighbourhood, as its median: a mean would carry a caustic's bright side into the dark
-/// pixels beside a sharp edge and hide their blur (the median of a firefly's neighbourhood is
-/// the dark it lands in, as the mean's nearly is). The median of nine noisy values has about
-/// pi/2 times the variance of their mean (measured in BENCHMARKS.md, "Error estimate").
+/// the pixel's error is inflated 1/0.01-fold; averaged over the 3x3 neighbourhood it has nine
+/// (measured: 3x too high on the hybrid at 15 iterations with one pixel, 1.1x with nine).
+/// Beside a caustic's sharp edge that average carries the bright side into a dark pixel's
+/// reference and hides the kernel's blur there, so a pixel that is darker than its
+/// neighbourhood by more than its own noise (three standard deviations) is its own reference.
+/// (The neighbourhood's median instead over-read noise 2-6x: BENCHMARKS.md.)
 fn reference_squared(
     parts: &[[PixelParts; 3]],
     width: u32,
@@ -182,28 +183,25 @@ fn reference_squared(
 ) -> f64 {
     let (w, h) = (width as i64, height as i64);
     let (x, y) = (pixel as i64 % w, pixel as i64 / w);
-    let mut values = [0.0f64; 9];
-    let (mut variance, mut count) = (0.0, 0usize);
+    let (mut mean, mut variance, mut count) = (0.0, 0.0, 0.0);
     for ny in (y - 1).max(0)..=(y + 1).min(h - 1) {
         for nx in (x - 1).max(0)..=(x + 1).min(w - 1) {
             let part = parts[(ny * w + nx) as usize][c];
-            values[count] = part.debiased;
+            mean += part.debiased;
             variance += part.debiased_variance;
-            count += 1;
+            count += 1.0;
         }
     }
-    let values = &mut values[..count];
-    values.sort_by(f64::total_cmp);
-    let median = match count % 2 {
-        1 => values[count / 2],
-        _ => 0.5 * (values[count / 2 - 1] + values[count / 2]),
-    };
+    let mean = mean / count;
+    let own = parts[pixel][c];
+    if own.debiased + 3.0 * own.debiased_variance.sqrt() < mean {
+        let own_value = own.debiased.max(0.0);
+        return (own_value * own_value - own.debiased_variance).max(0.0);
+    }
     // Radiance is not negative: where the bias estimate overshoots the image (a sharp caustic
     // just inside the kernel), the reference is near 0.
-    let median = median.max(0.0);
-    let count = count as f64;
-    let median_variance = std::f64::consts::FRAC_PI_2 * variance / (count * count);
-    (median * median - median_variance).max(0.0)
+    let mean = mean.max(0.0);
+    (mean * mean - variance / (count * count)).max(0.0)
 }
 
 #[cfg(test)]
