@@ -519,7 +519,8 @@ fn render(args: RenderArgs) -> Result<(), Error> {
         Some(_) => None,
         None => renderer.error_estimate()?,
     };
-    report_stop(&summary, budget, estimate.as_ref());
+    let unsampled = renderer.unsampled_light_warning().is_some();
+    report_stop(&summary, budget, estimate.as_ref(), unsampled);
     if let Some(e) = checkpoint_error {
         return Err(e);
     }
@@ -630,6 +631,7 @@ fn report_stop(
     summary: &hppm::app::render::RunSummary,
     budget: Budget,
     estimate: Option<&hppm::app::error_estimate::ErrorEstimate>,
+    unsampled_light: bool,
 ) {
     use hppm::app::render::Stop;
     let why = match summary.stop {
@@ -639,9 +641,13 @@ fn report_stop(
         Stop::TargetError => "the estimated error fell below --target-error",
         Stop::Cancelled => "interrupted",
     };
+    let lower_bound = match unsampled_light {
+        true => ", a lower bound: the caustics this graph cannot sample are missing from it",
+        false => "",
+    };
     let estimate = estimate.map_or("no error estimate (fewer than 2 iterations)".into(), |e| {
         format!(
-            "estimated relMSE {:.3e} (noise {:.3e}, kernel bias {:.3e})",
+            "estimated relMSE {:.3e} (noise {:.3e}, kernel bias {:.3e}{lower_bound})",
             e.relmse, e.variance, e.bias
         )
     });

@@ -563,7 +563,7 @@ fn check_lists_every_problem_and_render_prints_warnings() {
 }
 
 /// A point light behind glass with `pt`: the caustic cannot be path traced, and the render says
-/// so before it starts; the hybrid (which traces photons) and an area-lit glass scene do not
+/// so before it starts and calls its error estimate a lower bound at the end; the hybrid (which traces photons) and an area-lit glass scene do not
 /// warn. Would catch the warning lost, or raised for every glass scene.
 #[test]
 fn pt_warns_of_a_point_lights_caustic_it_cannot_sample() {
@@ -575,7 +575,14 @@ fn pt_warns_of_a_point_lights_caustic_it_cannot_sample() {
             "render", scene, "--graph", graph, "--spp", "2", "--size", "16x16", "--out", &out_path,
         ]);
         assert!(out.status.success(), "{}", stderr(&out));
-        stderr(&out).contains("cannot be path traced")
+        let warned = stderr(&out).contains("cannot be path traced");
+        assert_eq!(
+            stderr(&out).contains("a lower bound"),
+            warned,
+            "{}",
+            stderr(&out)
+        );
+        warned
     };
     let point = "tests/refs/scenes/point_light_caustic/scene.xml";
     let area = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
