@@ -515,9 +515,12 @@ fn render(args: RenderArgs) -> Result<(), Error> {
     })?;
     bar.finish_and_clear();
     // The estimate at the image written, not the last one made on the way.
-    let estimate = match args.shard {
-        Some(_) => None,
-        None => renderer.error_estimate()?,
+    let (image, estimate) = match args.shard {
+        Some(_) => (None, None),
+        None => {
+            let (image, estimate) = renderer.image_and_error_estimate()?;
+            (Some(image), estimate)
+        }
     };
     let unsampled = renderer.unsampled_light_warning().is_some();
     report_stop(&summary, budget, estimate.as_ref(), unsampled);
@@ -560,10 +563,9 @@ fn render(args: RenderArgs) -> Result<(), Error> {
             .collect();
         provenance = provenance.with("hppm_defines", defines.join(" "));
     }
-    if args.shard.is_some() {
-        shard_file(&renderer, &origin)?.write(&args.out)?;
-    } else {
-        renderer.image()?.write(&args.out, &provenance)?;
+    match image {
+        Some(image) => image.write(&args.out, &provenance)?,
+        None => shard_file(&renderer, &origin)?.write(&args.out)?,
     }
     if args.aovs {
         for (slot, aov) in renderer.aovs()? {

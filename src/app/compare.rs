@@ -292,13 +292,13 @@ pub fn compare(
             };
             let summary = renderer.run(budget, cancel, |_, _| {})?;
             clock += summary.seconds;
-            let image = renderer.image()?;
+            let (image, estimate) = renderer.image_and_error_estimate()?;
             let metrics = match &reference {
                 Some(r) => Some(image.metrics_where(r, |i| keep.as_ref().is_none_or(|k| k[i]))?),
                 None => None,
             };
             // Over the pixels measured, as the error against the reference is.
-            let estimated = renderer.error_estimate()?.map(|e| {
+            let estimated = estimate.map(|e| {
                 let (relmse, variance, bias) = e.over(|i| keep.as_ref().is_none_or(|k| k[i]));
                 Estimated {
                     relmse,

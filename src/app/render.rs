@@ -673,11 +673,14 @@ impl<'a> Renderer<'a> {
     /// The estimated error of the image so far (docs/error-estimate.md); `None` before two
     /// iterations.
     pub fn error_estimate(&self) -> Result<Option<ErrorEstimate>, Error> {
-        if self.iteration < 2 {
-            return Ok(None);
-        }
-        let Some(first) = self.tiles.first() else {
-            return Ok(None);
+        Ok(self.image_and_error_estimate()?.1)
+    }
+
+    /// The image and its estimated error, reading the image back once (the estimate needs it
+    /// too).
+    pub fn image_and_error_estimate(&self) -> Result<(Image, Option<ErrorEstimate>), Error> {
+        let Some(first) = self.tiles.first().filter(|_| self.iteration >= 2) else {
+            return Ok((self.image()?, None));
         };
         // Per band, per tracked image: the odd-iteration sums of its rows.
         let band_sums = self
@@ -710,10 +713,17 @@ impl<'a> Renderer<'a> {
             .zip(&odd_sums)
             .map(|(mean, odd_sums)| Halves { mean, odd_sums })
             .collect();
-        let Some((image, biases)) = halves.split_first() else {
-            return Ok(None);
+        let estimate = match halves.split_first() {
+            Some((image, biases)) => error_estimate::estimate(self.iteration, image, biases),
+            None => None,
         };
-        Ok(error_estimate::estimate(self.iteration, image, biases))
+        drop(halves);
+        // The output is tracked first.
+        let image = match means.into_iter().next() {
+            Some(image) => image,
+            None => self.image()?,
+        };
+        Ok((image, estimate))
     }
 
     /// Every image slot of the output node, written or read (e.g. `combined`, `pt`,
