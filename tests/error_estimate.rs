@@ -13,6 +13,16 @@ use hppm::gpu::odd_iterations::OddIterations;
 use hppm::gpu::sample_mask::{SAMPLED, SampleMask, UPDATED};
 use hppm::gpu::shaders::ShaderLibrary;
 
+/// The library the odd-iteration kernel is composed with.
+fn shader_library(gpu: &hppm::gpu::GpuContext) -> ShaderLibrary {
+    ShaderLibrary::new(
+        gpu.has_float_atomics(),
+        Default::default(),
+        hppm::passes::COMMON_MODULES,
+    )
+    .expect("shader library")
+}
+
 /// Images kept as running means in all three forms nodes use (a sum and its count, a sum and a
 /// varying filter weight, a mean with weight 1), updated for 7 iterations: the odd iterations'
 /// sums equal the CPU's sum of x_1, x_3, x_5, x_7. Would catch the parity taken from the wrong
@@ -20,12 +30,7 @@ use hppm::gpu::shaders::ShaderLibrary;
 #[test]
 fn odd_iterations_sum_the_odd_estimates() {
     let gpu = gpu();
-    let shaders = ShaderLibrary::new(
-        gpu.has_float_atomics(),
-        Default::default(),
-        hppm::passes::COMMON_MODULES,
-    )
-    .expect("shader library");
+    let shaders = shader_library(&gpu);
     let pixels = 300u32; // more than one workgroup
     let iterations = 7u64;
     // The per-iteration estimate x_i of pixel p, channel c, and its filter weight.
@@ -121,12 +126,7 @@ fn odd_iterations_sum_the_odd_estimates() {
 #[test]
 fn a_pixel_the_mask_leaves_alone_keeps_its_halves() {
     let gpu = gpu();
-    let shaders = ShaderLibrary::new(
-        gpu.has_float_atomics(),
-        Default::default(),
-        hppm::passes::COMMON_MODULES,
-    )
-    .expect("shader library");
+    let shaders = shader_library(&gpu);
     let pixels = 300u32;
     let image = Arc::new(
         gpu.create_buffer(

@@ -240,6 +240,19 @@ mod tests {
         (mean, odd)
     }
 
+    /// The estimate of an image and one kernel-bias image, each (mean, odd sums).
+    fn with_bias(
+        n: u64,
+        (mean, odd_sums): (&Image, &[[f32; 4]]),
+        (bias, bias_odd): (&Image, &[[f32; 4]]),
+    ) -> ErrorEstimate {
+        let bias = Halves {
+            mean: bias,
+            odd_sums: bias_odd,
+        };
+        estimate(n, &Halves { mean, odd_sums }, &[bias]).expect("halves")
+    }
+
     /// Estimates of mean 0.5 and standard deviation 0.4 per iteration (a uniform variable),
     /// 64 iterations: the image's relMSE is 0.16 / 64 / (0.25 + 0.01) = 9.6e-3, and the
     /// estimate finds it within 5% over 64x64 pixels. Would catch the variance of one
@@ -316,18 +329,7 @@ mod tests {
         let n = 40;
         let (mean, odd) = simulate(48, n, |_| 0.7 + 0.2 * (2.0 * uniform(&mut rng) - 1.0));
         let (bias, bias_odd) = simulate(48, n, |_| 0.2 + 0.3 * (2.0 * uniform(&mut rng) - 1.0));
-        let e = estimate(
-            n,
-            &Halves {
-                mean: &mean,
-                odd_sums: &odd,
-            },
-            &[Halves {
-                mean: &bias,
-                odd_sums: &bias_odd,
-            }],
-        )
-        .expect("halves");
+        let e = with_bias(n, (&mean, &odd), (&bias, &bias_odd));
         let expected = 0.04 / 0.26;
         assert!(
             (e.bias / expected - 1.0).abs() < 0.1,
@@ -359,18 +361,7 @@ mod tests {
             x * (1.0 + 0.01 * (2.0 * uniform(&mut rng) - 1.0))
         });
         let (bias, bias_odd) = simulate(size, n, |p| if column(p) == 8 { 2.0 } else { 0.0 });
-        let e = estimate(
-            n,
-            &Halves {
-                mean: &mean,
-                odd_sums: &odd,
-            },
-            &[Halves {
-                mean: &bias,
-                odd_sums: &bias_odd,
-            }],
-        )
-        .expect("halves");
+        let e = with_bias(n, (&mean, &odd), (&bias, &bias_odd));
         let expected = 4.0 / 0.26 / 16.0;
         assert!(
             (e.relmse / expected - 1.0).abs() < 0.1,
