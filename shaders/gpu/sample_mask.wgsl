@@ -1,6 +1,6 @@
 #define_import_path gpu::sample_mask
 
-// Adaptive sampling's per-pixel flags (src/passes/sample_mask.rs): which pixels the camera
+// Adaptive sampling's per-pixel flags (src/gpu/sample_mask.rs): which pixels the camera
 // samples this iteration, and which pixels' images may change (those within a splatting pixel
 // filter's reach of a sampled one). A pixel whose image does not change also keeps its halves
 // for the error estimate as they are (shaders/gpu/odd_iterations.wgsl).
@@ -19,8 +19,3 @@ struct SampleMask {
 
 const SAMPLED: u32 = 1u;
 const UPDATED: u32 = 2u;
-
-// Whether `flag` holds for a pixel whose flags are `flags`, under a mask that is `enabled`.
-fn mask_allows(enabled: u32, flags: u32, flag: u32) -> bool {
-    return enabled == 0u || (flags & flag) != 0u;
-}

@@ -57,7 +57,7 @@
 #endif
 #import common::hit_points::{HitPoint, HitPointBuffer, RadiusBuffer, PhotonHitsIn, NO_PIXEL, initial_radius}
 #import common::photon_grid::{PhotonGridInfo, photon_cell, photon_bucket}
-#import gpu::sample_mask::{SampleMask, SAMPLED, mask_allows}
+#import gpu::sample_mask::{SampleMask, SAMPLED}
 
 struct PathTraceParams {
     sample_base: u32,
@@ -572,7 +572,7 @@ fn masked() -> bool {
 }
 
 fn skipped(pixel_index: u32) -> bool {
-    return masked() && !mask_allows(sample_mask.enabled, sample_mask.words[pixel_index], SAMPLED);
+    return masked() && (sample_mask.words[pixel_index] & SAMPLED) == 0u;
 }
 
 // The pixels this iteration samples, and the `item`-th of them.
@@ -589,9 +589,9 @@ fn pixel_of(pixel_index: u32) -> vec2<u32> {
 }
 
 // Each invocation renders the samples of pixels first, first + invocations, ... (of the
-// sampled ones, with adaptive sampling) one after another, and starts the next sample in the same lane as soon as a path ends (path
-// regeneration, Novak et al. 2010): SIMD lanes whose paths end early would otherwise idle
-// until the longest path of their group ends.
+// sampled ones, with adaptive sampling) one after another, and starts the next sample in the
+// same lane as soon as a path ends (path regeneration, Novak et al. 2010): SIMD lanes whose
+// paths end early would otherwise idle until the longest path of their group ends.
 @compute @workgroup_size(64, 1, 1)
 fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let pixels = scene_info.width * scene_info.height;

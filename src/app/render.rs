@@ -673,6 +673,9 @@ impl<'a> Renderer<'a> {
     /// The estimated error of the image so far (docs/error-estimate.md); `None` before two
     /// iterations.
     pub fn error_estimate(&self) -> Result<Option<ErrorEstimate>, Error> {
+        if self.iteration < 2 {
+            return Ok(None);
+        }
         Ok(self.image_and_error_estimate()?.1)
     }
 
