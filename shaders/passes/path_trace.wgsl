@@ -156,6 +156,12 @@ struct PathState {
 }
 
 // Where the camera pass hands a sample over to photon mapping.
+// A BSDF's value towards a light sample (cosine and frame factor included) and its pdf there.
+struct BsdfTowards {
+    value: vec3<f32>,
+    pdf: f32,
+}
+
 struct HitPointSink {
     pixel: u32,
     // Record hit points for this sample (the first sample of the iteration, when recording).
@@ -183,16 +189,41 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
 
 // Next-event estimation at a diffuse vertex: one light sample with a shadow ray. `shading`
 // (around surface.shading_normal) adds a normal map's masking and shadow terminator.
-fn direct_light(surface: Surface, albedo: vec3<f32>, shading: ShadingFrame, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+// What the BSDF at `surface` sends back along `wo` of light arriving from world direction `dir`
+// (cosine and frame factor included), and its pdf of sampling `dir`. `wi` is local, in
+// `shading`'s frame. With GLOSSY the `mapped` share of the specular lobes' part is left out
+// (photons carry it).
+fn bsdf_towards(surface: Surface, material: Material, shading: ShadingFrame, wi: vec3<f32>, mapped: vec3<f32>, dir: vec3<f32>) -> BsdfTowards {
+    if material.kind == MATERIAL_DIFFUSE {
+        let cos_i = dot(surface.shading_normal, dir);
+        let factor = frame_factor(shading, dir);
+        if cos_i <= 0.0 || factor <= 0.0 {
+            return BsdfTowards(vec3<f32>(0.0), 0.0);
+        }
+        return BsdfTowards(material.albedo * INV_PI * cos_i * factor, cos_i * INV_PI);
+    }
+    let local = dir * shading.frame;
+    let e = material_eval(material, wi, local, true);
+#ifdef GLOSSY
+    let specular = material_specular_eval(material, wi, local, e, params.glossy_threshold);
+    return BsdfTowards((e.value - mapped * specular) * frame_factor(shading, dir), e.pdf);
+#else
+    return BsdfTowards(e.value * frame_factor(shading, dir), e.pdf);
+#endif
+}
+
+// Next-event estimation: one light sample, MIS-weighted against sampling the BSDF. Every lobe
+// that light sampling can reach comes through this one call site: lavapipe inlines each call of
+// the shadow ray's traversal, and its compile time grows with every copy.
+fn direct_light(surface: Surface, material: Material, shading: ShadingFrame, wi: vec3<f32>, mapped: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
     let ls = sample_light(surface.position, u_pick, u);
     if !ls.valid {
         return vec3<f32>(0.0);
     }
-    let cos_i = dot(surface.shading_normal, ls.dir);
-    let factor = frame_factor(shading, ls.dir);
-    if cos_i <= 0.0 || factor <= 0.0 {
+    let towards = bsdf_towards(surface, material, shading, wi, mapped, ls.dir);
+    if max_component(towards.value) <= 0.0 {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
@@ -201,9 +232,9 @@ fn direct_light(surface: Surface, albedo: vec3<f32>, shading: ShadingFrame, rng:
     }
     var weight = 1.0;
     if !ls.is_delta {
-        weight = power_heuristic(ls.pdf, cos_i * INV_PI);
+        weight = power_heuristic(ls.pdf, towards.pdf);
     }
-    return albedo * INV_PI * cos_i * factor * ls.radiance * weight / ls.pdf;
+    return towards.value * ls.radiance * weight / ls.pdf;
 }
 
 // Caustic flux arriving per unit area at `surface` from the front, by this iteration's photons
@@ -254,39 +285,6 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
         flux += hit.flux;
     }
     return flux / (PI * r2);
-}
-
-// Next-event estimation at a vertex with a non-Lambertian, non-delta lobe: the BSDF evaluated
-// towards one light sample, MIS-weighted against sampling the BSDF. `wi` is local, in
-// `shading`'s frame. With GLOSSY the `mapped` share of the specular lobes' part is left out
-// (photons carry it).
-fn direct_light_bsdf(surface: Surface, material: Material, shading: ShadingFrame, wi: vec3<f32>, mapped: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
-    let u_pick = rng_next_f32(rng);
-    let u = rng_next_vec2(rng);
-    let ls = sample_light(surface.position, u_pick, u);
-    if !ls.valid {
-        return vec3<f32>(0.0);
-    }
-    let frame = shading.frame;
-    let e = material_eval(material, wi, ls.dir * frame, true);
-#ifdef GLOSSY
-    let specular = material_specular_eval(material, wi, ls.dir * frame, e, params.glossy_threshold);
-    let value = (e.value - mapped * specular) * frame_factor(shading, ls.dir);
-#else
-    let value = e.value * frame_factor(shading, ls.dir);
-#endif
-    if max_component(value) <= 0.0 {
-        return vec3<f32>(0.0);
-    }
-    *rays += 1u;
-    if !unoccluded(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal) {
-        return vec3<f32>(0.0);
-    }
-    var weight = 1.0;
-    if !ls.is_delta {
-        weight = power_heuristic(ls.pdf, e.pdf);
-    }
-    return value * ls.radiance * weight / ls.pdf;
 }
 
 // Emission the path reaches now takes full weight, not MIS's: light sampling could not have
@@ -346,19 +344,23 @@ fn start_path(ray: CameraRay) -> PathState {
 // Emitting shapes a camera ray steps through under hide_emitters before it counts as hidden.
 const MAX_EMITTER_SKIPS: u32 = 16u;
 
-// The first surface along a camera ray that does not emit, as Mitsuba's hide_emitters skips
-// emitting shapes: each one met is stepped through along the same direction.
-fn past_emitters(first: Hit, path: ptr<function, PathState>, rays: ptr<function, u32>) -> Hit {
-    var hit = first;
-    for (var skips = 0u; skips < MAX_EMITTER_SKIPS && hit.prim != NO_HIT; skips++) {
+// The next surface along `path`. Under Mitsuba's hide_emitters (`hidden`) a camera ray steps
+// through each emitting shape it meets, up to MAX_EMITTER_SKIPS of them, as Mitsuba skips them.
+// The one call site of the closest-hit traversal (see direct_light for why one).
+fn next_hit(path: ptr<function, PathState>, hidden: bool, rays: ptr<function, u32>) -> Hit {
+    var hit: Hit;
+    for (var skips = 0u; skips <= MAX_EMITTER_SKIPS; skips++) {
+        *rays += 1u;
+        hit = intersect_scene((*path).origin, (*path).dir);
+        if !hidden || hit.prim == NO_HIT {
+            break;
+        }
         let surface = surface_at(hit, (*path).origin, (*path).dir);
-        if surface.light == NO_LIGHT {
+        if surface.light == NO_LIGHT || skips == MAX_EMITTER_SKIPS {
             break;
         }
         (*path).origin = spawn_origin(surface, (*path).dir);
         (*path).travelled += hit.t;
-        *rays += 1u;
-        hit = intersect_scene((*path).origin, (*path).dir);
     }
     return hit;
 }
@@ -371,13 +373,9 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     if depth > min(params.max_depth, SAFETY_MAX_DEPTH) {
         return false;
     }
-    *rays += 1u;
-    var hit = intersect_scene((*path).origin, (*path).dir);
     // Mitsuba's hide_emitters: what the camera sees directly leaves out every emitter.
     let hidden = depth == 1u && scene_info.hide_emitters != 0u;
-    if hidden {
-        hit = past_emitters(hit, path, rays);
-    }
+    let hit = next_hit(path, hidden, rays);
     if hit.prim == NO_HIT {
 #ifdef ENVIRONMENT
         if !hidden {
@@ -456,7 +454,8 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     (*path).through_null = false;
 #endif
 
-    if material.kind == MATERIAL_DIFFUSE {
+    let diffuse = material.kind == MATERIAL_DIFFUSE;
+    if diffuse {
         // One-sided, as Mitsuba's diffuse: black from behind, and where the shading normal
         // turns away from the viewer.
         if cos_o <= 0.0 || dot(surface.shading_normal, wo) <= 0.0 {
@@ -483,7 +482,13 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
                 return false;
             }
         }
-        (*path).radiance += (*path).throughput * direct_light(surface, material.albedo, shading, rng, rays);
+    }
+    // One next-event estimate for every lobe light sampling can reach (see direct_light).
+    let wi = wo * shading.frame;
+    if diffuse || material_has_continuous_lobe(material.kind) {
+        (*path).radiance += (*path).throughput * direct_light(surface, material, shading, wi, (*path).mapped, rng, rays);
+    }
+    if diffuse {
         let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
         let cos_i = dot(dir, surface.shading_normal);
         if cos_i <= 0.0 {
@@ -519,10 +524,6 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     } else {
         // Every other BSDF, in the shading frame of the side it is seen from.
         let frame = shading.frame;
-        let wi = wo * frame;
-        if material_has_continuous_lobe(material.kind) {
-            (*path).radiance += (*path).throughput * direct_light_bsdf(surface, material, shading, wi, (*path).mapped, rng, rays);
-        }
         let u1 = rng_next_f32(rng);
         let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
         if !s.valid {
