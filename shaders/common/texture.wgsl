@@ -106,13 +106,8 @@ fn texel_space(t: TextureHeader, uv: vec2<f32>) -> vec2<f32> {
     return p * vec2<f32>(f32(t.width), f32(t.height));
 }
 
-// Texture `index` at texture coordinates `uv`.
-fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
-    let t = texture_header(index);
-    if t.kind == TEXTURE_CHECKERBOARD {
-        let p = to_uv(t, uv);
-        return select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) == upper_half(p.y));
-    }
+// A bitmap's colour at `uv`: its nearest texel, or the bilinear mean of four.
+fn bitmap_eval(t: TextureHeader, uv: vec2<f32>) -> vec3<f32> {
     let p = texel_space(t, uv);
     if t.filter_type == FILTER_NEAREST {
         let i = floor(p);
@@ -127,15 +122,30 @@ fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
     return texel(t, x, y) * (w0.x * w0.y) + texel(t, x + 1, y) * (w1.x * w0.y) + texel(t, x, y + 1) * (w0.x * w1.y) + texel(t, x + 1, y + 1) * (w1.x * w1.y);
 }
 
-// The scalar value at `uv` (Mitsuba's eval_1, what a roughness reads): a bitmap's luminance, a
-// checkerboard's with its colours the other way round from texture_eval, as Mitsuba has them.
-fn texture_eval_1(index: u32, uv: vec2<f32>) -> f32 {
+// Texture `index` at `uv`: its colour, or with `scalar` Mitsuba's eval_1 (what a roughness
+// reads) in every channel: a bitmap's luminance, a checkerboard's with its colours the other way
+// round from the colour's, as Mitsuba has them.
+fn texture_lookup(index: u32, uv: vec2<f32>, scalar: bool) -> vec3<f32> {
     let t = texture_header(index);
+    var colour: vec3<f32>;
     if t.kind == TEXTURE_CHECKERBOARD {
         let p = to_uv(t, uv);
-        return luminance(select(word_rgb(t.data + 3u), word_rgb(t.data), upper_half(p.x) != upper_half(p.y)));
+        let first = (upper_half(p.x) == upper_half(p.y)) != scalar;
+        colour = select(word_rgb(t.data + 3u), word_rgb(t.data), first);
+    } else {
+        colour = bitmap_eval(t, uv);
     }
-    return luminance(texture_eval(index, uv));
+    return select(colour, vec3<f32>(luminance(colour)), scalar);
+}
+
+// Texture `index` at texture coordinates `uv`.
+fn texture_eval(index: u32, uv: vec2<f32>) -> vec3<f32> {
+    return texture_lookup(index, uv, false);
+}
+
+// The scalar value at `uv` (Mitsuba's eval_1), see texture_lookup.
+fn texture_eval_1(index: u32, uv: vec2<f32>) -> f32 {
+    return texture_lookup(index, uv, true).x;
 }
 
 // Mitsuba's eval_1_grad of a bitmap (what a bump map reads; a checkerboard has none): the
@@ -166,20 +176,35 @@ fn texture_eval_1_grad(index: u32, uv: vec2<f32>) -> vec2<f32> {
 // evaluation and sampling, hit-point weights, photon bounces) sees the surface's own values.
 fn textured_material(m: Material, uv: vec2<f32>) -> Material {
     var out = m;
-    if m.diffuse_texture != NO_TEXTURE {
-        out.albedo = texture_eval(m.diffuse_texture, uv);
-    }
-    if m.specular_texture != NO_TEXTURE {
-        out.specular = texture_eval(m.specular_texture, uv);
-    }
     // The floor the untextured roughness gets too (src/scene/gpu_layout.rs); principled keeps
     // roughness and metallic there as given (it floors its alphas itself).
     let floor = select(1e-4, 0.0, m.kind == MATERIAL_PRINCIPLED);
-    if m.alpha_u_texture != NO_TEXTURE {
-        out.alpha_u = max(texture_eval_1(m.alpha_u_texture, uv), floor);
+    let slots = array<u32, 4>(m.diffuse_texture, m.specular_texture, m.alpha_u_texture, m.alpha_v_texture);
+    var textured = 0u;
+    for (var slot = 0u; slot < 4u; slot++) {
+        textured |= select(0u, 1u << slot, slots[slot] != NO_TEXTURE);
     }
-    if m.alpha_v_texture != NO_TEXTURE {
-        out.alpha_v = max(texture_eval_1(m.alpha_v_texture, uv), floor);
+    // One lookup site for every slot, in a loop whose trip count the compiler cannot know (so it
+    // is not unrolled): lavapipe inlines each call, and a lookup is much code (four texels, each
+    // a chunked load). Slots 2 and 3 are roughnesses, read as scalars.
+    while textured != 0u {
+        let slot = firstTrailingBit(textured);
+        textured &= textured - 1u;
+        let value = texture_lookup(slots[slot], uv, slot >= 2u);
+        switch slot {
+            case 0u: {
+                out.albedo = value;
+            }
+            case 1u: {
+                out.specular = value;
+            }
+            case 2u: {
+                out.alpha_u = max(value.x, floor);
+            }
+            default: {
+                out.alpha_v = max(value.x, floor);
+            }
+        }
     }
     return out;
 }
