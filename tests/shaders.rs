@@ -315,10 +315,10 @@ fn scene_features_compile_code_in_and_out() {
         "shaders/passes/photon_trace.wgsl",
     ] {
         for lib in [&diffuse, &glass, &materials] {
-            assert!(!has(lib, path, "texture_eval"), "{path}: untextured scene");
+            assert!(!has(lib, path, "texture_lookup"), "{path}: untextured scene");
         }
         assert!(
-            has(&textured, path, "texture_eval"),
+            has(&textured, path, "texture_lookup"),
             "{path}: textured scene"
         );
     }
