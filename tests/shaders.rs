@@ -73,11 +73,31 @@ const LIGHT_SETS: [&[&str]; 7] = [
     &LIGHT_DEFS,
 ];
 
-/// Sets of the scene defs other than the light defs that cover every pair of them in each of
-/// the four on/off states: none, all, each alone, each pair, all but one, all but a pair. Each
-/// set goes with each light set, with and without float atomics. (Every subset was 2^n: with
-/// 10 such defs, 14,336 compositions of every pass, too slow for CI; a def that breaks only in
-/// a combination of three or more would be missed, and none has.)
+/// Masks over `n` defs in which every pair of defs takes each of its four on/off states, from
+/// eight masks for up to 35 defs: def `i` is on in mask `r` when row `r` is in the `i`-th 4-subset
+/// of rows 1..8 (Kleitman and Spencer's construction). Two 4-subsets of 7 rows always share a
+/// row (both on), neither holds the other (each on alone), and row 0 is in none (both off).
+fn pair_covering_masks(n: usize) -> Vec<u64> {
+    let subsets: Vec<u32> = (0u32..256)
+        .filter(|m| m & 1 == 0 && m.count_ones() == 4)
+        .take(n)
+        .collect();
+    assert_eq!(subsets.len(), n, "more defs than eight masks cover");
+    (0..8)
+        .map(|row| {
+            (0..n)
+                .filter(|&i| subsets[i] & (1 << row) != 0)
+                .fold(0, |mask, i| mask | 1u64 << i)
+        })
+        .collect()
+}
+
+/// Def sets that cover, with and without float atomics: every pair of the non-light defs in
+/// each of its four on/off states (eight masks), each non-light def on and off with each light
+/// set (no def and every def, with each light set), and each def alone and left out (with no
+/// light and with every light). A def that breaks only in a combination of three or more would
+/// be missed, and none has. (Every pair crossed with every light set was 784 sets and two
+/// minutes of CI, every subset 14,336; these 42 take seconds.)
 fn every_def_combination() -> Vec<(bool, HashMap<String, naga_oil::compose::ShaderDefValue>)> {
     let names: Vec<&str> = hppm::passes::SCENE_DEFS
         .iter()
@@ -91,34 +111,53 @@ fn every_def_combination() -> Vec<(bool, HashMap<String, naga_oil::compose::Shad
         "a light def is no longer a scene def"
     );
     let n = names.len();
-    let all = (1u32 << n) - 1;
-    let mut masks = vec![0, all];
-    for i in 0..n {
-        masks.extend([1 << i, all & !(1 << i)]);
-        for j in i + 1..n {
-            let pair = (1 << i) | (1 << j);
-            masks.extend([pair, all & !pair]);
-        }
+    let all = (1u64 << n) - 1;
+    let mut sets: Vec<(u64, &[&str])> = Vec::new();
+    for lights in LIGHT_SETS {
+        sets.extend([(0, lights), (all, lights)]);
     }
-    masks.sort_unstable();
-    masks.dedup();
+    for (row, mask) in pair_covering_masks(n).into_iter().enumerate() {
+        sets.push((mask, LIGHT_SETS[row % LIGHT_SETS.len()]));
+    }
+    for i in 0..n {
+        sets.extend([(1 << i, LIGHT_SETS[0]), (all & !(1 << i), &LIGHT_DEFS[..])]);
+    }
     let mut out = Vec::new();
     for float_atomics in [true, false] {
-        for &mask in &masks {
-            for lights in LIGHT_SETS {
-                let defs = names
-                    .iter()
-                    .enumerate()
-                    .filter(|(i, _)| mask & (1 << i) != 0)
-                    .map(|(_, n)| *n)
-                    .chain(lights.iter().copied())
-                    .map(|n| (n.to_string(), naga_oil::compose::ShaderDefValue::Bool(true)))
-                    .collect();
-                out.push((float_atomics, defs));
-            }
+        for &(mask, lights) in &sets {
+            let defs = names
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| mask & (1 << i) != 0)
+                .map(|(_, n)| *n)
+                .chain(lights.iter().copied())
+                .map(|n| (n.to_string(), naga_oil::compose::ShaderDefValue::Bool(true)))
+                .collect();
+            out.push((float_atomics, defs));
         }
     }
     out
+}
+
+/// The masks cover every pair of defs in each on/off state: would catch a construction that
+/// leaves a pair out (a def combination the composition test then never tries).
+#[test]
+fn pair_covering_masks_cover_every_pair() {
+    for n in [2, 10, 20, 35] {
+        let masks = pair_covering_masks(n);
+        for i in 0..n {
+            for j in i + 1..n {
+                for (a, b) in [(false, false), (false, true), (true, false), (true, true)] {
+                    assert!(
+                        masks
+                            .iter()
+                            .any(|m| (m >> i & 1 == 1) == a && (m >> j & 1 == 1) == b),
+                        "{n} defs: pair ({i}, {j}) never ({a}, {b})"
+                    );
+                }
+            }
+        }
+    }
 }
 
 #[test]
@@ -315,7 +354,10 @@ fn scene_features_compile_code_in_and_out() {
         "shaders/passes/photon_trace.wgsl",
     ] {
         for lib in [&diffuse, &glass, &materials] {
-            assert!(!has(lib, path, "texture_lookup"), "{path}: untextured scene");
+            assert!(
+                !has(lib, path, "texture_lookup"),
+                "{path}: untextured scene"
+            );
         }
         assert!(
             has(&textured, path, "texture_lookup"),
