@@ -132,6 +132,12 @@ fn found_by_long_runs() {
 /// colour, roughness and metallic, every lobe on one sphere, a transmissive sphere; metallic
 /// read as 0 fails (2.0x); single lobes (retro-reflection, clearcoat) move less than block
 /// means see (0.49x, 0.39x) and are checked lobe by lobe against Mitsuba in tests/bsdf.rs.
+/// `principled_textured`: a texture on each of the other eight parameters (spec_trans and
+/// anisotropic in stripes on a dark sphere, sheen from a bitmap's luminance, clearcoat, gloss,
+/// tints and flatness on a red one and the floor). Correct: 0.37x; the textures replaced by
+/// their means fail (2.9x, -18% in a block), each texture written into the next parameter's
+/// place fails (1.8x, -13%); which parameter each lands in is
+/// tests/textures.rs's (`principled_field_textures_land_in_their_parameters`).
 /// `spot_texture` and `projector`: a spot with a projected bitmap (its frame turned by a
 /// diagonal up) and a projector of a 4:3 bitmap, each lighting a floor and a cube directly and
 /// through a mirror the camera cannot see, against Mitsuba's particle tracer (its path tracer

@@ -1012,9 +1012,10 @@ fn broken_blends_are_errors_at_their_line() {
 
 /// `principled` reads what Mitsuba's reads: `specular` 0.5 is eta 1.5 (Mitsuba's
 /// 2 / (1 - sqrt(0.08 s)) - 1), `eta` and `specular` together are refused, a parameter counts
-/// as given (Mitsuba's m_has_*) when it is a texture or a float other than 0, base colour,
-/// roughness and metallic take textures and others are refused by name. Would catch a lobe
-/// switched on by a zero, the specular-to-eta mapping, a texture silently dropped.
+/// as given (Mitsuba's m_has_*) when it is a texture or a float other than 0, every parameter
+/// Mitsuba reads as a texture takes one (kept in its slot) and `eta` and `specular`, which it
+/// reads as numbers, refuse one by name. Would catch a lobe switched on by a zero, the
+/// specular-to-eta mapping, a texture silently dropped or kept in another parameter's slot.
 #[test]
 fn principled_reads_what_mitsuba_reads() {
     use hppm::scene::principled::{HAS_CLEARCOAT, HAS_METALLIC, HAS_SHEEN, HAS_SPEC_TRANS};
@@ -1025,7 +1026,7 @@ fn principled_reads_what_mitsuba_reads() {
         )
     };
     let scene = scene_of(check(&shape(
-        r#"<float name="sheen" value="0"/><float name="clearcoat" value="0.5"/><texture name="metallic" type="checkerboard"/><texture name="roughness" type="checkerboard"/>"#,
+        r#"<float name="sheen" value="0"/><float name="clearcoat" value="0.5"/><texture name="metallic" type="checkerboard"/><texture name="roughness" type="checkerboard"/><texture name="spec_trans" type="checkerboard"/>"#,
     )));
     let m = &scene.materials[scene.triangles[0].material as usize];
     let Bsdf::Principled(p) = m.bsdf else {
@@ -1036,24 +1037,30 @@ fn principled_reads_what_mitsuba_reads() {
         "specular 0.5 is eta 1.5: {}",
         p.eta
     );
+    assert_eq!(p.has & HAS_SHEEN, 0, "a zero or absent lobe is off");
     assert_eq!(
-        p.has & (HAS_SHEEN | HAS_SPEC_TRANS),
-        0,
-        "a zero or absent lobe is off"
-    );
-    assert_eq!(
-        p.has & (HAS_CLEARCOAT | HAS_METALLIC),
-        HAS_CLEARCOAT | HAS_METALLIC
+        p.has & (HAS_CLEARCOAT | HAS_METALLIC | HAS_SPEC_TRANS),
+        HAS_CLEARCOAT | HAS_METALLIC | HAS_SPEC_TRANS
     );
     assert!(m.textures.front.alpha_u.is_some() && m.textures.front.alpha_v.is_some());
+    let spec_trans = hppm::scene::PRINCIPLED_TEXTURED
+        .iter()
+        .position(|&n| n == "spec_trans");
+    for (i, slot) in m.textures.front.principled.iter().enumerate() {
+        assert_eq!(slot.is_some(), Some(i) == spec_trans, "principled slot {i}");
+    }
     for (bsdf, expected) in [
         (
             r#"<float name="eta" value="1.3"/><float name="specular" value="0.3"/>"#,
             "not both",
         ),
         (
-            r#"<texture name="sheen" type="checkerboard"/>"#,
-            "a texture for sheen is not supported",
+            r#"<texture name="eta" type="checkerboard"/>"#,
+            "takes no texture",
+        ),
+        (
+            r#"<texture name="specular" type="checkerboard"/>"#,
+            "takes no texture",
         ),
     ] {
         assert_error_at(

@@ -732,3 +732,122 @@ fn textured_roughness_renders_each_cells_constant_roughness() {
         "a cell renders off its constant roughness by {worst}"
     );
 }
+
+const MATERIAL_KERNEL: &str = "#import common::scene::materials
+#import common::texture::textured_material
+@group(1) @binding(0) var<storage, read> queries: array<vec4<f32>>;
+@group(1) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&out) / 3u { return; }
+    let q = queries[id.x];
+    let m = textured_material(materials[u32(q.z)], q.xy);
+    out[3u * id.x] = vec4<f32>(m.specular, m.alpha_u);
+    out[3u * id.x + 1u] = vec4<f32>(m.eta, m.alpha_v);
+    out[3u * id.x + 2u] = vec4<f32>(m.k, m.albedo.x);
+}
+";
+
+/// Each of principled's parameters that its plugin reads as a texture (besides base colour,
+/// roughness and metallic) given its own checkerboard, with colours and scales unlike the
+/// others', and a second material with two of them and plain floats for the rest: the WGSL
+/// material at 500 uvs carries in each parameter's place (`specular`, `eta`, `k`, in
+/// `PRINCIPLED_TEXTURED`'s order; `k.z` keeps eta) exactly the CPU lookup of that parameter's
+/// texture, and the untextured ones keep their floats. Would catch a parameter written into
+/// another's place, a texture list read from the wrong offset of `bsdf_tables` (the second
+/// material's list follows the first's), or a scalar taken from the wrong channel.
+#[test]
+fn principled_field_textures_land_in_their_parameters() {
+    use hppm::scene::PRINCIPLED_TEXTURED;
+    let checker = |name: &str, i: usize| {
+        format!(
+            r#"<texture type="checkerboard" name="{name}"><float name="color0" value="{}"/><float name="color1" value="{}"/>
+                <transform name="to_uv"><scale x="{}" y="{}"/></transform></texture>"#,
+            0.05 + 0.1 * i as f32,
+            0.9 - 0.07 * i as f32,
+            1 + i,
+            2 + i % 3
+        )
+    };
+    let all: String = PRINCIPLED_TEXTURED
+        .iter()
+        .enumerate()
+        .map(|(i, name)| checker(name, i))
+        .collect();
+    let some = format!(
+        r#"{}{}<float name="anisotropic" value="0.3"/><float name="clearcoat" value="0.7"/><float name="eta" value="1.7"/>"#,
+        checker("sheen", 3),
+        checker("clearcoat_gloss", 7)
+    );
+    let dir = temp_dir("principled_fields");
+    let path = dir.join("scene.xml");
+    let xml = format!(
+        r#"<scene version="3.0.0"><sensor type="perspective"/>
+        <shape type="rectangle"><bsdf type="principled"><float name="eta" value="1.4"/>{all}</bsdf></shape>
+        <shape type="rectangle"><transform name="to_world"><translate x="3"/></transform><bsdf type="principled">{some}</bsdf></shape>
+        </scene>"#
+    );
+    std::fs::write(&path, xml).expect("scene");
+    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let texture_of = |material: usize, name: &str| {
+        let i = PRINCIPLED_TEXTURED
+            .iter()
+            .position(|n| n == &name)
+            .expect("name");
+        scene.materials[material].textures.front.principled[i]
+    };
+    let mut rng = common::rng::Rng(0x2545_f491_4f6c_dd1d);
+    let queries: Vec<Vec4> = (0..500)
+        .map(|i| {
+            Vec4::new(
+                -2.0 + 5.0 * rng.unit(),
+                -2.0 + 5.0 * rng.unit(),
+                (i % 2) as f32,
+                0.0,
+            )
+        })
+        .filter(|q| {
+            // Checker cells within 1e-4 of an edge may round either way.
+            scene.textures.iter().all(|t| match t {
+                Texture::Checkerboard { to_uv, .. } => {
+                    let p = to_uv.apply(q.truncate().truncate()) * 2.0;
+                    (p.x - p.x.round()).abs() > 2e-4 && (p.y - p.y.round()).abs() > 2e-4
+                }
+                _ => true,
+            })
+        })
+        .collect();
+    let gpu = gpu();
+    let harness = PassHarness::new(&gpu, &scene, (4, 4), false);
+    let out = harness.run_kernel(
+        "tests/textures.rs (material kernel)",
+        MATERIAL_KERNEL,
+        &queries,
+        3 * queries.len(),
+    );
+    let floats = [
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.4],
+        [0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, 1.7],
+    ];
+    for (q, got) in queries.iter().zip(out.chunks(3)) {
+        let material = q.z as usize;
+        let fields = [got[0].truncate(), got[1].truncate(), got[2].truncate()];
+        let fields: Vec<f32> = fields.iter().flat_map(|v| v.to_array()).collect();
+        for (i, got) in fields.iter().enumerate() {
+            let want = match PRINCIPLED_TEXTURED
+                .get(i)
+                .and_then(|n| texture_of(material, n))
+            {
+                Some(t) => scene.textures[t as usize].eval_1(q.truncate().truncate()),
+                None => floats[material][i],
+            };
+            let what = PRINCIPLED_TEXTURED.get(i).unwrap_or(&"eta");
+            assert!(
+                (got - want).abs() <= 1e-6,
+                "material {material}, {what} at {:?}: GPU {got}, expected {want}",
+                q.truncate().truncate()
+            );
+        }
+    }
+    eprintln!("{} lookups", queries.len());
+}

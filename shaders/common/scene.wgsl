@@ -147,8 +147,11 @@ struct Material {
     children: vec2<u32>,
     blend_weight: f32,
     blend_weight_texture: u32,
-    pad_a: u32,
-    pad_b: u32,
+    // Scalar textures replacing one component each of specular, eta and k (principled's
+    // parameters): field_texture_count pairs (component of the nine, texture) of bsdf_tables
+    // from field_textures (common::texture).
+    field_textures: u32,
+    field_texture_count: u32,
 }
 
 struct Light {

@@ -4,7 +4,7 @@
 // (Texture::eval), which this must equal. Compiled in only for scenes with textures.
 
 #ifdef TEXTURES
-#import common::scene::{Material, NO_TEXTURE, MATERIAL_PRINCIPLED, texture_word}
+#import common::scene::{Material, NO_TEXTURE, MATERIAL_PRINCIPLED, bsdf_tables, texture_word}
 #import common::sampling::luminance
 
 const TEXTURE_CHECKERBOARD: u32 = 0u;
@@ -184,13 +184,36 @@ fn textured_material(m: Material, uv: vec2<f32>) -> Material {
     for (var slot = 0u; slot < 4u; slot++) {
         textured |= select(0u, 1u << slot, slots[slot] != NO_TEXTURE);
     }
-    // One lookup site for every slot, in a loop whose trip count the compiler cannot know (so it
-    // is not unrolled): lavapipe inlines each call, and a lookup is much code (four texels, each
-    // a chunked load). Slots 2 and 3 are roughnesses, read as scalars.
-    while textured != 0u {
-        let slot = firstTrailingBit(textured);
-        textured &= textured - 1u;
-        let value = texture_lookup(slots[slot], uv, slot >= 2u);
+    // specular, eta and k as one array for field textures (one component each), taken once the
+    // fixed slots are done (which come first).
+    var fields: array<f32, 9>;
+    var field = 0u;
+    // One lookup site for every slot and field texture, in a loop whose trip count the compiler
+    // cannot know (so it is not unrolled): lavapipe inlines each call, and a lookup is much code
+    // (four texels, each a chunked load). Slots 2 and 3 (roughnesses) and fields are scalars.
+    loop {
+        var slot = 4u;
+        var texture = NO_TEXTURE;
+        if textured != 0u {
+            slot = firstTrailingBit(textured);
+            textured &= textured - 1u;
+            texture = slots[slot];
+        } else if field < m.field_texture_count {
+            if field == 0u {
+                fields = array<f32, 9>(
+                    out.specular.x, out.specular.y, out.specular.z,
+                    out.eta.x, out.eta.y, out.eta.z,
+                    out.k.x, out.k.y, out.k.z
+                );
+            }
+            let entry = m.field_textures + 2u * field;
+            slot = 4u + u32(bsdf_tables[entry]);
+            texture = u32(bsdf_tables[entry + 1u]);
+            field += 1u;
+        } else {
+            break;
+        }
+        let value = texture_lookup(texture, uv, slot >= 2u);
         switch slot {
             case 0u: {
                 out.albedo = value;
@@ -201,10 +224,18 @@ fn textured_material(m: Material, uv: vec2<f32>) -> Material {
             case 2u: {
                 out.alpha_u = max(value.x, floor);
             }
-            default: {
+            case 3u: {
                 out.alpha_v = max(value.x, floor);
             }
+            default: {
+                fields[min(slot - 4u, 8u)] = value.x;
+            }
         }
+    }
+    if m.field_texture_count != 0u {
+        out.specular = vec3<f32>(fields[0], fields[1], fields[2]);
+        out.eta = vec3<f32>(fields[3], fields[4], fields[5]);
+        out.k = vec3<f32>(fields[6], fields[7], fields[8]);
     }
     return out;
 }

@@ -43,7 +43,8 @@ pub const LAYOUTS: &[StructLayout] = &[
         albedo, kind, emission, int_ior, specular, ext_ior, eta, alpha_u, k, alpha_v,
         distribution, back, nonlinear, specular_weight, internal_reflectance, table,
         diffuse_texture, specular_texture, alpha_u_texture, alpha_v_texture, frame_kind,
-        frame_texture, frame_scale, frame_flags, children, blend_weight, blend_weight_texture
+        frame_texture, frame_scale, frame_flags, children, blend_weight, blend_weight_texture,
+        field_textures, field_texture_count
     }),
     struct_layout!(GpuLight => "Light" in TRACER, {
         position, kind, radiance, prim, axis, select_prob, area, table, cutoff, beam_width,

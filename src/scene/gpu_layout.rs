@@ -147,7 +147,12 @@ pub struct GpuMaterial {
     pub children: [u32; 2],
     pub blend_weight: f32,
     pub blend_weight_texture: u32,
-    pub _pad: [u32; 2],
+    /// Scalar textures that replace one component each of `specular`, `eta` and `k` (principled
+    /// keeps eight parameters there): `field_texture_count` pairs of `bsdf_tables` entries from
+    /// `field_textures`, each the component (of the three taken as one array of nine) and the
+    /// texture, as floats (exact below 2^24; shaders/common/texture.wgsl).
+    pub field_textures: u32,
+    pub field_texture_count: u32,
 }
 
 #[repr(C)]
@@ -324,7 +329,8 @@ fn gpu_material(
         children: [0; 2],
         blend_weight: 0.0,
         blend_weight_texture: textures.blend_weight.unwrap_or(NO_TEXTURE),
-        _pad: [0; 2],
+        field_textures: 0,
+        field_texture_count: 0,
     };
     if let Some(frame) = textures.frame {
         (m.frame_kind, m.frame_scale) = match frame.kind {
@@ -382,7 +388,8 @@ fn gpu_material(
         Bsdf::Null => m.kind = MATERIAL_NULL,
         // The principled parameters in the fields of the other kinds
         // (shaders/common/principled.wgsl reads them back): base colour, roughness and
-        // metallic where textures replace them (`albedo`, `alpha_u`, `alpha_v`).
+        // metallic where the fixed texture slots replace them (`albedo`, `alpha_u`,
+        // `alpha_v`), the rest where field textures do.
         Bsdf::Principled(p) => {
             m.kind = MATERIAL_PRINCIPLED;
             m.albedo = p.base_color.to_array();
@@ -393,6 +400,14 @@ fn gpu_material(
             (m.int_ior, m.ext_ior) = (p.spec_srate, p.clearcoat_srate);
             m.specular_weight = p.diffuse_srate;
             m.nonlinear = p.has;
+            // PRINCIPLED_TEXTURED is in the order of the components above.
+            m.field_textures = tables.len() as u32;
+            for (component, texture) in textures.principled.iter().enumerate() {
+                if let Some(texture) = *texture {
+                    tables.extend([component as f32, texture as f32]);
+                    m.field_texture_count += 1;
+                }
+            }
         }
         Bsdf::Blend {
             weight,

@@ -25,8 +25,8 @@ use super::filter::{
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
     Bsdf, Camera, Crop, Distribution, FramePerturbation, Integrator, Lens, Material,
-    MaterialTextures, Microfacet, PerturbationKind, PointLight, Report, Scene, SceneError,
-    SideTextures, Sphere, Tint, bsdf, mesh, plugins, spectrum,
+    MaterialTextures, Microfacet, PRINCIPLED_TEXTURED, PerturbationKind, PointLight, Report, Scene,
+    SceneError, SideTextures, Sphere, Tint, bsdf, mesh, plugins, spectrum,
 };
 use crate::error::{Location, edit_distance};
 
@@ -404,7 +404,9 @@ struct ViewAngle<'a, 'input> {
 const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
     roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic, \
     dielectric, thindielectric, roughdielectric), specular_transmittance (dielectric, \
-    thindielectric, roughdielectric), alpha, alpha_u, alpha_v (roughconductor, roughdielectric)";
+    thindielectric, roughdielectric), alpha, alpha_u, alpha_v (roughconductor, roughdielectric), \
+    weight (blendbsdf), opacity (mask), every parameter of principled but eta, specular and its \
+    sampling rates";
 
 /// Mitsuba's named indices of refraction (include/mitsuba/render/ior.h).
 const NAMED_IORS: &[(&str, f32)] = &[
@@ -2327,7 +2329,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     }
                 }
             }
-            "principled" => self.read_principled(props, node, &mut textures)?,
+            "principled" => self.read_principled(props, &mut textures)?,
             other => {
                 return Err(self.attr_error(
                     node,
@@ -2344,13 +2346,11 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok((bsdf, textures))
     }
 
-    /// Mitsuba's `principled`, every property its plugin reads. Base colour, roughness and
-    /// metallic may be textures (the slots the GPU record has); a texture for another
-    /// parameter is refused by name.
+    /// Mitsuba's `principled`, every property its plugin reads; each parameter its plugin reads
+    /// as a texture may be one.
     fn read_principled(
         &self,
         props: &mut Props<'a, 'input>,
-        node: Node<'a, 'input>,
         textures: &mut SideTextures,
     ) -> Result<Bsdf, SceneError> {
         use super::principled::{self as pr, Principled};
@@ -2373,32 +2373,31 @@ impl<'a, 'input> Reader<'a, 'input> {
         let (roughness, roughness_texture) = scalar("roughness", 0.5, 0)?;
         let (metallic, metallic_texture) = scalar("metallic", 0.0, pr::HAS_METALLIC)?;
         (textures.alpha_u, textures.alpha_v) = (roughness_texture, metallic_texture);
-        let mut untextured = Vec::new();
-        let mut plain = |name: &'static str, bit: u32| -> Result<f32, SceneError> {
-            let (value, texture) = scalar(name, 0.0, bit)?;
-            if texture.is_some() {
-                untextured.push(name);
-            }
-            Ok(value)
-        };
-        let anisotropic = plain("anisotropic", pr::HAS_ANISOTROPIC)?;
-        let spec_trans = plain("spec_trans", pr::HAS_SPEC_TRANS)?;
-        let spec_tint = plain("spec_tint", pr::HAS_SPEC_TINT)?;
-        let sheen = plain("sheen", pr::HAS_SHEEN)?;
-        let sheen_tint = plain("sheen_tint", pr::HAS_SHEEN_TINT)?;
-        let flatness = plain("flatness", pr::HAS_FLATNESS)?;
-        let clearcoat = plain("clearcoat", pr::HAS_CLEARCOAT)?;
-        let clearcoat_gloss = plain("clearcoat_gloss", 0)?;
-        if !untextured.is_empty() {
-            return Err(self.error(
-                node,
-                format!(
-                    "principled: a texture for {} is not supported (base_color, roughness and \
-                     metallic may be textured)",
-                    untextured.join(", ")
-                ),
-            ));
+        // The rest in PRINCIPLED_TEXTURED's order, each a float or a texture.
+        let bits = [
+            pr::HAS_ANISOTROPIC,
+            pr::HAS_SPEC_TRANS,
+            pr::HAS_SPEC_TINT,
+            pr::HAS_SHEEN,
+            pr::HAS_SHEEN_TINT,
+            pr::HAS_FLATNESS,
+            pr::HAS_CLEARCOAT,
+            0,
+        ];
+        let mut values = [0.0; PRINCIPLED_TEXTURED.len()];
+        for (i, (name, bit)) in PRINCIPLED_TEXTURED.iter().zip(bits).enumerate() {
+            (values[i], textures.principled[i]) = scalar(name, 0.0, bit)?;
         }
+        let [
+            anisotropic,
+            spec_trans,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            clearcoat,
+            clearcoat_gloss,
+        ] = values;
         let mut rate = |name: &str| match props.take(name) {
             Some(n) => self.float(n),
             None => Ok(1.0),

@@ -384,14 +384,31 @@ pub struct SideTextures {
     pub frame: Option<FramePerturbation>,
     /// A blend's weight (`blendbsdf`) or opacity (`mask`), looked up as a scalar.
     pub blend_weight: Option<u32>,
+    /// `principled`'s scalar parameters in [`PRINCIPLED_TEXTURED`]'s order (base colour,
+    /// roughness and metallic are `diffuse`, `alpha_u` and `alpha_v`).
+    pub principled: [Option<u32>; PRINCIPLED_TEXTURED.len()],
 }
+
+/// The parameters of Mitsuba's `principled` besides base colour, roughness and metallic, each of
+/// which its plugin reads as a texture (`eta` and `specular` are plain floats there).
+pub const PRINCIPLED_TEXTURED: [&str; 8] = [
+    "anisotropic",
+    "spec_trans",
+    "spec_tint",
+    "sheen",
+    "sheen_tint",
+    "flatness",
+    "clearcoat",
+    "clearcoat_gloss",
+];
 
 impl SideTextures {
     pub fn any(&self) -> bool {
-        self.all().iter().any(Option::is_some)
+        self.all().any(|t| t.is_some())
     }
 
-    pub fn all(&self) -> [Option<u32>; 6] {
+    /// Every texture slot of the side, empty ones included.
+    pub fn all(&self) -> impl Iterator<Item = Option<u32>> + '_ {
         [
             self.diffuse,
             self.specular,
@@ -400,6 +417,8 @@ impl SideTextures {
             self.frame.map(|f| f.texture),
             self.blend_weight,
         ]
+        .into_iter()
+        .chain(self.principled.iter().copied())
     }
 }
 
@@ -882,7 +901,9 @@ impl Scene {
                 l.aperture_radius, l.focus_distance
             ));
         }
-        let texture_ok = |t: Option<u32>| t.is_none_or(|t| (t as usize) < self.textures.len());
+        // Field textures carry the index as a float, exact below 2^24.
+        let texture_ok =
+            |t: Option<u32>| t.is_none_or(|t| (t as usize) < self.textures.len() && t < 1 << 24);
         for (i, m) in self.materials.iter().enumerate() {
             let sides = [m.textures.front, m.textures.back];
             // A blend's children come before it: choosing among them always ends.
@@ -893,7 +914,7 @@ impl Scene {
             let ok = finite(m.emission)
                 && children_ok
                 && m.bsdfs().all(Bsdf::is_valid)
-                && sides.iter().all(|s| s.all().into_iter().all(texture_ok))
+                && sides.iter().all(|s| s.all().all(texture_ok))
                 && sides.iter().all(|s| {
                     s.frame.is_none_or(|f| match f.kind {
                         PerturbationKind::Bump { scale } => scale.is_finite(),

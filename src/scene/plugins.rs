@@ -393,8 +393,8 @@ pub const PLUGINS: &[Plugin] = &[
             p("diffuse_reflectance_sampling_rate", "1"),
         ],
         notes: "Every lobe as Mitsuba 3.9.1 writes it (src/scene/principled.rs), its sampling \
-                too. `base_color`, `roughness` and `metallic` may be textures; a texture on \
-                another parameter is refused. A continuous BSDF for the light-transport \
+                too. Every parameter but `eta`, `specular` and the sampling rates may be a \
+                texture, as in Mitsuba (the rest are numbers there too). A continuous BSDF for the light-transport \
                 partition: caustics through it or onto it are path traced, never photon \
                 mapped.",
     },
