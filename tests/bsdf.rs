@@ -95,6 +95,14 @@ const MATERIALS: &[(&str, &str)] = &[
         "roughdielectric_tinted",
         r#"<bsdf type="roughdielectric"><string name="distribution" value="ggx"/><float name="alpha" value="0.2"/><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/><rgb name="specular_reflectance" value="0.9, 0.6, 0.3"/><rgb name="specular_transmittance" value="0.2, 0.7, 0.95"/></bsdf>"#,
     ),
+    (
+        "pplastic_ggx",
+        r#"<bsdf type="pplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.15"/><float name="int_ior" value="1.5"/><float name="ext_ior" value="1.0"/><rgb name="diffuse_reflectance" value="0.3, 0.5, 0.7"/></bsdf>"#,
+    ),
+    (
+        "pplastic_beckmann_aniso",
+        r#"<bsdf type="pplastic"><string name="distribution" value="beckmann"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/><rgb name="diffuse_reflectance" value="0.8, 0.3, 0.1"/><rgb name="specular_reflectance" value="0.9, 0.8, 0.7"/></bsdf>"#,
+    ),
 ];
 
 /// A one-sphere Mitsuba scene per BSDF snippet, loaded through the XML loader.
@@ -169,10 +177,11 @@ fn close3(a: Vec3, b: Vec3, rel: f32) -> bool {
 }
 
 /// The CPU reference reproduces Mitsuba 3.9.1's own `eval`, `pdf` and `sample` (same random
-/// numbers, so the same direction) for every BSDF (14 materials) on 24 direction pairs each, including
+/// numbers, so the same direction) for every BSDF of tests/data/bsdf/mitsuba_table.py on 24 direction pairs each, including
 /// directions from inside a dielectric and below a one-sided surface. Catches any formula that
 /// differs from Mitsuba's: a wrong Fresnel term, a missing 1/eta^2, Mitsuba's internal-reflection
 /// and specular-sampling-weight handling in plastic, the rough plastic's transmittance table,
+/// pplastic's two smooth refractions and fixed lobe probabilities,
 /// the named conductors' RGB eta/k, an anisotropy swapped between u and v, or a sampler that
 /// maps random numbers differently (which would still be unbiased, but is not Mitsuba's).
 #[test]
@@ -256,6 +265,8 @@ fn test_bsdfs() -> Vec<(&'static str, Bsdf)> {
         "principled_every_lobe",
         "principled_glass",
         "roughdielectric_tinted",
+        "pplastic_ggx",
+        "pplastic_beckmann_aniso",
     ]
     .iter()
     .map(|n| (*n, loaded(n)))

@@ -3,7 +3,7 @@
 // The BSDFs other than Lambertian, mirror and smooth dielectric (which the passes handle
 // inline), dispatched on the material's kind; kinds the scene lacks are compiled out.
 
-#import common::scene::{Material, MATERIAL_CONDUCTOR, MATERIAL_ROUGH_CONDUCTOR, MATERIAL_PLASTIC, MATERIAL_ROUGH_PLASTIC, MATERIAL_ROUGH_DIELECTRIC, MATERIAL_THIN_DIELECTRIC, MATERIAL_PRINCIPLED}
+#import common::scene::{Material, MATERIAL_CONDUCTOR, MATERIAL_ROUGH_CONDUCTOR, MATERIAL_PLASTIC, MATERIAL_ROUGH_PLASTIC, MATERIAL_POLARIZED_PLASTIC, MATERIAL_ROUGH_DIELECTRIC, MATERIAL_THIN_DIELECTRIC, MATERIAL_PRINCIPLED}
 #import common::bsdf::{BsdfEval, BsdfSample, no_sample}
 #ifdef DIELECTRIC
 #import common::bsdf::sample_thin_dielectric
@@ -32,7 +32,7 @@ fn material_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> B
     if m.kind == MATERIAL_PLASTIC {
         return plastic_eval(m, wi, wo);
     }
-    if m.kind == MATERIAL_ROUGH_PLASTIC {
+    if rough_plastic_kind(m.kind) {
         return rough_plastic_eval(m, wi, wo);
     }
 #endif
@@ -49,9 +49,14 @@ fn material_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> B
     return BsdfEval(vec3<f32>(0.0), 0.0);
 }
 
+// Rough plastic and pplastic: a rough reflection over a diffuse base (common::plastic).
+fn rough_plastic_kind(kind: u32) -> bool {
+    return kind == MATERIAL_ROUGH_PLASTIC || kind == MATERIAL_POLARIZED_PLASTIC;
+}
+
 // Whether the kind has a non-delta lobe, which next-event estimation can reach.
 fn material_has_continuous_lobe(kind: u32) -> bool {
-    return kind == MATERIAL_ROUGH_CONDUCTOR || kind == MATERIAL_PLASTIC || kind == MATERIAL_ROUGH_PLASTIC || kind == MATERIAL_ROUGH_DIELECTRIC || kind == MATERIAL_PRINCIPLED;
+    return kind == MATERIAL_ROUGH_CONDUCTOR || kind == MATERIAL_PLASTIC || rough_plastic_kind(kind) || kind == MATERIAL_ROUGH_DIELECTRIC || kind == MATERIAL_PRINCIPLED;
 }
 
 fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: bool) -> BsdfSample {
@@ -75,7 +80,7 @@ fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance:
     if m.kind == MATERIAL_PLASTIC {
         return plastic_sample(m, wi, u1, u2);
     }
-    if m.kind == MATERIAL_ROUGH_PLASTIC {
+    if rough_plastic_kind(m.kind) {
         return rough_plastic_sample(m, wi, u1, u2);
     }
 #endif
@@ -106,7 +111,7 @@ fn material_specular_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, full: BsdfE
         return full.value;
     }
 #ifdef PLASTIC
-    if m.kind == MATERIAL_ROUGH_PLASTIC && microfacet_is_specular(m, threshold) {
+    if rough_plastic_kind(m.kind) && microfacet_is_specular(m, threshold) {
         return rough_plastic_eval_parts(m, wi, wo).coating;
     }
 #endif
@@ -125,7 +130,7 @@ fn material_specular_share(m: Material, wi: vec3<f32>, s: BsdfSample, threshold:
         return vec3<f32>(1.0);
     }
 #ifdef PLASTIC
-    if m.kind == MATERIAL_ROUGH_PLASTIC && microfacet_is_specular(m, threshold) {
+    if rough_plastic_kind(m.kind) && microfacet_is_specular(m, threshold) {
         let parts = rough_plastic_eval_parts(m, wi, s.wo);
         let total = parts.coating + parts.base;
         return select(vec3<f32>(0.0), parts.coating / total, total > vec3<f32>(0.0));

@@ -2,10 +2,12 @@
 
 // Mitsuba 3's plastic and roughplastic (src/bsdfs/plastic.cpp, roughplastic.cpp): a diffuse
 // base under a dielectric coating, with the coating's internal reflections folded into the
-// base (`nonlinear` as Mitsuba) and its lobe chosen by the specular sampling weight.
+// base (`nonlinear` as Mitsuba) and its lobe chosen by the specular sampling weight. And
+// pplastic (pplastic.cpp) as its RGB variants render it: the same rough reflection over a base
+// weighted by two smooth refractions, its lobes chosen with fixed probabilities.
 
 #import common::sampling::{INV_PI, square_to_cosine_hemisphere}
-#import common::scene::{Material, bsdf_tables}
+#import common::scene::{Material, MATERIAL_POLARIZED_PLASTIC, bsdf_tables}
 #import common::bsdf::{BsdfEval, BsdfSample, no_sample, mirror_local}
 #import common::fresnel::fresnel_full
 #import common::microfacet::{Microfacet, microfacet_d, microfacet_g1, microfacet_sample}
@@ -82,6 +84,28 @@ fn rough_plastic_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
     return BsdfEval(parts.coating + parts.base, parts.pdf);
 }
 
+// Rough plastic's base seen through the coating: its tabulated rough transmittances at wi and
+// wo and the internal reflections; pplastic's: two smooth refractions, nothing reflected back.
+fn rough_plastic_base(m: Material, wi: vec3<f32>, wo: vec3<f32>, eta: f32) -> vec3<f32> {
+    if m.kind == MATERIAL_POLARIZED_PLASTIC {
+        let fi = fresnel_full(wi.z, eta).f;
+        let fo = fresnel_full(wo.z, eta).f;
+        return m.albedo * (INV_PI * wo.z * (1.0 - fi) * (1.0 - fo));
+    }
+    let ti = transmittance_at(m, wi.z);
+    let to = transmittance_at(m, wo.z);
+    return diffuse_under_coating(m) * (INV_PI / (eta * eta) * wo.z * ti * to);
+}
+
+// The probability of sampling the base at wi: by the coating's transmittance for rough
+// plastic, fixed for pplastic.
+fn rough_plastic_diffuse_prob(m: Material, wi: vec3<f32>) -> f32 {
+    if m.kind == MATERIAL_POLARIZED_PLASTIC {
+        return 1.0 - m.specular_weight;
+    }
+    return plastic_diffuse_prob(1.0 - transmittance_at(m, wi.z), m.specular_weight);
+}
+
 fn rough_plastic_eval_parts(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> RoughPlasticParts {
     if wi.z <= 0.0 || wo.z <= 0.0 {
         return RoughPlasticParts(vec3<f32>(0.0), vec3<f32>(0.0), 0.0);
@@ -93,11 +117,9 @@ fn rough_plastic_eval_parts(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> RoughP
     let g1_i = microfacet_g1(mf, wi, h);
     let g = g1_i * microfacet_g1(mf, wo, h);
     let f = fresnel_full(dot(wi, h), eta).f;
-    let ti = transmittance_at(m, wi.z);
-    let to = transmittance_at(m, wo.z);
     let coating = m.specular * (f * d * g / (4.0 * wi.z));
-    let base = diffuse_under_coating(m) * (INV_PI / (eta * eta) * wo.z * ti * to);
-    let prob_diffuse = plastic_diffuse_prob(1.0 - ti, m.specular_weight);
+    let base = rough_plastic_base(m, wi, wo, eta);
+    let prob_diffuse = rough_plastic_diffuse_prob(m, wi);
     let pdf = (1.0 - prob_diffuse) * d * g1_i / (4.0 * wi.z) + prob_diffuse * wo.z * INV_PI;
     return RoughPlasticParts(coating, base, pdf);
 }
@@ -106,7 +128,7 @@ fn rough_plastic_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>) -> B
     if wi.z <= 0.0 {
         return no_sample();
     }
-    let prob_diffuse = plastic_diffuse_prob(1.0 - transmittance_at(m, wi.z), m.specular_weight);
+    let prob_diffuse = rough_plastic_diffuse_prob(m, wi);
     var wo: vec3<f32>;
     if u1 < 1.0 - prob_diffuse {
         let h = microfacet_sample(plastic_microfacet(m), wi, u2);

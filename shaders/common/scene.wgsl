@@ -201,6 +201,7 @@ const MATERIAL_THIN_DIELECTRIC: u32 = 8u;
 const MATERIAL_BLEND: u32 = 9u;
 const MATERIAL_NULL: u32 = 10u;
 const MATERIAL_PRINCIPLED: u32 = 11u;
+const MATERIAL_POLARIZED_PLASTIC: u32 = 12u;
 const NO_BACK: u32 = 0xffffffffu;
 const LIGHT_TRIANGLE: u32 = 0u;
 const LIGHT_SPHERE: u32 = 1u;

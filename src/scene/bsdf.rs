@@ -83,6 +83,9 @@ impl Prepared {
                 p.internal_reflectance = 2.0 * internal / TRANSMITTANCE_RES as f32;
                 p.specular_weight = specular_weight(diffuse, specular);
             }
+            Bsdf::PolarizedPlastic {
+                diffuse, specular, ..
+            } => p.specular_weight = specular_weight(diffuse, specular),
             _ => {}
         }
         p
@@ -482,6 +485,24 @@ pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
             spec + diffuse_under_coating(diffuse, nonlinear, p.internal_reflectance)
                 * (std::f32::consts::FRAC_1_PI / (eta * eta) * co * ti * to)
         }
+        Bsdf::PolarizedPlastic {
+            int_ior,
+            ext_ior,
+            diffuse,
+            specular,
+            microfacet,
+        } => {
+            if ci <= 0.0 || co <= 0.0 {
+                return Vec3::ZERO;
+            }
+            let eta = int_ior / ext_ior;
+            let h = (wi + wo).normalize();
+            let f = fresnel(wi.dot(h), eta).0;
+            let g = microfacet.g1(wi, h) * microfacet.g1(wo, h);
+            let spec = specular * (f * microfacet.d(h) * g / (4.0 * ci));
+            let (fi, fo) = (fresnel(ci, eta).0, fresnel(co, eta).0);
+            spec + diffuse * ((1.0 - fi) * (1.0 - fo) * co * std::f32::consts::FRAC_1_PI)
+        }
         Bsdf::RoughDielectric {
             int_ior,
             ext_ior,
@@ -583,6 +604,15 @@ pub fn pdf(p: &Prepared, wi: Vec3, wo: Vec3) -> f32 {
             let h = (wi + wo).normalize();
             let spec = microfacet.d(h) * microfacet.g1(wi, h) / (4.0 * ci);
             (1.0 - prob_diffuse) * spec + prob_diffuse * cosine
+        }
+        Bsdf::PolarizedPlastic { microfacet, .. } => {
+            if ci <= 0.0 || co <= 0.0 {
+                return 0.0;
+            }
+            // Mitsuba's fixed lobe probabilities (no Fresnel term in them).
+            let h = (wi + wo).normalize();
+            let spec = microfacet.d(h) * microfacet.g1(wi, h) / (4.0 * ci);
+            p.specular_weight * spec + (1.0 - p.specular_weight) * cosine
         }
         Bsdf::RoughDielectric {
             int_ior,
@@ -776,6 +806,17 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
             let ti = lerp_table(&p.transmittance, ci);
             let prob_diffuse = plastic_diffuse_prob(1.0 - ti, p.specular_weight);
             let wo = if u1 < 1.0 - prob_diffuse {
+                reflect(wi, microfacet.sample(wi, u2))
+            } else {
+                square_to_cosine_hemisphere(u2)
+            };
+            from_eval(wo)
+        }
+        Bsdf::PolarizedPlastic { microfacet, .. } => {
+            if ci <= 0.0 {
+                return None;
+            }
+            let wo = if u1 < p.specular_weight {
                 reflect(wi, microfacet.sample(wi, u2))
             } else {
                 square_to_cosine_hemisphere(u2)

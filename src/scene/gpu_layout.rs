@@ -25,6 +25,7 @@ pub const MATERIAL_THIN_DIELECTRIC: u32 = 8;
 pub const MATERIAL_BLEND: u32 = 9;
 pub const MATERIAL_NULL: u32 = 10;
 pub const MATERIAL_PRINCIPLED: u32 = 11;
+pub const MATERIAL_POLARIZED_PLASTIC: u32 = 12;
 
 /// `GpuMaterial::frame_kind`: the shading frame as the shape gives it, or perturbed by a
 /// normal map or a bump map (src/scene/normal_map.rs).
@@ -457,6 +458,17 @@ fn gpu_material(
             rough(&mut m, &microfacet);
             m.table = tables.len() as u32;
             tables.extend_from_slice(&prepared.transmittance);
+        }
+        Bsdf::PolarizedPlastic {
+            int_ior,
+            ext_ior,
+            diffuse,
+            specular,
+            microfacet,
+        } => {
+            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_POLARIZED_PLASTIC, int_ior, ext_ior);
+            (m.albedo, m.specular) = (diffuse.to_array(), specular.to_array());
+            rough(&mut m, &microfacet);
         }
     }
     m

@@ -408,6 +408,16 @@ const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (p
     weight (blendbsdf), opacity (mask), every parameter of principled but eta, specular and its \
     sampling rates";
 
+/// The roughness a microfacet BSDF reads: one number (`roughplastic`), numbers that may differ
+/// along u and v (`pplastic`), or numbers or textures along u and v (rough conductors and
+/// dielectrics), as each Mitsuba plugin reads it.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Alphas {
+    Isotropic,
+    Anisotropic,
+    Textured,
+}
+
 /// Mitsuba's named indices of refraction (include/mitsuba/render/ior.h).
 const NAMED_IORS: &[(&str, f32)] = &[
     ("vacuum", 1.0),
@@ -2271,7 +2281,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 Bsdf::RoughDielectric {
                     int_ior,
                     ext_ior,
-                    microfacet: self.microfacet(props, node, true, &mut textures)?,
+                    microfacet: self.microfacet(props, node, Alphas::Textured, &mut textures)?,
                     tint: self.dielectric_tint(props, &mut textures)?,
                 }
             }
@@ -2284,7 +2294,12 @@ impl<'a, 'input> Reader<'a, 'input> {
                         eta,
                         k,
                         specular,
-                        microfacet: self.microfacet(props, node, true, &mut textures)?,
+                        microfacet: self.microfacet(
+                            props,
+                            node,
+                            Alphas::Textured,
+                            &mut textures,
+                        )?,
                     }
                 } else if eta == Vec3::ZERO
                     && k == Vec3::ONE
@@ -2325,8 +2340,31 @@ impl<'a, 'input> Reader<'a, 'input> {
                         diffuse,
                         specular,
                         nonlinear,
-                        microfacet: self.microfacet(props, node, false, &mut textures)?,
+                        microfacet: self.microfacet(
+                            props,
+                            node,
+                            Alphas::Isotropic,
+                            &mut textures,
+                        )?,
                     }
+                }
+            }
+            "pplastic" => {
+                // Mitsuba's defaults, as plastic's.
+                let int_ior = self.ior(props, "int_ior", 1.49)?;
+                let ext_ior = self.ior(props, "ext_ior", 1.000277)?;
+                self.distinct_iors(node, int_ior, ext_ior)?;
+                let (diffuse, diffuse_texture) =
+                    self.color_param(props, "diffuse_reflectance", 0.5)?;
+                let (specular, specular_texture) =
+                    self.color_param(props, "specular_reflectance", 1.0)?;
+                (textures.diffuse, textures.specular) = (diffuse_texture, specular_texture);
+                Bsdf::PolarizedPlastic {
+                    int_ior,
+                    ext_ior,
+                    diffuse,
+                    specular,
+                    microfacet: self.microfacet(props, node, Alphas::Anisotropic, &mut textures)?,
                 }
             }
             "principled" => self.read_principled(props, &mut textures)?,
@@ -2684,7 +2722,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         &self,
         props: &mut Props<'a, 'input>,
         node: Node,
-        anisotropic: bool,
+        alphas: Alphas,
         textures: &mut SideTextures,
     ) -> Result<Microfacet, SceneError> {
         let distribution = match props.take("distribution") {
@@ -2702,7 +2740,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             },
         };
         let texture = |r: &Self, n: Node<'a, 'input>| -> Result<Option<(f32, u32)>, SceneError> {
-            if !anisotropic {
+            if alphas != Alphas::Textured {
                 return Ok(None);
             }
             r.texture_node(n, "alpha")
@@ -2738,7 +2776,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 (v, v)
             }
             (None, None, None) => (0.1, 0.1),
-            (None, Some(u), Some(v)) if anisotropic => {
+            (None, Some(u), Some(v)) if alphas != Alphas::Isotropic => {
                 (textured(u, &mut tu)?, textured(v, &mut tv)?)
             }
             (None, Some(u), Some(v)) => {

@@ -173,6 +173,16 @@ pub enum Bsdf {
         nonlinear: bool,
         microfacet: Microfacet,
     },
+    /// Mitsuba's `pplastic` as its RGB variants render it: a microfacet reflection with the
+    /// dielectric Fresnel term plus a Lambertian base weighted by the two smooth refractions
+    /// through the interface, (1 - F(cos wi)) (1 - F(cos wo)); no internal reflections.
+    PolarizedPlastic {
+        int_ior: f32,
+        ext_ior: f32,
+        diffuse: Vec3,
+        specular: Vec3,
+        microfacet: Microfacet,
+    },
     RoughDielectric {
         int_ior: f32,
         ext_ior: f32,
@@ -221,6 +231,7 @@ impl Bsdf {
         match self {
             Bsdf::RoughConductor { microfacet, .. }
             | Bsdf::RoughPlastic { microfacet, .. }
+            | Bsdf::PolarizedPlastic { microfacet, .. }
             | Bsdf::RoughDielectric { microfacet, .. } => {
                 Some(microfacet.alpha_u.max(microfacet.alpha_v))
             }
@@ -233,7 +244,10 @@ impl Bsdf {
     pub fn has_microfacet_lobe(&self) -> bool {
         matches!(
             self,
-            Bsdf::RoughConductor { .. } | Bsdf::RoughPlastic { .. } | Bsdf::RoughDielectric { .. }
+            Bsdf::RoughConductor { .. }
+                | Bsdf::RoughPlastic { .. }
+                | Bsdf::PolarizedPlastic { .. }
+                | Bsdf::RoughDielectric { .. }
         )
     }
 
@@ -308,6 +322,13 @@ impl Bsdf {
                 specular,
                 microfacet,
                 ..
+            }
+            | Bsdf::PolarizedPlastic {
+                int_ior,
+                ext_ior,
+                diffuse,
+                specular,
+                microfacet,
             } => {
                 ior(*int_ior, *ext_ior)
                     && finite(*diffuse)
@@ -797,7 +818,9 @@ impl Scene {
                     Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => f.dielectric = true,
                     Bsdf::Mirror => f.mirror = true,
                     Bsdf::Conductor { .. } | Bsdf::RoughConductor { .. } => f.conductor = true,
-                    Bsdf::Plastic { .. } | Bsdf::RoughPlastic { .. } => f.plastic = true,
+                    Bsdf::Plastic { .. }
+                    | Bsdf::RoughPlastic { .. }
+                    | Bsdf::PolarizedPlastic { .. } => f.plastic = true,
                     Bsdf::RoughDielectric { .. } => f.rough_dielectric = true,
                 }
                 f.delta |= bsdf.is_delta();

@@ -85,6 +85,18 @@ const ROUGH_PLASTIC: &[Property] = &[
     p("sample_visible", "true"),
 ];
 
+const POLARIZED_PLASTIC: &[Property] = &[
+    p("int_ior", "polypropylene"),
+    p("ext_ior", "air"),
+    p("diffuse_reflectance", "0.5"),
+    p("specular_reflectance", "1"),
+    p("distribution", "beckmann"),
+    p("alpha", "0.1"),
+    p("alpha_u", "0.1"),
+    p("alpha_v", "0.1"),
+    p("sample_visible", "true"),
+];
+
 const MESH_FILE: &[Property] = &[
     p("filename", ""),
     p("face_normals", "false"),
@@ -362,6 +374,15 @@ pub const PLUGINS: &[Plugin] = &[
         properties: ROUGH_PLASTIC,
         notes: "Isotropic `alpha` only, a number, as in Mitsuba; the coating's transmittance \
                 table is computed at load.",
+    },
+    Plugin {
+        object: "bsdf",
+        kinds: &["pplastic"],
+        properties: POLARIZED_PLASTIC,
+        notes: "As Mitsuba's RGB variants render it (no polarisation): the rough reflection \
+                with the dielectric Fresnel term plus the diffuse base weighted by (1 - F) at \
+                wi and at wo; `alpha`, `alpha_u`, `alpha_v` numbers as in Mitsuba, both \
+                reflectances may be textures.",
     },
     Plugin {
         object: "bsdf",

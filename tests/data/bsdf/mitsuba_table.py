@@ -59,6 +59,11 @@ MATERIALS = {
                                "int_ior": 1.5, "ext_ior": 1.0,
                                "specular_reflectance": {"type": "rgb", "value": [0.9, 0.6, 0.3]},
                                "specular_transmittance": {"type": "rgb", "value": [0.2, 0.7, 0.95]}},
+    "pplastic_ggx": {"type": "pplastic", "distribution": "ggx", "alpha": 0.15, "int_ior": 1.5, "ext_ior": 1.0,
+                     "diffuse_reflectance": {"type": "rgb", "value": [0.3, 0.5, 0.7]}},
+    "pplastic_beckmann_aniso": {"type": "pplastic", "distribution": "beckmann", "alpha_u": 0.1, "alpha_v": 0.3,
+                                "diffuse_reflectance": {"type": "rgb", "value": [0.8, 0.3, 0.1]},
+                                "specular_reflectance": {"type": "rgb", "value": [0.9, 0.8, 0.7]}},
 }
 
 
