@@ -725,7 +725,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             )
             .expect("answers");
         let (layout, group) = bind_buffers(
-            &gpu.device,
+            &gpu,
             "bsdf test",
             &[
                 (Access::Read, &query_buffer),

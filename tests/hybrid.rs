@@ -313,3 +313,61 @@ fn hybrid_survives_degenerate_scenes() {
         );
     }
 }
+
+/// A second renderer on the same device (another seed, as a bias test's seeds or a host
+/// program's next render) builds no pipeline: every one comes from the device's cache, and
+/// its image is the one a renderer on a fresh device makes with that seed (to the order of
+/// atomic additions). A scene
+/// with other shader defs builds its own. Would catch a cached pipeline bound with a layout
+/// it was not built for (a validation error), a pipeline reused across defs (another scene's
+/// code: a wrong image or an error), or a cache that keeps nothing.
+#[test]
+fn a_second_renderer_on_one_device_reuses_its_pipelines() {
+    let gpu = gpu();
+    let scene = load_scene(GLASS);
+    let first = render_to(
+        &mut renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), 1),
+        4,
+    );
+    let built = gpu.cache.pipelines();
+    assert!(built >= 4, "{built} pipelines kept after one render");
+    let second = render_to(
+        &mut renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), 2),
+        4,
+    );
+    assert_eq!(
+        gpu.cache.pipelines(),
+        built,
+        "the second renderer built pipelines"
+    );
+    let fresh_gpu = common::gpu();
+    let fresh = render_to(
+        &mut renderer(&fresh_gpu, &scene, load_graph("graphs/hybrid.ron"), 2),
+        4,
+    );
+    // Equal up to the order of atomic float additions (photon deposits, splats).
+    let largest_difference = |a: &Image, b: &Image| {
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .flat_map(|(p, q)| p.iter().zip(q).map(|(x, y)| (x - y).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    let reused = largest_difference(&second, &fresh);
+    let seeds = largest_difference(&first, &second);
+    eprintln!("seed 2 reused against fresh: {reused:.2e}; seeds 1 and 2: {seeds:.2e}");
+    assert!(
+        reused <= 1e-5,
+        "seed 2 differs on a fresh device by {reused}"
+    );
+    assert!(seeds > 1e-2, "seeds 1 and 2 rendered alike ({seeds})");
+    let other = load_scene(POINT_LIGHT);
+    render_to(
+        &mut renderer(&gpu, &other, load_graph("graphs/hybrid.ron"), 1),
+        2,
+    );
+    assert!(
+        gpu.cache.pipelines() > built,
+        "a scene with other defs reused the first scene's pipelines"
+    );
+}

@@ -41,7 +41,7 @@ fn gpu_offsets(gpu: &GpuContext, filter: PixelFilter, lo: f32, hi: f32, n: usize
     let out = gpu
         .create_buffer("offsets", (n * 4) as u64, usage)
         .expect("buffer");
-    let (layout, group) = bind_buffers(&gpu.device, "offsets", &[(Access::ReadWrite, &out)]);
+    let (layout, group) = bind_buffers(gpu, "offsets", &[(Access::ReadWrite, &out)]);
     let pipeline = library
         .compute_pipeline(gpu, &file, "main", &[&layout])
         .expect("pipeline");

@@ -57,7 +57,7 @@ fn gpu_streams_equal_the_cpu_mirror() {
         .create_buffer("floats", n as u64 * 4, storage)
         .expect("floats");
     let (layout, group) = bind_buffers(
-        &gpu.device,
+        &gpu,
         "rng probe",
         &[
             (Access::Read, &key_buffer),

@@ -1,6 +1,8 @@
 //! Bind group layout and bind group built from one ordered list, so the two cannot drift apart:
 //! binding i of the layout is entry i of the list.
 
+use super::GpuContext;
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Access {
     Uniform,
@@ -27,9 +29,10 @@ pub fn layout_entry(binding: u32, access: Access) -> wgpu::BindGroupLayoutEntry 
     }
 }
 
-/// Layout and bind group for `entries`, labelled `label`.
+/// Layout and bind group for `entries`, labelled `label`. The layout is the device's one for
+/// these entries (`GpuContext::cache`), so pipelines built with it are shared.
 pub fn bind_buffers(
-    device: &wgpu::Device,
+    gpu: &GpuContext,
     label: &str,
     entries: &[(Access, &wgpu::Buffer)],
 ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
@@ -37,12 +40,12 @@ pub fn bind_buffers(
         .zip(entries)
         .map(|(i, (access, buffer))| (i, *access, *buffer))
         .collect();
-    bind_buffers_at(device, label, &numbered)
+    bind_buffers_at(gpu, label, &numbered)
 }
 
 /// As [`bind_buffers`], with each entry's binding number given.
 pub fn bind_buffers_at(
-    device: &wgpu::Device,
+    gpu: &GpuContext,
     label: &str,
     entries: &[(u32, Access, &wgpu::Buffer)],
 ) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
@@ -50,10 +53,8 @@ pub fn bind_buffers_at(
         .iter()
         .map(|(binding, access, _)| layout_entry(*binding, *access))
         .collect();
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries: &layout_entries,
-    });
+    let device = &gpu.device;
+    let layout = gpu.cache.layout(device, label, &layout_entries);
     let group_entries: Vec<_> = entries
         .iter()
         .map(|(binding, _, buffer)| wgpu::BindGroupEntry {

@@ -13,6 +13,7 @@ pub mod binding;
 pub mod dispatch;
 pub mod layout;
 pub mod odd_iterations;
+pub mod pipeline_cache;
 pub mod radix_sort;
 pub mod sample_mask;
 pub mod shaders;
@@ -74,6 +75,8 @@ pub struct GpuContext {
     pub features: wgpu::Features,
     pub limits: wgpu::Limits,
     first_error: Arc<Mutex<Option<String>>>,
+    /// Pipelines and layouts built on this device, shared by every renderer on it.
+    pub cache: pipeline_cache::PipelineCache,
 }
 
 /// Optional features used when the adapter has them; none is required.
@@ -119,6 +122,7 @@ impl GpuContext {
             features,
             limits,
             first_error,
+            cache: pipeline_cache::PipelineCache::default(),
         })
     }
 

@@ -74,7 +74,7 @@ impl OddIterations {
                 wgpu::BufferUsages::UNIFORM,
             )?;
             let (layout, bind_group) = bind_buffers(
-                &gpu.device,
+                gpu,
                 "odd iterations",
                 &[
                     (Access::Uniform, &params),

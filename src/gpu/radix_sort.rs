@@ -54,7 +54,7 @@ pub struct RadixSort {
 
 impl RadixSort {
     pub fn new(gpu: &GpuContext, shaders: &ShaderLibrary) -> Result<Self, GpuError> {
-        let layout = sort_layout(&gpu.device);
+        let layout = sort_layout(gpu);
         let pipeline = |entry| shaders.compute_pipeline(gpu, &SHADER, entry, &[&layout]);
         Ok(Self {
             count_digits: pipeline("count_digits")?,
@@ -191,7 +191,7 @@ impl RadixSort {
 }
 
 /// Params, source keys and values (read), destination keys and values, histogram.
-fn sort_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+fn sort_layout(gpu: &GpuContext) -> wgpu::BindGroupLayout {
     use crate::gpu::binding::Access;
     let accesses = [
         Access::Uniform,
@@ -205,8 +205,5 @@ fn sort_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         .zip(accesses)
         .map(|(binding, access)| crate::gpu::binding::layout_entry(binding, access))
         .collect();
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("radix sort"),
-        entries: &entries,
-    })
+    gpu.cache.layout(&gpu.device, "radix sort", &entries)
 }

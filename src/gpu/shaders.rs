@@ -6,6 +6,7 @@
 
 use std::borrow::Cow;
 use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 use std::sync::Mutex;
 
 use naga_oil::compose::{
@@ -13,6 +14,7 @@ use naga_oil::compose::{
 };
 use wgpu::naga;
 
+use super::pipeline_cache::PipelineKey;
 use super::{GpuContext, GpuError};
 
 /// A WGSL file: its path relative to the crate root (how errors and `$HPPM_SHADER_DIR` name it)
@@ -67,6 +69,9 @@ pub fn defs_of<'a>(names: impl IntoIterator<Item = &'a str>) -> HashMap<String, 
 /// Composes entry files for one device and one set of shader defs.
 pub struct ShaderLibrary {
     defs: HashMap<String, ShaderDefValue>,
+    /// The modules' paths and text, the defs and the device features, hashed: what a composed
+    /// module depends on besides its entry file (the pipeline cache's key).
+    fingerprint: u64,
     // `make_naga_module` needs `&mut`; passes compose through a shared reference.
     composer: Mutex<Composer>,
 }
@@ -87,8 +92,13 @@ impl ShaderLibrary {
             defs.insert("FLOAT_ATOMICS".into(), ShaderDefValue::Bool(true));
         }
         let mut composer = Composer::default().with_capabilities(capabilities);
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        let mut sorted: Vec<String> = defs.iter().map(|(k, v)| format!("{k}={v:?}")).collect();
+        sorted.sort_unstable();
+        (float_atomics, sorted).hash(&mut hasher);
         for module in GPU_MODULES.iter().chain(modules) {
             let source = module.text()?;
+            (module.path, &source).hash(&mut hasher);
             let added = composer.add_composable_module(ComposableModuleDescriptor {
                 source: &source,
                 file_path: module.path,
@@ -101,6 +111,7 @@ impl ShaderLibrary {
         }
         Ok(Self {
             defs,
+            fingerprint: hasher.finish(),
             composer: Mutex::new(composer),
         })
     }
@@ -165,6 +176,27 @@ impl ShaderLibrary {
     /// As [`ShaderLibrary::compute_pipeline`], composed with `extra` defs (see
     /// [`ShaderLibrary::compose_with`]).
     pub fn compute_pipeline_with(
+        &self,
+        gpu: &GpuContext,
+        file: &ShaderFile,
+        entry: &str,
+        layouts: &[&wgpu::BindGroupLayout],
+        extra: &[&str],
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        let key = PipelineKey {
+            library: self.fingerprint,
+            path: file.path.to_string(),
+            source: file.text()?.into_owned(),
+            extra: extra.iter().map(|e| e.to_string()).collect(),
+            entry: entry.to_string(),
+            layouts: layouts.iter().map(|l| (*l).clone()).collect(),
+        };
+        gpu.cache.pipeline(key, || {
+            self.build_pipeline(gpu, file, entry, layouts, extra)
+        })
+    }
+
+    fn build_pipeline(
         &self,
         gpu: &GpuContext,
         file: &ShaderFile,

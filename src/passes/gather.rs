@@ -45,7 +45,7 @@ impl Gather {
             (Access::ReadWrite, &*deposits.buffer),
         ];
         entries.extend_from_slice(structure);
-        let (layout, bind_group) = bind_buffers(&ctx.gpu.device, label, &entries);
+        let (layout, bind_group) = bind_buffers(ctx.gpu, label, &entries);
         let pipeline =
             ctx.shaders
                 .compute_pipeline(ctx.gpu, shader, entry, &[&scene.layout, &layout])?;

@@ -195,7 +195,7 @@ impl Pass for HitPointBvhLbvh {
             wgpu::BufferUsages::UNIFORM,
         )?;
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "hit_point_bvh_lbvh",
             &[
                 (Access::Uniform, &params),

@@ -192,7 +192,7 @@ impl Pass for HitPointGrid {
         // The gather's bindings and the grid's, in the gather's order: the build kernels share
         // the gather's shader file, whose bindings 0-2 come from common::gather.
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "hit_point_grid build",
             &[
                 (Access::Read, &hit_points.buffer),

@@ -377,7 +377,7 @@ impl Pass for PathTrace {
             }
         };
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "path_trace",
             &[
                 (Access::Uniform, &params),

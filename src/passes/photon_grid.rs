@@ -221,7 +221,7 @@ impl Pass for PhotonGrid {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "photon_grid",
             &[
                 (Access::Read, &photon_hits.buffer),

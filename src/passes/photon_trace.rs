@@ -237,7 +237,7 @@ impl Pass for PhotonTrace {
                 | wgpu::BufferUsages::COPY_DST,
         )?;
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "photon_trace",
             &[
                 (Access::Uniform, &params),

@@ -165,7 +165,7 @@ impl Pass for Pppm {
                 | wgpu::BufferUsages::COPY_DST,
         )?;
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "pppm",
             &[
                 (Access::Uniform, &params),

@@ -98,7 +98,7 @@ impl Pass for Resolve {
             wgpu::BufferUsages::UNIFORM,
         )?;
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "resolve",
             &[
                 (Access::Uniform, &params),

@@ -663,7 +663,7 @@ impl SceneResources {
                 .iter()
                 .map(|(binding, buffer)| (*binding, Access::Read, buffer)),
         );
-        let (layout, bind_group) = bind_buffers_at(&gpu.device, "scene", &entries);
+        let (layout, bind_group) = bind_buffers_at(gpu, "scene", &entries);
         let bound = entries
             .into_iter()
             .map(|(binding, access, buffer)| (binding, access, buffer.clone()))
@@ -699,7 +699,7 @@ impl SceneResources {
             .iter()
             .map(|(b, a, buffer)| (*b, *a, buffer))
             .collect();
-        let (layout, bind_group) = bind_buffers_at(&gpu.device, "scene", &entries);
+        let (layout, bind_group) = bind_buffers_at(gpu, "scene", &entries);
         Ok(Self {
             layout,
             bind_group,

@@ -229,7 +229,7 @@ impl Pass for Merge {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let (layout, bind_group) = bind_buffers(
-            &gpu.device,
+            gpu,
             "merge",
             &[
                 (Access::Uniform, &params),

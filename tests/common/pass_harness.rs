@@ -76,7 +76,7 @@ impl<'a> PassHarness<'a> {
             .create_buffer("kernel output", (outputs * 16) as u64, usage)
             .expect("kernel output");
         let (layout, group) = bind_buffers(
-            &gpu.device,
+            gpu,
             path,
             &[(Access::Read, &input), (Access::ReadWrite, &output)],
         );
