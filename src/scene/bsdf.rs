@@ -417,6 +417,15 @@ fn lerp_table(table: &[f32], x: f32) -> f32 {
 
 // --- Evaluation ---
 
+/// f |cos wo| of a rough dielectric interface's reflection (both directions above it): the
+/// coating of rough plastic and pplastic.
+fn rough_reflection(microfacet: &Microfacet, eta: f32, wi: Vec3, wo: Vec3) -> f32 {
+    let h = (wi + wo).normalize();
+    let f = fresnel(wi.dot(h), eta).0;
+    let g = microfacet.g1(wi, h) * microfacet.g1(wo, h);
+    f * microfacet.d(h) * g / (4.0 * wi.z)
+}
+
 /// f(wi, wo) |cos wo| of the non-delta lobes.
 pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
     let (ci, co) = (wi.z, wo.z);
@@ -475,11 +484,7 @@ pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
                 return Vec3::ZERO;
             }
             let eta = int_ior / ext_ior;
-            let h = (wi + wo).normalize();
-            let d = microfacet.d(h);
-            let f = fresnel(wi.dot(h), eta).0;
-            let g = microfacet.g1(wi, h) * microfacet.g1(wo, h);
-            let spec = specular * (f * d * g / (4.0 * ci));
+            let spec = specular * rough_reflection(&microfacet, eta, wi, wo);
             let ti = lerp_table(&p.transmittance, ci);
             let to = lerp_table(&p.transmittance, co);
             spec + diffuse_under_coating(diffuse, nonlinear, p.internal_reflectance)
@@ -496,10 +501,7 @@ pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
                 return Vec3::ZERO;
             }
             let eta = int_ior / ext_ior;
-            let h = (wi + wo).normalize();
-            let f = fresnel(wi.dot(h), eta).0;
-            let g = microfacet.g1(wi, h) * microfacet.g1(wo, h);
-            let spec = specular * (f * microfacet.d(h) * g / (4.0 * ci));
+            let spec = specular * rough_reflection(&microfacet, eta, wi, wo);
             let (fi, fo) = (fresnel(ci, eta).0, fresnel(co, eta).0);
             spec + diffuse * ((1.0 - fi) * (1.0 - fo) * co * std::f32::consts::FRAC_1_PI)
         }
