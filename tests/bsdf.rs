@@ -530,7 +530,9 @@ fn named_conductors_are_mitsubas() {
 
 /// Malformed BSDF parameters are errors at their line: both alpha and alpha_u, one of
 /// alpha_u/alpha_v, anisotropic roughplastic, a dielectric nested in twosided, an unknown
-/// distribution and an unknown parameter (whose message lists the parameters the BSDF takes).
+/// distribution, an unknown parameter (whose message lists the parameters the BSDF takes), and
+/// what Mitsuba's pplastic refuses too (equal indices, a textured alpha, an `eta` it never
+/// reads).
 #[test]
 fn bad_bsdf_parameters_are_errors_at_their_line() {
     let cases = [
@@ -563,6 +565,18 @@ fn bad_bsdf_parameters_are_errors_at_their_line() {
             "unknown property \"roughness\" for <bsdf type=\"plastic\"> (it takes int_ior, ext_ior, diffuse_reflectance",
         ),
         (r#"<bsdf type="blend"/>"#, "roughplastic"),
+        (
+            r#"<bsdf type="pplastic"><float name="int_ior" value="1.2"/><float name="ext_ior" value="1.2"/></bsdf>"#,
+            "must differ",
+        ),
+        (
+            r#"<bsdf type="pplastic"><texture name="alpha" type="checkerboard"/></bsdf>"#,
+            "takes no texture",
+        ),
+        (
+            r#"<bsdf type="pplastic"><float name="eta" value="1.5"/></bsdf>"#,
+            "unknown property \"eta\" for <bsdf type=\"pplastic\">",
+        ),
     ];
     for (bsdf, expected) in cases {
         let xml = format!(

@@ -402,8 +402,8 @@ struct ViewAngle<'a, 'input> {
 
 /// The parameters that take a texture, for messages.
 const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
-    roughplastic), specular_reflectance (conductor, roughconductor, plastic, roughplastic, \
-    dielectric, thindielectric, roughdielectric), specular_transmittance (dielectric, \
+    roughplastic, pplastic), specular_reflectance (conductor, roughconductor, plastic, \
+    roughplastic, pplastic, dielectric, thindielectric, roughdielectric), specular_transmittance (dielectric, \
     thindielectric, roughdielectric), alpha, alpha_u, alpha_v (roughconductor, roughdielectric), \
     weight (blendbsdf), opacity (mask), every parameter of principled but eta, specular and its \
     sampling rates";
