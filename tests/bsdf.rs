@@ -177,8 +177,9 @@ fn close3(a: Vec3, b: Vec3, rel: f32) -> bool {
 }
 
 /// The CPU reference reproduces Mitsuba 3.9.1's own `eval`, `pdf` and `sample` (same random
-/// numbers, so the same direction) for every BSDF of tests/data/bsdf/mitsuba_table.py on 24 direction pairs each, including
-/// directions from inside a dielectric and below a one-sided surface. Catches any formula that
+/// numbers, so the same direction) for every BSDF of tests/data/bsdf/mitsuba_table.py on 24
+/// direction pairs each, including directions from inside a dielectric and below a one-sided
+/// surface. Catches any formula that
 /// differs from Mitsuba's: a wrong Fresnel term, a missing 1/eta^2, Mitsuba's internal-reflection
 /// and specular-sampling-weight handling in plastic, the rough plastic's transmittance table,
 /// pplastic's two smooth refractions and fixed lobe probabilities,

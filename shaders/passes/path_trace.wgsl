@@ -155,13 +155,13 @@ struct PathState {
     depth: u32,
 }
 
-// Where the camera pass hands a sample over to photon mapping.
 // A BSDF's value towards a light sample (cosine and frame factor included) and its pdf there.
 struct BsdfTowards {
     value: vec3<f32>,
     pdf: f32,
 }
 
+// Where the camera pass hands a sample over to photon mapping.
 struct HitPointSink {
     pixel: u32,
     // Record hit points for this sample (the first sample of the iteration, when recording).
@@ -187,11 +187,10 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
     hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight * sink.film_weight, footprint);
 }
 
-// Next-event estimation at a diffuse vertex: one light sample with a shadow ray. `shading`
-// (around surface.shading_normal) adds a normal map's masking and shadow terminator.
 // What the BSDF at `surface` sends back along `wo` of light arriving from world direction `dir`
 // (cosine and frame factor included), and its pdf of sampling `dir`. `wi` is local, in
-// `shading`'s frame. With GLOSSY the `mapped` share of the specular lobes' part is left out
+// `shading`'s frame; `shading` (around surface.shading_normal) adds a normal map's masking and
+// shadow terminator. With GLOSSY the `mapped` share of the specular lobes' part is left out
 // (photons carry it).
 fn bsdf_towards(surface: Surface, material: Material, shading: ShadingFrame, wi: vec3<f32>, mapped: vec3<f32>, dir: vec3<f32>) -> BsdfTowards {
     if material.kind == MATERIAL_DIFFUSE {

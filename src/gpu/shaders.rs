@@ -183,32 +183,35 @@ impl ShaderLibrary {
         layouts: &[&wgpu::BindGroupLayout],
         extra: &[&str],
     ) -> Result<wgpu::ComputePipeline, GpuError> {
+        let source = file.text()?;
         let key = PipelineKey {
             library: self.fingerprint,
             path: file.path.to_string(),
-            source: file.text()?.into_owned(),
+            source: source.to_string(),
             extra: extra.iter().map(|e| e.to_string()).collect(),
             entry: entry.to_string(),
             layouts: layouts.iter().map(|l| (*l).clone()).collect(),
         };
         gpu.cache.pipeline(key, || {
-            self.build_pipeline(gpu, file, entry, layouts, extra)
+            self.build_pipeline(gpu, file.path, &source, entry, layouts, extra)
         })
     }
 
+    /// Composes the entry file at `path` (its text `source`) and compiles `entry` of it.
     fn build_pipeline(
         &self,
         gpu: &GpuContext,
-        file: &ShaderFile,
+        path: &'static str,
+        source: &str,
         entry: &str,
         layouts: &[&wgpu::BindGroupLayout],
         extra: &[&str],
     ) -> Result<wgpu::ComputePipeline, GpuError> {
-        let module = self.compose_with(file, extra)?;
+        let module = self.compose_source_with(path, source, extra)?;
         let shader = gpu
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(file.path),
+                label: Some(path),
                 source: wgpu::ShaderSource::Naga(Cow::Owned(module)),
             });
         let layout_refs: Vec<Option<&wgpu::BindGroupLayout>> =
@@ -216,14 +219,14 @@ impl ShaderLibrary {
         let layout = gpu
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(file.path),
+                label: Some(path),
                 bind_group_layouts: &layout_refs,
                 immediate_size: 0,
             });
         let pipeline = gpu
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(file.path),
+                label: Some(path),
                 layout: Some(&layout),
                 module: &shader,
                 entry_point: Some(entry),

@@ -403,10 +403,10 @@ struct ViewAngle<'a, 'input> {
 /// The parameters that take a texture, for messages.
 const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (plastic, \
     roughplastic, pplastic), specular_reflectance (conductor, roughconductor, plastic, \
-    roughplastic, pplastic, dielectric, thindielectric, roughdielectric), specular_transmittance (dielectric, \
-    thindielectric, roughdielectric), alpha, alpha_u, alpha_v (roughconductor, roughdielectric), \
-    weight (blendbsdf), opacity (mask), every parameter of principled but eta, specular and its \
-    sampling rates";
+    roughplastic, pplastic, dielectric, thindielectric, roughdielectric), \
+    specular_transmittance (dielectric, thindielectric, roughdielectric), alpha, alpha_u, \
+    alpha_v (roughconductor, roughdielectric), weight (blendbsdf), opacity (mask), every \
+    parameter of principled but eta, specular and its sampling rates";
 
 /// The roughness a microfacet BSDF reads: one number (`roughplastic`), numbers that may differ
 /// along u and v (`pplastic`), or numbers or textures along u and v (rough conductors and
@@ -2311,7 +2311,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     Bsdf::Conductor { eta, k, specular }
                 }
             }
-            "plastic" | "roughplastic" => {
+            "plastic" | "roughplastic" | "pplastic" => {
                 // Mitsuba's defaults: polypropylene inside, air outside.
                 let int_ior = self.ior(props, "int_ior", 1.49)?;
                 let ext_ior = self.ior(props, "ext_ior", 1.000277)?;
@@ -2320,51 +2320,51 @@ impl<'a, 'input> Reader<'a, 'input> {
                 let (specular, specular_texture) =
                     self.color_param(props, "specular_reflectance", 1.0)?;
                 (textures.diffuse, textures.specular) = (diffuse_texture, specular_texture);
-                let nonlinear = match props.take("nonlinear") {
-                    Some(n) => self.boolean(n)?,
-                    None => false,
+                // Mitsuba's `nonlinear` (plastic, roughplastic): pplastic has no internal
+                // reflections, and leaves the property to be refused as unknown.
+                let mut nonlinear = || match props.take("nonlinear") {
+                    Some(n) => self.boolean(n),
+                    None => Ok(false),
                 };
-                if kind == "plastic" {
-                    Bsdf::Plastic {
+                match kind {
+                    "plastic" => Bsdf::Plastic {
                         int_ior,
                         ext_ior,
                         diffuse,
                         specular,
-                        nonlinear,
+                        nonlinear: nonlinear()?,
+                    },
+                    "roughplastic" => {
+                        self.distinct_iors(node, int_ior, ext_ior)?;
+                        Bsdf::RoughPlastic {
+                            int_ior,
+                            ext_ior,
+                            diffuse,
+                            specular,
+                            nonlinear: nonlinear()?,
+                            microfacet: self.microfacet(
+                                props,
+                                node,
+                                Alphas::Isotropic,
+                                &mut textures,
+                            )?,
+                        }
                     }
-                } else {
-                    self.distinct_iors(node, int_ior, ext_ior)?;
-                    Bsdf::RoughPlastic {
-                        int_ior,
-                        ext_ior,
-                        diffuse,
-                        specular,
-                        nonlinear,
-                        microfacet: self.microfacet(
-                            props,
-                            node,
-                            Alphas::Isotropic,
-                            &mut textures,
-                        )?,
+                    _ => {
+                        self.distinct_iors(node, int_ior, ext_ior)?;
+                        Bsdf::PolarizedPlastic {
+                            int_ior,
+                            ext_ior,
+                            diffuse,
+                            specular,
+                            microfacet: self.microfacet(
+                                props,
+                                node,
+                                Alphas::Anisotropic,
+                                &mut textures,
+                            )?,
+                        }
                     }
-                }
-            }
-            "pplastic" => {
-                // Mitsuba's defaults, as plastic's.
-                let int_ior = self.ior(props, "int_ior", 1.49)?;
-                let ext_ior = self.ior(props, "ext_ior", 1.000277)?;
-                self.distinct_iors(node, int_ior, ext_ior)?;
-                let (diffuse, diffuse_texture) =
-                    self.color_param(props, "diffuse_reflectance", 0.5)?;
-                let (specular, specular_texture) =
-                    self.color_param(props, "specular_reflectance", 1.0)?;
-                (textures.diffuse, textures.specular) = (diffuse_texture, specular_texture);
-                Bsdf::PolarizedPlastic {
-                    int_ior,
-                    ext_ior,
-                    diffuse,
-                    specular,
-                    microfacet: self.microfacet(props, node, Alphas::Anisotropic, &mut textures)?,
                 }
             }
             "principled" => self.read_principled(props, &mut textures)?,

@@ -415,9 +415,9 @@ pub const PLUGINS: &[Plugin] = &[
         ],
         notes: "Every lobe as Mitsuba 3.9.1 writes it (src/scene/principled.rs), its sampling \
                 too. Every parameter but `eta`, `specular` and the sampling rates may be a \
-                texture, as in Mitsuba (the rest are numbers there too). A continuous BSDF for the light-transport \
-                partition: caustics through it or onto it are path traced, never photon \
-                mapped.",
+                texture, as in Mitsuba (the rest are numbers there too). A continuous BSDF \
+                for the light-transport partition: caustics through it or onto it are path \
+                traced, never photon mapped.",
     },
     Plugin {
         object: "bsdf",
