@@ -758,44 +758,94 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 /// material's list follows the first's), or a scalar taken from the wrong channel.
 #[test]
 fn principled_field_textures_land_in_their_parameters() {
-    use hppm::scene::PRINCIPLED_TEXTURED;
-    let checker = |name: &str, i: usize| {
-        format!(
-            r#"<texture type="checkerboard" name="{name}"><float name="color0" value="{}"/><float name="color1" value="{}"/>
-                <transform name="to_uv"><scale x="{}" y="{}"/></transform></texture>"#,
-            0.05 + 0.1 * i as f32,
-            0.9 - 0.07 * i as f32,
-            1 + i,
-            2 + i % 3
-        )
-    };
-    let all: String = PRINCIPLED_TEXTURED
-        .iter()
-        .enumerate()
-        .map(|(i, name)| checker(name, i))
-        .collect();
+    let checker = |name, i| checker_texture(name, i);
     let some = format!(
         r#"{}{}<float name="anisotropic" value="0.3"/><float name="clearcoat" value="0.7"/><float name="eta" value="1.7"/>"#,
         checker("sheen", 3),
         checker("clearcoat_gloss", 7)
     );
-    let dir = temp_dir("principled_fields");
+    let floats = [
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.4],
+        [0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, 1.7],
+    ];
+    let all = r#"<float name="eta" value="1.4"/>"#;
+    field_textures_land(
+        "principled",
+        &hppm::scene::PRINCIPLED_TEXTURED,
+        all,
+        &some,
+        floats,
+    );
+}
+
+/// The same for principledthin, whose `eta` (`k.y`) may be a texture too and whose `k.x` is
+/// `diff_trans`.
+#[test]
+fn principled_thin_field_textures_land_in_their_parameters() {
+    let some = format!(
+        r#"{}{}<float name="anisotropic" value="0.3"/><float name="diff_trans" value="0.7"/>"#,
+        checker_texture("sheen", 3),
+        checker_texture("eta", 7)
+    );
+    let floats = [[0.0; 9], [0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, 0.0]];
+    let names = &hppm::scene::PRINCIPLED_THIN_TEXTURED;
+    field_textures_land("principledthin", names, "", &some, floats);
+}
+
+/// A checkerboard for parameter `name`, its colours and scales set by `i`.
+fn checker_texture(name: &str, i: usize) -> String {
+    format!(
+        r#"<texture type="checkerboard" name="{name}"><float name="color0" value="{}"/><float name="color1" value="{}"/>
+            <transform name="to_uv"><scale x="{}" y="{}"/></transform></texture>"#,
+        0.05 + 0.1 * i as f32,
+        0.9 - 0.07 * i as f32,
+        1 + i,
+        2 + i % 3
+    )
+}
+
+/// Two rectangles of `plugin`: the first with every parameter of `names` textured (and
+/// `all_extra`), the second with `some`. At 500 uvs the WGSL material's nine field components
+/// (`specular`, `eta`, `k`) hold each textured parameter's CPU lookup in the place of its index
+/// in `names`, and `floats` (per material) elsewhere.
+fn field_textures_land(
+    plugin: &str,
+    names: &[&str],
+    all_extra: &str,
+    some: &str,
+    floats: [[f32; 9]; 2],
+) {
+    let all: String = names
+        .iter()
+        .enumerate()
+        .map(|(i, name)| checker_texture(name, i))
+        .collect();
+    let dir = temp_dir(&format!("{plugin}_fields"));
     let path = dir.join("scene.xml");
     let xml = format!(
         r#"<scene version="3.0.0"><sensor type="perspective"/>
-        <shape type="rectangle"><bsdf type="principled"><float name="eta" value="1.4"/>{all}</bsdf></shape>
-        <shape type="rectangle"><transform name="to_world"><translate x="3"/></transform><bsdf type="principled">{some}</bsdf></shape>
+        <shape type="rectangle"><bsdf type="{plugin}">{all_extra}{all}</bsdf></shape>
+        <shape type="rectangle"><transform name="to_world"><translate x="3"/></transform><bsdf type="{plugin}">{some}</bsdf></shape>
         </scene>"#
     );
     std::fs::write(&path, xml).expect("scene");
     let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
-    let texture_of = |material: usize, name: &str| {
-        let i = PRINCIPLED_TEXTURED
-            .iter()
-            .position(|n| n == &name)
-            .expect("name");
-        scene.materials[material].textures.front.principled[i]
-    };
+    // The loader kept each parameter's texture in its own slot: the checkerboard made for
+    // index i sits at component i.
+    for material in &scene.materials {
+        for (i, slot) in material.textures.front.principled.iter().enumerate() {
+            if let Some(t) = slot {
+                let Texture::Checkerboard { color0, .. } = scene.textures[*t as usize] else {
+                    panic!("{plugin}: slot {i} holds a bitmap");
+                };
+                let expected = 0.05 + 0.1 * i as f32;
+                assert!(
+                    (color0.x - expected).abs() < 1e-6,
+                    "{plugin}: slot {i} holds {color0}"
+                );
+            }
+        }
+    }
     let mut rng = common::rng::Rng(0x2545_f491_4f6c_dd1d);
     let queries: Vec<Vec4> = (0..500)
         .map(|i| {
@@ -825,29 +875,23 @@ fn principled_field_textures_land_in_their_parameters() {
         &queries,
         3 * queries.len(),
     );
-    let floats = [
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.4],
-        [0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, 1.7],
-    ];
     for (q, got) in queries.iter().zip(out.chunks(3)) {
         let material = q.z as usize;
         let fields = [got[0].truncate(), got[1].truncate(), got[2].truncate()];
         let fields: Vec<f32> = fields.iter().flat_map(|v| v.to_array()).collect();
+        let textures = scene.materials[material].textures.front.principled;
         for (i, got) in fields.iter().enumerate() {
-            let want = match PRINCIPLED_TEXTURED
-                .get(i)
-                .and_then(|n| texture_of(material, n))
-            {
+            let want = match textures.get(i).copied().flatten() {
                 Some(t) => scene.textures[t as usize].eval_1(q.truncate().truncate()),
                 None => floats[material][i],
             };
-            let what = PRINCIPLED_TEXTURED.get(i).unwrap_or(&"eta");
+            let what = names.get(i).unwrap_or(&"unused");
             assert!(
                 (got - want).abs() <= 1e-6,
-                "material {material}, {what} at {:?}: GPU {got}, expected {want}",
+                "{plugin} {material}, {what} at {:?}: GPU {got}, expected {want}",
                 q.truncate().truncate()
             );
         }
     }
-    eprintln!("{} lookups", queries.len());
+    eprintln!("{plugin}: {} lookups", queries.len());
 }

@@ -3,7 +3,7 @@
 // The BSDFs other than Lambertian, mirror and smooth dielectric (which the passes handle
 // inline), dispatched on the material's kind; kinds the scene lacks are compiled out.
 
-#import common::scene::{Material, MATERIAL_CONDUCTOR, MATERIAL_ROUGH_CONDUCTOR, MATERIAL_PLASTIC, MATERIAL_ROUGH_PLASTIC, MATERIAL_POLARIZED_PLASTIC, MATERIAL_ROUGH_DIELECTRIC, MATERIAL_THIN_DIELECTRIC, MATERIAL_PRINCIPLED}
+#import common::scene::{Material, MATERIAL_CONDUCTOR, MATERIAL_ROUGH_CONDUCTOR, MATERIAL_PLASTIC, MATERIAL_ROUGH_PLASTIC, MATERIAL_POLARIZED_PLASTIC, MATERIAL_ROUGH_DIELECTRIC, MATERIAL_THIN_DIELECTRIC, MATERIAL_PRINCIPLED, MATERIAL_PRINCIPLED_THIN}
 #import common::bsdf::{BsdfEval, BsdfSample, no_sample}
 #ifdef DIELECTRIC
 #import common::bsdf::sample_thin_dielectric
@@ -19,6 +19,7 @@
 #endif
 #ifdef PRINCIPLED
 #import common::principled::{principled_eval, principled_sample}
+#import common::principled_thin::{principled_thin_eval, principled_thin_sample}
 #endif
 
 // f |cos wo| and pdf of the non-delta lobes (zero for delta-only kinds).
@@ -45,6 +46,9 @@ fn material_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> B
     if m.kind == MATERIAL_PRINCIPLED {
         return principled_eval(m, wi, wo, radiance);
     }
+    if m.kind == MATERIAL_PRINCIPLED_THIN {
+        return principled_thin_eval(m, wi, wo);
+    }
 #endif
     return BsdfEval(vec3<f32>(0.0), 0.0);
 }
@@ -56,7 +60,7 @@ fn rough_plastic_kind(kind: u32) -> bool {
 
 // Whether the kind has a non-delta lobe, which next-event estimation can reach.
 fn material_has_continuous_lobe(kind: u32) -> bool {
-    return kind == MATERIAL_ROUGH_CONDUCTOR || kind == MATERIAL_PLASTIC || rough_plastic_kind(kind) || kind == MATERIAL_ROUGH_DIELECTRIC || kind == MATERIAL_PRINCIPLED;
+    return kind == MATERIAL_ROUGH_CONDUCTOR || kind == MATERIAL_PLASTIC || rough_plastic_kind(kind) || kind == MATERIAL_ROUGH_DIELECTRIC || kind == MATERIAL_PRINCIPLED || kind == MATERIAL_PRINCIPLED_THIN;
 }
 
 fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: bool) -> BsdfSample {
@@ -92,6 +96,9 @@ fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance:
 #ifdef PRINCIPLED
     if m.kind == MATERIAL_PRINCIPLED {
         return principled_sample(m, wi, u1, u2, radiance);
+    }
+    if m.kind == MATERIAL_PRINCIPLED_THIN {
+        return principled_thin_sample(m, wi, u1, u2);
     }
 #endif
     return no_sample();

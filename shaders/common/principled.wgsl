@@ -49,13 +49,15 @@ fn has(p: Principled, bit: u32) -> bool {
     return (p.has & bit) != 0u;
 }
 
+// The GGX distribution of a roughness and anisotropy (0: isotropic).
+fn ggx(anisotropic: f32, roughness: f32) -> Microfacet {
+    let r2 = roughness * roughness;
+    let aspect = sqrt(1.0 - 0.9 * anisotropic);
+    return Microfacet(max(0.001, r2 / aspect), max(0.001, r2 * aspect), true);
+}
+
 fn specular_distribution(p: Principled) -> Microfacet {
-    let r2 = p.roughness * p.roughness;
-    if has(p, HAS_ANISOTROPIC) {
-        let aspect = sqrt(1.0 - 0.9 * p.anisotropic);
-        return Microfacet(max(0.001, r2 / aspect), max(0.001, r2 * aspect), true);
-    }
-    return Microfacet(max(0.001, r2), max(0.001, r2), true);
+    return ggx(select(0.0, p.anisotropic, has(p, HAS_ANISOTROPIC)), p.roughness);
 }
 
 fn clearcoat_alpha(p: Principled) -> f32 {
@@ -157,6 +159,31 @@ fn smith_ggx1(v: vec3<f32>, m: vec3<f32>, alpha: f32) -> f32 {
     return 2.0 / (1.0 + sqrt(1.0 + alpha * alpha * (1.0 - c2) / c2));
 }
 
+// Burley's diffuse with retro-reflection, towards the fake subsurface term by `flatness`.
+fn diffuse_lobe(roughness: f32, flatness: f32, cos_i: f32, cos_o: f32, cos_d: f32) -> f32 {
+    let fo = schlick_weight(cos_o);
+    let fi = schlick_weight(cos_i);
+    let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
+    let rr = 2.0 * roughness * cos_d * cos_d;
+    let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
+    if flatness == 0.0 {
+        return f_diff + f_retro;
+    }
+    let fss90 = rr / 2.0;
+    let fss = mix(1.0, fss90, fo) * mix(1.0, fss90, fi);
+    let f_ss = 1.25 * (fss * (1.0 / (cos_o + cos_i) - 0.5) + 0.5);
+    return mix(f_diff + f_retro, f_ss, flatness);
+}
+
+// The sheen lobe's f, white tinted towards the base colour's hue by `sheen_tint`.
+fn sheen_lobe(sheen: f32, sheen_tint: f32, base_color: vec3<f32>, cos_d: f32) -> vec3<f32> {
+    var tint = vec3<f32>(1.0);
+    if sheen_tint != 0.0 {
+        tint = mix(vec3<f32>(1.0), tint_of(base_color), sheen_tint);
+    }
+    return sheen * schlick_weight(abs(cos_d)) * tint;
+}
+
 // The half vector of (wi, wo), facing +z.
 fn half_vector(p: Principled, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     let eta_path = select(1.0 / p.eta, p.eta, wi.z > 0.0);
@@ -194,28 +221,13 @@ fn principled_value(p: Principled, wi: vec3<f32>, wo: vec3<f32>, radiance: bool)
         value += vec3<f32>(p.clearcoat * 0.25 * fcc * gtr1_d(clearcoat_alpha(p), h) * gcc * abs(co));
     }
     if w.x > 0.0 && reflect_pair && front {
-        let fo = schlick_weight(abs(co));
-        let fi = schlick_weight(abs(ci));
-        let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
-        let cos_d = dot(h, wo);
-        let rr = 2.0 * p.roughness * cos_d * cos_d;
-        let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
-        var lobe = f_diff + f_retro;
-        if has(p, HAS_FLATNESS) {
-            let fss90 = rr / 2.0;
-            let fss = mix(1.0, fss90, fo) * mix(1.0, fss90, fi);
-            let f_ss = 1.25 * (fss * (1.0 / (abs(co) + abs(ci)) - 0.5) + 0.5);
-            lobe = mix(f_diff + f_retro, f_ss, p.flatness);
-        }
+        let flatness = select(0.0, p.flatness, has(p, HAS_FLATNESS));
+        let lobe = diffuse_lobe(p.roughness, flatness, abs(ci), abs(co), dot(h, wo));
         value += w.x * abs(co) * p.base_color * INV_PI * lobe;
     }
     if has(p, HAS_SHEEN) && p.sheen > 0.0 && reflect_pair && 1.0 - p.metallic > 0.0 && front {
-        let fd = schlick_weight(abs(dot(h, wo)));
-        var tint = vec3<f32>(1.0);
-        if has(p, HAS_SHEEN_TINT) {
-            tint = mix(vec3<f32>(1.0), tint_of(p.base_color), p.sheen_tint);
-        }
-        value += p.sheen * (1.0 - p.metallic) * fd * tint * abs(co);
+        let sheen_tint = select(0.0, p.sheen_tint, has(p, HAS_SHEEN_TINT));
+        value += (1.0 - p.metallic) * sheen_lobe(p.sheen, sheen_tint, p.base_color, dot(h, wo)) * abs(co);
     }
     return value;
 }

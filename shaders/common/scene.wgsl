@@ -202,6 +202,7 @@ const MATERIAL_BLEND: u32 = 9u;
 const MATERIAL_NULL: u32 = 10u;
 const MATERIAL_PRINCIPLED: u32 = 11u;
 const MATERIAL_POLARIZED_PLASTIC: u32 = 12u;
+const MATERIAL_PRINCIPLED_THIN: u32 = 13u;
 const NO_BACK: u32 = 0xffffffffu;
 const LIGHT_TRIANGLE: u32 = 0u;
 const LIGHT_SPHERE: u32 = 1u;

@@ -65,6 +65,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/plastic.wgsl"),
     shader_file!("shaders/common/rough_dielectric.wgsl"),
     shader_file!("shaders/common/principled.wgsl"),
+    shader_file!("shaders/common/principled_thin.wgsl"),
     shader_file!("shaders/common/normal_map.wgsl"),
     shader_file!("shaders/common/blend.wgsl"),
     shader_file!("shaders/common/material.wgsl"),

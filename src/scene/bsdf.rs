@@ -442,6 +442,7 @@ pub fn eval(p: &Prepared, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
         // Never evaluated: a child is chosen first (see `Bsdf::Blend`).
         Bsdf::Blend { .. } => Vec3::ZERO,
         Bsdf::Principled(ref pr) => super::principled::eval(pr, wi, wo, mode),
+        Bsdf::PrincipledThin(ref pr) => super::principled_thin::eval(pr, wi, wo),
         Bsdf::RoughConductor {
             eta,
             k,
@@ -581,6 +582,7 @@ pub fn pdf(p: &Prepared, wi: Vec3, wo: Vec3) -> f32 {
         | Bsdf::Null
         | Bsdf::Blend { .. } => 0.0,
         Bsdf::Principled(ref pr) => super::principled::pdf(pr, wi, wo),
+        Bsdf::PrincipledThin(ref pr) => super::principled_thin::pdf(pr, wi, wo),
         Bsdf::RoughConductor { microfacet, .. } => {
             if ci <= 0.0 || co <= 0.0 {
                 return 0.0;
@@ -735,6 +737,14 @@ pub fn sample(p: &Prepared, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<S
         Bsdf::Blend { .. } => None,
         Bsdf::Principled(ref pr) => {
             super::principled::sample(pr, wi, u1, u2, mode).map(|(wo, weight, pdf)| Sample {
+                wo,
+                weight,
+                pdf,
+                delta: false,
+            })
+        }
+        Bsdf::PrincipledThin(ref pr) => {
+            super::principled_thin::sample(pr, wi, u1, u2).map(|(wo, weight, pdf)| Sample {
                 wo,
                 weight,
                 pdf,

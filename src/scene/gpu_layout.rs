@@ -26,6 +26,7 @@ pub const MATERIAL_BLEND: u32 = 9;
 pub const MATERIAL_NULL: u32 = 10;
 pub const MATERIAL_PRINCIPLED: u32 = 11;
 pub const MATERIAL_POLARIZED_PLASTIC: u32 = 12;
+pub const MATERIAL_PRINCIPLED_THIN: u32 = 13;
 
 /// `GpuMaterial::frame_kind`: the shading frame as the shape gives it, or perturbed by a
 /// normal map or a bump map (src/scene/normal_map.rs).
@@ -401,14 +402,22 @@ fn gpu_material(
             (m.int_ior, m.ext_ior) = (p.spec_srate, p.clearcoat_srate);
             m.specular_weight = p.diffuse_srate;
             m.nonlinear = p.has;
-            // PRINCIPLED_TEXTURED is in the order of the components above.
-            m.field_textures = tables.len() as u32;
-            for (component, texture) in textures.principled.iter().enumerate() {
-                if let Some(texture) = *texture {
-                    tables.extend([component as f32, texture as f32]);
-                    m.field_texture_count += 1;
-                }
-            }
+            field_textures(&mut m, &textures.principled, tables);
+        }
+        // As principled's, with diff_trans and eta in `k` and the four sampling rates in
+        // int_ior, ext_ior, specular_weight and internal_reflectance
+        // (shaders/common/principled_thin.wgsl).
+        Bsdf::PrincipledThin(p) => {
+            m.kind = MATERIAL_PRINCIPLED_THIN;
+            m.albedo = p.base_color.to_array();
+            m.alpha_u = p.roughness;
+            m.specular = [p.anisotropic, p.spec_trans, p.spec_tint];
+            m.eta = [p.sheen, p.sheen_tint, p.flatness];
+            m.k = [p.diff_trans, p.eta, 0.0];
+            (m.int_ior, m.ext_ior) = (p.spec_reflect_srate, p.spec_trans_srate);
+            (m.specular_weight, m.internal_reflectance) =
+                (p.diff_reflect_srate, p.diff_trans_srate);
+            field_textures(&mut m, &textures.principled, tables);
         }
         Bsdf::Blend {
             weight,
@@ -472,6 +481,18 @@ fn gpu_material(
         }
     }
     m
+}
+
+/// Principled's and principledthin's field textures, `fields` in the order of their components
+/// in `specular`, `eta` and `k`, appended to `tables` as (component, texture) pairs.
+fn field_textures(m: &mut GpuMaterial, fields: &[Option<u32>], tables: &mut Vec<f32>) {
+    m.field_textures = tables.len() as u32;
+    for (component, texture) in fields.iter().enumerate() {
+        if let Some(texture) = *texture {
+            tables.extend([component as f32, texture as f32]);
+            m.field_texture_count += 1;
+        }
+    }
 }
 
 /// Every material's front, then the back sides of twosided ones (each front pointing at its

@@ -25,8 +25,9 @@ use super::filter::{
 use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use super::{
     Bsdf, Camera, Crop, Distribution, FramePerturbation, Integrator, Lens, Material,
-    MaterialTextures, Microfacet, PRINCIPLED_TEXTURED, PerturbationKind, PointLight, Report, Scene,
-    SceneError, SideTextures, Sphere, Tint, bsdf, mesh, plugins, spectrum,
+    MaterialTextures, Microfacet, PRINCIPLED_TEXTURED, PRINCIPLED_THIN_TEXTURED, PerturbationKind,
+    PointLight, Report, Scene, SceneError, SideTextures, Sphere, Tint, bsdf, mesh, plugins,
+    spectrum,
 };
 use crate::error::{Location, edit_distance};
 
@@ -406,7 +407,8 @@ const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (p
     roughplastic, pplastic, dielectric, thindielectric, roughdielectric), \
     specular_transmittance (dielectric, thindielectric, roughdielectric), alpha, alpha_u, \
     alpha_v (roughconductor, roughdielectric), weight (blendbsdf), opacity (mask), every \
-    parameter of principled but eta, specular and its sampling rates";
+    parameter of principled but eta, specular and its sampling rates, every parameter of \
+    principledthin but its sampling rates";
 
 /// The roughness a microfacet BSDF reads: one number (`roughplastic`), numbers that may differ
 /// along u and v (`pplastic`), or numbers or textures along u and v (rough conductors and
@@ -2368,6 +2370,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
             }
             "principled" => self.read_principled(props, &mut textures)?,
+            "principledthin" => self.read_principled_thin(props, &mut textures)?,
             other => {
                 return Err(self.attr_error(
                     node,
@@ -2493,6 +2496,74 @@ impl<'a, 'input> Reader<'a, 'input> {
             clearcoat_srate,
             diffuse_srate,
             has,
+        }))
+    }
+
+    /// Mitsuba's `principledthin`, every property its plugin reads; all but the sampling rates
+    /// may be textures.
+    fn read_principled_thin(
+        &self,
+        props: &mut Props<'a, 'input>,
+        textures: &mut SideTextures,
+    ) -> Result<Bsdf, SceneError> {
+        use super::principled_thin::PrincipledThin;
+        let (base_color, base_texture) = self.color_param(props, "base_color", 0.5)?;
+        textures.diffuse = base_texture;
+        let mut scalar = |name: &str, default: f32| -> Result<(f32, Option<u32>), SceneError> {
+            match props.take(name) {
+                Some(n) => self.float_or_texture(n, name),
+                None => Ok((default, None)),
+            }
+        };
+        let (roughness, roughness_texture) = scalar("roughness", 0.5)?;
+        textures.alpha_u = roughness_texture;
+        let mut values = [0.0; PRINCIPLED_THIN_TEXTURED.len()];
+        // The last is eta, which is checked apart.
+        let [params @ .., eta_slot] = &PRINCIPLED_THIN_TEXTURED;
+        for (i, name) in params.iter().enumerate() {
+            (values[i], textures.principled[i]) = scalar(name, 0.0)?;
+        }
+        let [
+            anisotropic,
+            spec_trans,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            diff_trans,
+            _,
+        ] = values;
+        let eta = match props.take(eta_slot) {
+            Some(n) => {
+                let (eta, texture) = self.float_or_texture(n, eta_slot)?;
+                if texture.is_none() && !(eta > 0.0) {
+                    let message = format!("eta {eta}: must be positive");
+                    return Err(self.attr_error(n, "value", message));
+                }
+                textures.principled[params.len()] = texture;
+                eta
+            }
+            None => 1.5,
+        };
+        let mut rate = |name: &str| match props.take(name) {
+            Some(n) => self.float(n),
+            None => Ok(1.0),
+        };
+        Ok(Bsdf::PrincipledThin(PrincipledThin {
+            base_color,
+            roughness,
+            anisotropic,
+            spec_trans,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            diff_trans,
+            eta,
+            spec_reflect_srate: rate("specular_reflectance_sampling_rate")?,
+            spec_trans_srate: rate("specular_transmittance_sampling_rate")?,
+            diff_reflect_srate: rate("diffuse_reflectance_sampling_rate")?,
+            diff_trans_srate: rate("diffuse_transmittance_sampling_rate")?,
         }))
     }
 

@@ -15,6 +15,7 @@ pub mod obj;
 pub mod plugins;
 pub mod ply;
 pub mod principled;
+pub mod principled_thin;
 pub mod ron_format;
 pub mod serialized;
 pub mod spectrum;
@@ -209,6 +210,9 @@ pub enum Bsdf {
     /// Mitsuba 3's `principled` (src/scene/principled.rs), a continuous BSDF: never an S
     /// vertex of the partition, whatever its roughness.
     Principled(principled::Principled),
+    /// Mitsuba 3's `principledthin` (src/scene/principled_thin.rs): a sheet lit and seen from
+    /// both sides that transmits without bending; continuous like `principled`.
+    PrincipledThin(principled_thin::PrincipledThin),
 }
 
 impl Bsdf {
@@ -259,6 +263,7 @@ impl Bsdf {
                 | Bsdf::RoughDielectric { .. }
                 | Bsdf::ThinDielectric { .. }
                 | Bsdf::Null
+                | Bsdf::PrincipledThin(_)
         )
     }
 
@@ -298,6 +303,23 @@ impl Bsdf {
                     p.spec_srate,
                     p.clearcoat_srate,
                     p.diffuse_srate,
+                ];
+                finite(p.base_color) && scalars.iter().all(|v| v.is_finite()) && p.eta > 0.0
+            }
+            Bsdf::PrincipledThin(p) => {
+                let scalars = [
+                    p.roughness,
+                    p.anisotropic,
+                    p.spec_trans,
+                    p.spec_tint,
+                    p.sheen,
+                    p.sheen_tint,
+                    p.flatness,
+                    p.diff_trans,
+                    p.spec_reflect_srate,
+                    p.spec_trans_srate,
+                    p.diff_reflect_srate,
+                    p.diff_trans_srate,
                 ];
                 finite(p.base_color) && scalars.iter().all(|v| v.is_finite()) && p.eta > 0.0
             }
@@ -405,8 +427,9 @@ pub struct SideTextures {
     pub frame: Option<FramePerturbation>,
     /// A blend's weight (`blendbsdf`) or opacity (`mask`), looked up as a scalar.
     pub blend_weight: Option<u32>,
-    /// `principled`'s scalar parameters in [`PRINCIPLED_TEXTURED`]'s order (base colour,
-    /// roughness and metallic are `diffuse`, `alpha_u` and `alpha_v`).
+    /// `principled`'s scalar parameters in [`PRINCIPLED_TEXTURED`]'s order, or
+    /// `principledthin`'s in [`PRINCIPLED_THIN_TEXTURED`]'s (base colour, roughness and
+    /// metallic are `diffuse`, `alpha_u` and `alpha_v`).
     pub principled: [Option<u32>; PRINCIPLED_TEXTURED.len()],
 }
 
@@ -421,6 +444,19 @@ pub const PRINCIPLED_TEXTURED: [&str; 8] = [
     "flatness",
     "clearcoat",
     "clearcoat_gloss",
+];
+
+/// The same for Mitsuba's `principledthin`, each a texture there (`eta` too; the sampling
+/// rates are floats).
+pub const PRINCIPLED_THIN_TEXTURED: [&str; 8] = [
+    "anisotropic",
+    "spec_trans",
+    "spec_tint",
+    "sheen",
+    "sheen_tint",
+    "flatness",
+    "diff_trans",
+    "eta",
 ];
 
 impl SideTextures {
@@ -813,7 +849,7 @@ impl Scene {
             for bsdf in m.bsdfs() {
                 match bsdf {
                     Bsdf::Null | Bsdf::Blend { .. } => f.blends = true,
-                    Bsdf::Principled(_) => f.principled = true,
+                    Bsdf::Principled(_) | Bsdf::PrincipledThin(_) => f.principled = true,
                     Bsdf::Diffuse { .. } => f.diffuse = true,
                     Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => f.dielectric = true,
                     Bsdf::Mirror => f.mirror = true,

@@ -421,6 +421,32 @@ pub const PLUGINS: &[Plugin] = &[
     },
     Plugin {
         object: "bsdf",
+        kinds: &["principledthin"],
+        properties: &[
+            p("base_color", "0.5"),
+            p("roughness", "0.5"),
+            p("anisotropic", "0"),
+            p("spec_trans", "0"),
+            p("eta", "1.5"),
+            p("spec_tint", "0"),
+            p("sheen", "0"),
+            p("sheen_tint", "0"),
+            p("flatness", "0"),
+            p("diff_trans", "0"),
+            p("specular_reflectance_sampling_rate", "1"),
+            p("specular_transmittance_sampling_rate", "1"),
+            p("diffuse_reflectance_sampling_rate", "1"),
+            p("diffuse_transmittance_sampling_rate", "1"),
+        ],
+        notes: "A sheet seen and lit from both sides, as Mitsuba 3.9.1 writes it \
+                (src/scene/principled_thin.rs): diffuse with sheen, diffuse transmission \
+                (`diff_trans` 0 to 2), a GGX reflection and a GGX transmission straight through \
+                (no bending). Every parameter but the sampling rates may be a texture, `eta` \
+                too. It transmits, so `twosided` refuses it (as in Mitsuba). Continuous for \
+                the light-transport partition, as `principled`.",
+    },
+    Plugin {
+        object: "bsdf",
         kinds: &["blendbsdf"],
         properties: &[p("weight", "")],
         notes: "Two nested BSDFs; `weight` (a float or scalar texture, clamped to [0, 1]) is the \

@@ -54,20 +54,14 @@ impl Principled {
         self.has & bit != 0
     }
 
-    /// The main lobes' GGX distribution (Mitsuba's calc_dist_params).
+    /// The main lobes' GGX distribution.
     fn specular_distribution(&self) -> Microfacet {
-        let r2 = self.roughness * self.roughness;
-        let (alpha_u, alpha_v) = if self.has(HAS_ANISOTROPIC) {
-            let aspect = (1.0 - 0.9 * self.anisotropic).sqrt();
-            ((r2 / aspect).max(0.001), (r2 * aspect).max(0.001))
+        let anisotropic = if self.has(HAS_ANISOTROPIC) {
+            self.anisotropic
         } else {
-            (r2.max(0.001), r2.max(0.001))
+            0.0
         };
-        Microfacet {
-            distribution: Distribution::Ggx,
-            alpha_u,
-            alpha_v,
-        }
+        ggx(anisotropic, self.roughness)
     }
 
     fn clearcoat_alpha(&self) -> f32 {
@@ -115,27 +109,39 @@ impl Principled {
     }
 }
 
-fn lerp(a: f32, b: f32, t: f32) -> f32 {
+/// The GGX distribution of a roughness and anisotropy (Mitsuba's calc_dist_params; an
+/// anisotropy of 0 is its isotropic case).
+pub(super) fn ggx(anisotropic: f32, roughness: f32) -> Microfacet {
+    let r2 = roughness * roughness;
+    let aspect = (1.0 - 0.9 * anisotropic).sqrt();
+    Microfacet {
+        distribution: Distribution::Ggx,
+        alpha_u: (r2 / aspect).max(0.001),
+        alpha_v: (r2 * aspect).max(0.001),
+    }
+}
+
+pub(super) fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a * (1.0 - t) + b * t
 }
 
-fn lerp3(a: Vec3, b: Vec3, t: f32) -> Vec3 {
+pub(super) fn lerp3(a: Vec3, b: Vec3, t: f32) -> Vec3 {
     a * (1.0 - t) + b * t
 }
 
 /// `a` with the sign of `b` flipped in when `b` is negative (drjit's mulsign).
-fn mulsign(a: Vec3, b: f32) -> Vec3 {
+pub(super) fn mulsign(a: Vec3, b: f32) -> Vec3 {
     if b.is_sign_negative() { -a } else { a }
 }
 
-fn schlick_weight(cos: f32) -> f32 {
+pub(super) fn schlick_weight(cos: f32) -> f32 {
     let m = (1.0 - cos).clamp(0.0, 1.0);
     m * m * m * m * m
 }
 
 /// Schlick's Fresnel from `r0`, taken at the transmitted angle when light leaves the denser
 /// side (Mitsuba's calc_schlick).
-fn calc_schlick(r0: Vec3, cos_i: f32, eta: f32) -> Vec3 {
+pub(super) fn calc_schlick(r0: Vec3, cos_i: f32, eta: f32) -> Vec3 {
     let outside = cos_i >= 0.0;
     let (eta_it, eta_ti) = if outside {
         (eta, 1.0 / eta)
@@ -153,13 +159,13 @@ fn calc_schlick(r0: Vec3, cos_i: f32, eta: f32) -> Vec3 {
     Vec3::splat(w) * (Vec3::ONE - r0) + r0
 }
 
-fn schlick_r0(eta: f32) -> f32 {
+pub(super) fn schlick_r0(eta: f32) -> f32 {
     ((eta - 1.0) / (eta + 1.0)).powi(2)
 }
 
 /// Micro- and macro-surface agree on the sides of `wi` and `wo` (Mitsuba's
 /// mac_mic_compatibility).
-fn compatible(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
+pub(super) fn compatible(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
     let m_i = mulsign(m, cos_i);
     let m_o = if reflection { m_i } else { -m_i };
     wi.dot(m_i) > 0.0 && wo.dot(m_o) > 0.0
@@ -185,7 +191,7 @@ fn principled_fresnel(p: &Principled, f_dielectric: f32, cos_i: f32, front: bool
 }
 
 /// The base colour's hue at luminance 1 (white for black).
-fn tint_of(c: Vec3) -> Vec3 {
+pub(super) fn tint_of(c: Vec3) -> Vec3 {
     let lum = luminance(c);
     if lum > 0.0 { c / lum } else { Vec3::ONE }
 }
@@ -223,6 +229,40 @@ fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
     let c2 = v.z * v.z;
     let tan2 = (1.0 - c2) / c2;
     2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
+}
+
+/// The diffuse lobe's shape (times base colour / pi it is f): Burley's diffuse with its
+/// retro-reflection, blended towards the fake subsurface term by `flatness` (Hanrahan-Krueger
+/// based; Mitsuba's principledhelpers). `cos_d` is the half vector's cosine with wo.
+pub(super) fn diffuse_lobe(
+    roughness: f32,
+    flatness: f32,
+    cos_i: f32,
+    cos_o: f32,
+    cos_d: f32,
+) -> f32 {
+    let (fo, fi) = (schlick_weight(cos_o), schlick_weight(cos_i));
+    let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
+    let rr = 2.0 * roughness * cos_d * cos_d;
+    let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
+    if flatness == 0.0 {
+        return f_diff + f_retro;
+    }
+    let fss90 = rr / 2.0;
+    let fss = lerp(1.0, fss90, fo) * lerp(1.0, fss90, fi);
+    let f_ss = 1.25 * (fss * (1.0 / (cos_o + cos_i) - 0.5) + 0.5);
+    lerp(f_diff + f_retro, f_ss, flatness)
+}
+
+/// The sheen lobe's f (before its weight against the other lobes), white tinted towards the
+/// base colour's hue by `sheen_tint`.
+pub(super) fn sheen_lobe(sheen: f32, sheen_tint: f32, base_color: Vec3, cos_d: f32) -> Vec3 {
+    let tint = if sheen_tint == 0.0 {
+        Vec3::ONE
+    } else {
+        lerp3(Vec3::ONE, tint_of(base_color), sheen_tint)
+    };
+    sheen * schlick_weight(cos_d.abs()) * tint
 }
 
 /// The half vector of (wi, wo), facing +z, whether they reflect, and the index along the path.
@@ -271,32 +311,22 @@ pub fn eval(p: &Principled, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
         value += Vec3::splat(p.clearcoat * 0.25 * fcc * dcc * gcc * co.abs());
     }
     if brdf > 0.0 && reflect_pair && front {
-        let (fo, fi) = (schlick_weight(co.abs()), schlick_weight(ci.abs()));
-        let f_diff = (1.0 - 0.5 * fi) * (1.0 - 0.5 * fo);
-        let cos_d = h.dot(wo);
-        let rr = 2.0 * p.roughness * cos_d * cos_d;
-        let f_retro = rr * (fo + fi + fo * fi * (rr - 1.0));
-        let lobe = if p.has(HAS_FLATNESS) {
-            let fss90 = rr / 2.0;
-            let fss = lerp(1.0, fss90, fo) * lerp(1.0, fss90, fi);
-            let f_ss = 1.25 * (fss * (1.0 / (co.abs() + ci.abs()) - 0.5) + 0.5);
-            lerp(f_diff + f_retro, f_ss, p.flatness)
-        } else {
-            f_diff + f_retro
-        };
+        let flatness = if p.has(HAS_FLATNESS) { p.flatness } else { 0.0 };
+        let lobe = diffuse_lobe(p.roughness, flatness, ci.abs(), co.abs(), h.dot(wo));
         value += brdf * co.abs() * p.base_color * std::f32::consts::FRAC_1_PI * lobe;
     }
     // Mitsuba adds the sheen under the diffuse lobe's mask in scalar code but its own mask
     // alone in vectorised variants (any lane with a diffuse lobe runs it): the latter, which
     // is what its LLVM and CUDA variants render.
     if p.has(HAS_SHEEN) && p.sheen > 0.0 && reflect_pair && 1.0 - p.metallic > 0.0 && front {
-        let fd = schlick_weight(h.dot(wo).abs());
-        let tint = if p.has(HAS_SHEEN_TINT) {
-            lerp3(Vec3::ONE, tint_of(p.base_color), p.sheen_tint)
+        let sheen_tint = if p.has(HAS_SHEEN_TINT) {
+            p.sheen_tint
         } else {
-            Vec3::ONE
+            0.0
         };
-        value += p.sheen * (1.0 - p.metallic) * fd * tint * co.abs();
+        value += (1.0 - p.metallic)
+            * sheen_lobe(p.sheen, sheen_tint, p.base_color, h.dot(wo))
+            * co.abs();
     }
     if value.is_finite() { value } else { Vec3::ZERO }
 }

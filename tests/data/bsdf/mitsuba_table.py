@@ -64,6 +64,18 @@ MATERIALS = {
     "pplastic_beckmann_aniso": {"type": "pplastic", "distribution": "beckmann", "alpha_u": 0.1, "alpha_v": 0.3,
                                 "diffuse_reflectance": {"type": "rgb", "value": [0.8, 0.3, 0.1]},
                                 "specular_reflectance": {"type": "rgb", "value": [0.9, 0.8, 0.7]}},
+    "principledthin_plain": {"type": "principledthin", "base_color": {"type": "rgb", "value": [0.7, 0.3, 0.2]},
+                             "roughness": 0.4},
+    "principledthin_every_lobe": {"type": "principledthin",
+                                  "base_color": {"type": "rgb", "value": [0.8, 0.5, 0.3]},
+                                  "roughness": 0.3, "anisotropic": 0.5, "spec_trans": 0.6, "spec_tint": 0.4,
+                                  "sheen": 0.5, "sheen_tint": 0.3, "flatness": 0.3, "diff_trans": 0.8,
+                                  "eta": 1.33, "specular_reflectance_sampling_rate": 0.7,
+                                  "specular_transmittance_sampling_rate": 1.3,
+                                  "diffuse_reflectance_sampling_rate": 0.9,
+                                  "diffuse_transmittance_sampling_rate": 1.1},
+    "principledthin_leaf": {"type": "principledthin", "base_color": {"type": "rgb", "value": [0.2, 0.6, 0.1]},
+                            "roughness": 0.5, "spec_trans": 0.2, "diff_trans": 1.2},
 }
 
 
@@ -79,7 +91,7 @@ def main():
     rows = []
     for name, desc in MATERIALS.items():
         bsdf = mi.load_dict(desc)
-        transmits = "dielectric" in name or "glass" in name
+        transmits = "dielectric" in name or "glass" in name or name.startswith("principledthin")
         for i in range(24):
             wi = direction(rng, transmits and i % 3 == 2)
             wo = direction(rng, (transmits and i % 2 == 1) or i == 23)
