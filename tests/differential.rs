@@ -142,6 +142,12 @@ fn found_by_long_runs() {
 /// the hybrid) with a checkerboard base, an anisotropic cube with a tinted specular
 /// reflectance, a rough floor. Correct: 0.36x/0.38x; the base without its two (1 - F) factors
 /// fails both (1.65x, +13% in a block, 8 of 16 blocks).
+/// `principledthin`: a leaf-like sheet seen from its back and lit through its other side, and a
+/// frosted pane with a checkerboard `diff_trans`, both lit from behind. Correct: 0.45x (pt and
+/// hybrid alike: a thin principled is never S); diffuse transmission dropped fails (5.98x, -55%
+/// in a block), a back side that reflects and transmits nothing fails (5.6x); the transmission
+/// untinted by the base colour is at the bound (1.01x), its roughness unscaled by the index, or
+/// sheen left out, are below what block means see (0.61x, 0.40x) and are tests/bsdf.rs's.
 /// `spot_texture` and `projector`: a spot with a projected bitmap (its frame turned by a
 /// diagonal up) and a projector of a 4:3 bitmap, each lighting a floor and a cube directly and
 /// through a mirror the camera cannot see, against Mitsuba's particle tracer (its path tracer

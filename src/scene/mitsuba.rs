@@ -2536,7 +2536,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let eta = match props.take(eta_slot) {
             Some(n) => {
                 let (eta, texture) = self.float_or_texture(n, eta_slot)?;
-                if texture.is_none() && !(eta > 0.0) {
+                if texture.is_none() && (eta.is_nan() || eta <= 0.0) {
                     let message = format!("eta {eta}: must be positive");
                     return Err(self.attr_error(n, "value", message));
                 }
