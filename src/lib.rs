@@ -7,6 +7,8 @@
 //! compare, bench, plots) is one client of them.
 
 pub mod app;
+#[cfg(feature = "cli")]
+pub mod cli;
 pub mod error;
 pub mod gpu;
 pub mod graph;

@@ -163,9 +163,12 @@ fn furnace_matrix_at(furnace: &str, scene_file: &str, spp: u64) {
                 }
                 rendered.push((label.clone(), key));
                 let start = std::time::Instant::now();
-                let parsed =
-                    hppm::graph::parse_graph(&repo_path(graph), &text, hppm::passes::registry())
-                        .unwrap_or_else(|e| panic!("{label}: {e}"));
+                let parsed = hppm::graph::parse_graph(
+                    &repo_path(graph),
+                    &text,
+                    hppm::passes::builtin_kinds(),
+                )
+                .unwrap_or_else(|e| panic!("{label}: {e}"));
                 let mut r = Renderer::new(&gpu, &scene, parsed, w, h, 3)
                     .unwrap_or_else(|e| panic!("{label}: renderer: {e}"));
                 let spp = if graph.ends_with("ppm_only.ron") {

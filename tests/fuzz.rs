@@ -204,7 +204,7 @@ fn mutated_graph_files_load_or_name_their_file_and_line() {
     let scene = load_scene("tests/refs/scenes/cornell_glass_sphere/scene.xml");
     let (mut loaded, mut failed, mut rendered) = (0, 0, 0);
     for (path, how) in mutants(GRAPHS, &dir.0, 7) {
-        match hppm::graph::load_graph(&path, hppm::passes::registry()) {
+        match hppm::graph::load_graph(&path, hppm::passes::builtin_kinds()) {
             Err(errors) => {
                 failed += 1;
                 let message = errors.to_string();

@@ -76,7 +76,7 @@ fn hybrid_with_threshold(threshold: f32) -> ValidGraph {
         assert!(text.contains(from), "graphs/hybrid.ron has no {from:?}");
         text = text.replacen(from, &to, 1);
     }
-    parse_graph(&path, &text, hppm::passes::registry()).unwrap_or_else(|e| panic!("{e}"))
+    parse_graph(&path, &text, hppm::passes::builtin_kinds()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Mean of `image` over the pixels in `mask` (all three channels).

@@ -60,7 +60,7 @@ const HitPoints: ResourceKind = ResourceKind::new("hit_points", 0, 48);
 const HitPointTree: ResourceKind = ResourceKind::new("hit_point_tree", 16, 32);
 const Deposits: ResourceKind = ResourceKind::new("deposits", 0, 16);
 
-static REGISTRY: &[PassKind] = &[
+static FAKE_KINDS: &[PassKind] = &[
     PassKind {
         name: "path_trace",
         description: "camera",
@@ -132,12 +132,17 @@ static REGISTRY: &[PassKind] = &[
     },
 ];
 
+/// The fake kinds as a registry's list.
+fn fake_registry() -> Vec<&'static PassKind> {
+    FAKE_KINDS.iter().collect()
+}
+
 fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/graphs/{name}.ron"))
 }
 
 fn errors(name: &str) -> GraphErrors {
-    match load_graph(&data(name), REGISTRY) {
+    match load_graph(&data(name), &fake_registry()) {
         Ok(_) => panic!("{name}.ron should not validate"),
         Err(e) => e,
     }
@@ -261,7 +266,7 @@ fn bad_output() {
 fn output_must_be_an_image() {
     let text = r#"(version: 1, nodes: [(name: "camera", pass: "path_trace")], edges: [],
         output: "camera.hit_points")"#;
-    let errs = match parse_graph(&PathBuf::from("inline.ron"), text, REGISTRY) {
+    let errs = match parse_graph(&PathBuf::from("inline.ron"), text, &fake_registry()) {
         Ok(_) => panic!("hit points are not an image"),
         Err(e) => e,
     };
@@ -294,7 +299,7 @@ fn names_in_order(g: &ValidGraph) -> Vec<&str> {
 
 #[test]
 fn valid_graph_schedules_in_dependency_order() {
-    let g = load_graph(&data("valid_hybrid"), REGISTRY).unwrap_or_else(|e| panic!("{e}"));
+    let g = load_graph(&data("valid_hybrid"), &fake_registry()).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         names_in_order(&g),
         ["camera", "bvh", "photons", "estimate", "resolve"]
@@ -315,8 +320,8 @@ fn valid_graph_schedules_in_dependency_order() {
 fn ties_are_broken_by_file_order_and_dead_nodes_warned() {
     let text = r#"(version: 1, nodes: [(name: "z", pass: "path_trace"), (name: "a", pass: "path_trace")],
         edges: [], output: "a.radiance")"#;
-    let g =
-        parse_graph(&PathBuf::from("inline.ron"), text, REGISTRY).unwrap_or_else(|e| panic!("{e}"));
+    let g = parse_graph(&PathBuf::from("inline.ron"), text, &fake_registry())
+        .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(names_in_order(&g), ["z", "a"]);
     assert_eq!(g.warnings.len(), 1);
     assert!(g.warnings[0].message.contains("\"z\""));
@@ -334,7 +339,7 @@ fn shipped_graphs_validate_against_the_real_registry() {
                 folders.push(path);
                 continue;
             }
-            if let Err(e) = load_graph(&path, hppm::passes::registry()) {
+            if let Err(e) = load_graph(&path, hppm::passes::builtin_kinds()) {
                 panic!("{}: {e}", path.display());
             }
             graphs += 1;
@@ -351,7 +356,7 @@ fn mangled_graphs_never_panic() {
     let path = PathBuf::from("mangled.ron");
     let lines = text.lines().count();
     let check = |t: &str| {
-        if let Err(errs) = parse_graph(&path, t, REGISTRY) {
+        if let Err(errs) = parse_graph(&path, t, &fake_registry()) {
             for e in &errs.0 {
                 assert!(e.location.line >= 1 && e.location.line <= lines + 1, "{e}");
             }
@@ -399,7 +404,7 @@ fn mangled_graphs_never_panic() {
 fn pruning_drops_the_photon_nodes_when_the_scene_has_no_specular_surface() {
     let load = |name: &str| {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(name);
-        load_graph(&path, hppm::passes::registry()).unwrap_or_else(|e| panic!("{e}"))
+        load_graph(&path, hppm::passes::builtin_kinds()).unwrap_or_else(|e| panic!("{e}"))
     };
     let mut hybrid = load("graphs/hybrid.ron");
     let pruned = hybrid.prune(|_| false).expect("prune");
@@ -435,7 +440,7 @@ fn pruning_the_output_node_is_an_error() {
         "output: \"resolve.combined\"",
         "output: \"estimate.radiance\"",
     );
-    let mut graph = parse_graph(&path, &text, hppm::passes::registry()).expect("valid");
+    let mut graph = parse_graph(&path, &text, hppm::passes::builtin_kinds()).expect("valid");
     let error = graph.prune(|_| false).expect_err("output pruned");
     assert!(
         error.to_string().contains("output node \"estimate\""),

@@ -581,7 +581,7 @@ fn render(
     graph: &str,
     seed: u64,
 ) -> Vec<(&'static str, hppm::image::Image)> {
-    let graph = hppm::graph::load_graph(&repo_path(graph), hppm::passes::registry())
+    let graph = hppm::graph::load_graph(&repo_path(graph), hppm::passes::builtin_kinds())
         .unwrap_or_else(|e| panic!("{graph}: {e}"));
     let mut renderer =
         hppm::app::render::Renderer::new(gpu, scene, graph, 32, 32, seed).expect("renderer");

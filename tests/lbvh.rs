@@ -559,7 +559,7 @@ fn refit_gives_every_node_exactly_the_union_of_its_leaves() {
 
 #[test]
 fn unknown_params_are_rejected() {
-    let kind = hppm::passes::registry()
+    let kind = hppm::passes::builtin_kinds()
         .iter()
         .find(|k| k.name == "hit_point_bvh_lbvh")
         .expect("registered");
@@ -584,7 +584,7 @@ fn render_graph(
     if let Some((from, to)) = replace {
         text = text.replace(from, to);
     }
-    let graph = hppm::graph::parse_graph(Path::new(&path), &text, hppm::passes::registry())
+    let graph = hppm::graph::parse_graph(Path::new(&path), &text, hppm::passes::builtin_kinds())
         .unwrap_or_else(|e| panic!("{graph_file}: {e}"));
     let mut r = hppm::app::render::Renderer::new(&gpu, &scene, graph, size, size, 9)
         .unwrap_or_else(|e| panic!("renderer: {e}"));

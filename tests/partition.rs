@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use hppm::graph::{GraphErrors, ValidGraph, parse_graph};
-use hppm::passes::{paths, registry};
+use hppm::passes::{builtin_kinds, paths};
 
 fn bundled(name: &str) -> (PathBuf, String) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(name);
@@ -22,7 +22,7 @@ fn check(graph: &str, edits: &[(&str, &str)]) -> Result<ValidGraph, GraphErrors>
         assert!(text.contains(from), "{graph} has no {from:?}");
         text = text.replacen(from, to, 1);
     }
-    let graph = parse_graph(&path, &text, registry())?;
+    let graph = parse_graph(&path, &text, builtin_kinds())?;
     graph.check_transport(&paths::CLASSES)?;
     Ok(graph)
 }
@@ -119,7 +119,7 @@ fn hit_points_feeding_only_the_radius_aov_drop_nothing() {
     let text = text
         .replace("edges: [],", "edges: [\"camera.radiance -> resolve.pt\", \"camera.hit_points -> resolve.hit_points\"],")
         .replace("output: \"camera.radiance\"", "output: \"resolve.combined\"");
-    let graph = parse_graph(&path, &text, registry()).unwrap_or_else(|e| panic!("{e}"));
+    let graph = parse_graph(&path, &text, builtin_kinds()).unwrap_or_else(|e| panic!("{e}"));
     graph
         .check_transport(&paths::CLASSES)
         .unwrap_or_else(|e| panic!("{e}"));

@@ -148,7 +148,7 @@ fn render_edge(
             r#"(version: 1, nodes: [(name: "camera", pass: "path_trace",
             params: (samples_per_iteration: {per_iteration}))], edges: [], output: "camera.radiance")"#
         ),
-        hppm::passes::registry(),
+        hppm::passes::builtin_kinds(),
     )
     .expect("graph");
     let gpu = gpu();

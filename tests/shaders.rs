@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use hppm::gpu::shaders::{ShaderFile, ShaderLibrary};
-use hppm::passes::{COMMON_MODULES, registry};
+use hppm::passes::{COMMON_MODULES, builtin_kinds};
 use hppm::scene::bvh::BvhNode;
 use hppm::scene::gpu_layout::{
     GpuLight, GpuMaterial, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
@@ -36,7 +36,7 @@ fn validate(module: &naga::Module, what: &str) {
 /// Every entry file some pass kind names, once each.
 fn pass_shaders() -> Vec<ShaderFile> {
     let mut files: Vec<ShaderFile> = Vec::new();
-    for kind in registry() {
+    for kind in builtin_kinds() {
         for file in kind.shaders {
             if !files.contains(file) {
                 files.push(*file);
@@ -392,7 +392,7 @@ fn scene_features_compile_code_in_and_out() {
 #[test]
 fn every_uploaded_struct_matches_its_wgsl_layout() {
     let lib = library(true);
-    let layouts = registry()
+    let layouts = builtin_kinds()
         .iter()
         .flat_map(|kind| kind.layouts)
         .chain(hppm::passes::hit_points::LAYOUTS)

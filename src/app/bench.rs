@@ -36,7 +36,7 @@ fn measure(
     spp: u64,
 ) -> Result<BenchRow, Error> {
     let scene = scene::load(scene_path)?;
-    let graph = graph::load_graph(graph_path, passes::registry())?;
+    let graph = graph::load_graph(graph_path, passes::builtin_kinds())?;
     let mut renderer = Renderer::new(gpu, &scene, graph, SIZE, SIZE, 1)?;
     let never = AtomicBool::new(false);
     renderer.run(

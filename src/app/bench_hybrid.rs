@@ -39,7 +39,7 @@ pub(crate) fn graph_with(path: &Path, replace: Option<(&str, &str)>) -> Result<V
         Some((from, to)) => text.replace(from, to),
         None => text,
     };
-    Ok(parse_graph(path, &text, passes::registry())?)
+    Ok(parse_graph(path, &text, passes::builtin_kinds())?)
 }
 
 pub(crate) fn run_iterations(renderer: &mut Renderer<'_>, iterations: u64) -> Result<f64, Error> {

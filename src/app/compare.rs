@@ -8,14 +8,17 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use crate::Error;
+#[cfg(feature = "cli")]
 use crate::app::plot::{self, Series, SeriesStyle};
 use crate::app::render::{Budget, NodeTime, Renderer};
 use crate::gpu::GpuContext;
 use crate::image::{ErrorMetrics, Image, Provenance};
-use crate::{graph, passes, scene};
+use crate::scene;
 
 /// What to compare (the command line's arguments).
 pub struct CompareOptions {
+    /// The pass kinds the graphs are validated against and rendered with.
+    pub registry: crate::passes::Registry,
     pub scene: PathBuf,
     /// Mitsuba `-D name=value` scene parameters.
     pub defines: Vec<(String, String)>,
@@ -80,7 +83,7 @@ pub struct CompareReport {
     pub runs: Vec<GraphRun>,
     pub peers: Vec<PeerPoint>,
     pub errors_csv: PathBuf,
-    pub plot: PathBuf,
+    pub plot: Option<PathBuf>,
     pub profile_csv: Option<PathBuf>,
 }
 
@@ -246,7 +249,7 @@ pub fn compare(
     let graphs = options
         .graphs
         .iter()
-        .map(|path| graph::load_graph(path, passes::registry()))
+        .map(|path| options.registry.load_graph(path))
         .collect::<Result<Vec<_>, _>>()?;
     std::fs::create_dir_all(&options.out).map_err(|source| Error::Io {
         path: options.out.clone(),
@@ -261,7 +264,11 @@ pub fn compare(
         .zip(labels(&options.graphs))
     {
         progress(&format!("{label}: preparing {}", path.display()));
-        let mut renderer = Renderer::new(gpu, &scene, graph, width, height, options.seed)?;
+        let mut renderer = Renderer::builder(gpu, &scene, graph)
+            .registry(options.registry.clone())
+            .size(width, height)
+            .seed(options.seed)
+            .build()?;
         if let Some(warning) = renderer.unsampled_light_warning() {
             progress(&format!("{label}: {warning}"));
         }
@@ -361,22 +368,46 @@ pub fn compare(
     } else {
         None
     };
-    let plot_path = options.out.join("errors.png");
-    let title = format!("{} on {}", scene_label(&options.scene), gpu.info.name);
-    let series = plot_series(&runs, &peers);
-    crate::image::write_atomically(&plot_path, |temp| {
-        plot::error_vs_time(temp, &title, &series)
-    })?;
+    let plot = write_plot(options, gpu, &runs, &peers)?;
     Ok(CompareReport {
         runs,
         peers,
         errors_csv,
-        plot: plot_path,
+        plot,
         profile_csv,
     })
 }
 
+/// errors.png, the error of every run against time (with the `cli` feature, which brings the
+/// plotting library).
+#[cfg(feature = "cli")]
+fn write_plot(
+    options: &CompareOptions,
+    gpu: &GpuContext,
+    runs: &[GraphRun],
+    peers: &[PeerPoint],
+) -> Result<Option<PathBuf>, Error> {
+    let plot_path = options.out.join("errors.png");
+    let title = format!("{} on {}", scene_label(&options.scene), gpu.info.name);
+    let series = plot_series(runs, peers);
+    crate::image::write_atomically(&plot_path, |temp| {
+        plot::error_vs_time(temp, &title, &series)
+    })?;
+    Ok(Some(plot_path))
+}
+
+#[cfg(not(feature = "cli"))]
+fn write_plot(
+    _: &CompareOptions,
+    _: &GpuContext,
+    _: &[GraphRun],
+    _: &[PeerPoint],
+) -> Result<Option<PathBuf>, Error> {
+    Ok(None)
+}
+
 /// `refs/scenes/x/scene.xml` -> `x`; `scenes/furnace.ron` -> `furnace`.
+#[cfg(feature = "cli")]
 fn scene_label(path: &Path) -> String {
     let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned());
     match (stem.as_deref(), path.parent().and_then(|p| p.file_name())) {
@@ -471,6 +502,7 @@ pub fn profile_csv_text(runs: &[GraphRun]) -> String {
 
 /// Per graph its measured error (when there is a reference) and its estimate, dashed in the
 /// same colour; then the peers.
+#[cfg(feature = "cli")]
 fn plot_series(runs: &[GraphRun], peers: &[PeerPoint]) -> Vec<Series> {
     let mut series = Vec::new();
     for (index, run) in runs.iter().enumerate() {

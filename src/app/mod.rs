@@ -1,5 +1,5 @@
 //! The application on top of the library: the render loop and its budgets, `hppm compare`,
-//! `hppm bench`, plots and profile tables. The CLI (src/main.rs) calls these.
+//! `hppm bench`, plots and profile tables. The CLI (src/cli.rs) calls these.
 
 pub mod adaptive;
 pub mod bench;
@@ -8,6 +8,7 @@ pub mod bench_hybrid;
 pub mod bench_seed;
 pub mod compare;
 pub mod error_estimate;
+#[cfg(feature = "cli")]
 pub mod plot;
 pub mod render;
 pub mod state;

@@ -15,7 +15,7 @@ use crate::graph::exec::PreparedGraph;
 use crate::graph::pass::{Counters, IMAGE, Resource, Schedule, Shared};
 use crate::image::Image;
 use crate::passes::hit_points::KERNEL_BIAS;
-use crate::passes::{SceneResources, TablePlacement, paths, scene_meets, shader_library};
+use crate::passes::{Registry, SceneResources, TablePlacement, paths};
 use crate::scene::Scene;
 use crate::scene::gpu_layout::GpuScene;
 
@@ -139,6 +139,69 @@ pub struct Renderer<'a> {
     delta_caustics: bool,
 }
 
+/// Puts one item a program shares with its passes into a band's [`Shared`].
+type ShareItem = Box<dyn Fn(&mut Shared)>;
+
+/// Builds a [`Renderer`] ([`Renderer::builder`]).
+pub struct RendererBuilder<'a, 's> {
+    gpu: &'a GpuContext,
+    scene: &'s Scene,
+    graph: ValidGraph,
+    size: (u32, u32),
+    seed: u64,
+    schedule: Schedule,
+    bands: Option<u32>,
+    registry: Registry,
+    /// Each puts one item the program shares with its passes into a band's [`Shared`].
+    shared: Vec<ShareItem>,
+}
+
+impl<'a> RendererBuilder<'a, '_> {
+    /// The pass kinds, WGSL modules and scene-need tests the graph was validated against
+    /// (default: [`Registry::builtin`]).
+    pub fn registry(mut self, registry: Registry) -> Self {
+        self.registry = registry;
+        self
+    }
+
+    /// The image size (default: the scene's film).
+    pub fn size(mut self, width: u32, height: u32) -> Self {
+        self.size = (width, height);
+        self
+    }
+
+    /// The seed of every random stream (default 0).
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// Which global iterations to run (default: all, from 0).
+    pub fn schedule(mut self, schedule: Schedule) -> Self {
+        self.schedule = schedule;
+        self
+    }
+
+    /// Render in this many bands of rows (default: the fewest whose buffers fit the adapter).
+    pub fn bands(mut self, bands: u32) -> Self {
+        self.bands = Some(bands);
+        self
+    }
+
+    /// Shares `item` with every pass ([`Shared::get`] in `prepare`), as the render shares the
+    /// scene's GPU tables; each band of the image gets a clone.
+    pub fn share<T: std::any::Any + Clone>(mut self, item: T) -> Self {
+        self.shared.push(Box::new(move |shared: &mut Shared| {
+            shared.insert(item.clone())
+        }));
+        self
+    }
+
+    pub fn build(self) -> Result<Renderer<'a>, Error> {
+        Renderer::build(self)
+    }
+}
+
 /// An error estimate made during a render, without its per-pixel image.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ErrorReport {
@@ -217,12 +280,69 @@ impl<'a> Renderer<'a> {
     pub fn with_bands(
         gpu: &'a GpuContext,
         scene: &Scene,
-        mut graph: ValidGraph,
+        graph: ValidGraph,
         (width, height): (u32, u32),
         seed: u64,
         schedule: Schedule,
         bands: Option<u32>,
     ) -> Result<Self, Error> {
+        let mut builder = Self::builder(gpu, scene, graph)
+            .size(width, height)
+            .seed(seed)
+            .schedule(schedule);
+        builder.bands = bands;
+        builder.build()
+    }
+
+    /// A renderer with every choice spelled out: the pass registry (the built-in one unless
+    /// given), what the render shares with its passes, size, seed, schedule and bands.
+    ///
+    /// ```no_run
+    /// # fn main() -> Result<(), hppm::Error> {
+    /// let gpu = hppm::gpu::GpuContext::new(None)?;
+    /// let scene = hppm::scene::load(std::path::Path::new("scene.xml"))?;
+    /// let registry = hppm::passes::Registry::builtin();
+    /// let graph = registry.bundled_graph("hybrid")?;
+    /// let mut renderer = hppm::app::render::Renderer::builder(&gpu, &scene, graph)
+    ///     .registry(registry)
+    ///     .size(256, 256)
+    ///     .build()?;
+    /// renderer.iterate()?;
+    /// let image = renderer.image()?;
+    /// # let _ = image;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn builder<'s>(
+        gpu: &'a GpuContext,
+        scene: &'s Scene,
+        graph: ValidGraph,
+    ) -> RendererBuilder<'a, 's> {
+        RendererBuilder {
+            gpu,
+            scene,
+            graph,
+            size: (scene.camera.width, scene.camera.height),
+            seed: 0,
+            schedule: Schedule::default(),
+            bands: None,
+            registry: Registry::builtin(),
+            shared: Vec::new(),
+        }
+    }
+
+    fn build(builder: RendererBuilder<'a, '_>) -> Result<Self, Error> {
+        let RendererBuilder {
+            gpu,
+            scene,
+            mut graph,
+            size: (width, height),
+            seed,
+            schedule,
+            bands,
+            registry,
+            shared: shared_items,
+        } = builder;
         if schedule.stride == 0 {
             return Err(Error::Other(
                 "a schedule's stride must be at least 1".into(),
@@ -232,12 +352,12 @@ impl<'a> Renderer<'a> {
         // without a word either.
         scene.check_extent()?;
         let features = scene.features();
-        let pruned = graph.prune(|need| scene_meets(&features, need))?;
+        let pruned = graph.prune(|need| registry.scene_meets(scene, &features, need))?;
         graph.check_transport(&paths::CLASSES)?;
         let mut gpu_scene = GpuScene::new(scene, width, height);
         let scene_hash = scene_fingerprint(&gpu_scene);
         let placement = TablePlacement::for_adapter(gpu, &gpu_scene)?;
-        let shaders = shader_library(gpu.has_float_atomics(), scene, &placement)?;
+        let shaders = registry.shader_library(gpu.has_float_atomics(), scene, &placement)?;
         let halo = halo_rows(scene);
         let table_bytes = gpu_scene.table_bytes();
         // The tables once; every band binds them with its own uniform.
@@ -260,6 +380,9 @@ impl<'a> Renderer<'a> {
                 let mut shared = Shared::default();
                 shared.insert(tables.with_uniform(gpu, &gpu_scene.uniform)?);
                 shared.insert(mask.clone());
+                for share in &shared_items {
+                    share(&mut shared);
+                }
                 let graph = PreparedGraph::new(
                     gpu,
                     &shaders,

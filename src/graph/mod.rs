@@ -215,8 +215,9 @@ impl ValidGraph {
     }
 }
 
-/// Reads and validates a graph file against `registry`.
-pub fn load_graph(path: &Path, registry: &'static [PassKind]) -> Result<ValidGraph, GraphErrors> {
+/// Reads and validates a graph file against the pass kinds of a registry
+/// (`hppm::passes::Registry` holds the built-in ones and a program's own).
+pub fn load_graph(path: &Path, registry: &[&'static PassKind]) -> Result<ValidGraph, GraphErrors> {
     let text = std::fs::read_to_string(path).map_err(|e| {
         GraphErrors(vec![GraphError {
             location: Location::new(path, 1, 1),

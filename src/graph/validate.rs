@@ -69,7 +69,7 @@ struct Resolved {
 pub fn parse_graph(
     file: &Path,
     text: &str,
-    registry: &'static [PassKind],
+    registry: &[&'static PassKind],
 ) -> Result<ValidGraph, GraphErrors> {
     let parsed: GraphFile = ron::Options::default().from_str(text).map_err(|e| {
         GraphErrors(vec![GraphError {
@@ -167,12 +167,12 @@ pub fn parse_graph(
 
 fn resolve_kind(
     report: &mut Report,
-    registry: &'static [PassKind],
+    registry: &[&'static PassKind],
     pass: &str,
     spans: &NodeSpans,
 ) -> Option<&'static PassKind> {
     if let Some(kind) = registry.iter().find(|k| k.name == pass) {
-        return Some(kind);
+        return Some(*kind);
     }
     let at = spans
         .field("pass")

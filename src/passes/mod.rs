@@ -12,6 +12,7 @@ pub mod photon_grid;
 pub mod photon_trace;
 pub mod ppm;
 pub mod pppm;
+mod registry;
 pub mod resolve;
 pub mod rng;
 pub mod scene_resources;
@@ -26,21 +27,39 @@ use crate::graph::pass::{PassKind, SceneNeed};
 use crate::scene::{Scene, SceneFeatures};
 use crate::shader_file;
 
+/// `bundled!("pt")`: the entry of graphs/pt.ron in [`BUNDLED_GRAPHS`].
+macro_rules! bundled {
+    ($name:literal) => {
+        (
+            $name,
+            concat!("graphs/", $name, ".ron"),
+            include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/graphs/",
+                $name,
+                ".ron"
+            )),
+        )
+    };
+}
+
+pub use registry::{NeedTest, Registry};
 pub use scene_resources::{PlacementRule, SceneResources, TablePlacement};
 
-/// All pass kinds, in the order `hppm info` lists them.
-pub fn registry() -> &'static [PassKind] {
-    static KINDS: &[PassKind] = &[
-        path_trace::KIND,
-        hit_point_bvh_sah::KIND,
-        hit_point_bvh_lbvh::KIND,
-        hit_point_grid::KIND,
-        photon_trace::KIND,
-        photon_grid::KIND,
-        sppm::KIND,
-        ppm::KIND,
-        pppm::KIND,
-        resolve::KIND,
+/// The built-in pass kinds, in the order `hppm info` lists them ([`Registry::builtin`] holds
+/// them, and a program adds its own there).
+pub fn builtin_kinds() -> &'static [&'static PassKind] {
+    static KINDS: &[&PassKind] = &[
+        &path_trace::KIND,
+        &hit_point_bvh_sah::KIND,
+        &hit_point_bvh_lbvh::KIND,
+        &hit_point_grid::KIND,
+        &photon_trace::KIND,
+        &photon_grid::KIND,
+        &sppm::KIND,
+        &ppm::KIND,
+        &pppm::KIND,
+        &resolve::KIND,
     ];
     KINDS
 }
@@ -133,19 +152,45 @@ pub fn all_scene_defs() -> HashMap<String, ShaderDefValue> {
     defs_of(SCENE_DEFS.iter().copied())
 }
 
-/// The shader library the passes compose against for `scene` on a device with or without
-/// float atomics, with its tables bound as `placement` says.
+/// The shader library the built-in passes compose against for `scene` on a device with or
+/// without float atomics, with its tables bound as `placement` says
+/// ([`Registry::shader_library`] for a registry of one's own).
 pub fn shader_library(
     float_atomics: bool,
     scene: &Scene,
     placement: &TablePlacement,
 ) -> Result<ShaderLibrary, crate::Error> {
-    let mut defs = scene_defs(&scene.features());
-    if crate::scene::texture::has_float_bitmaps(&scene.textures) {
-        defs.extend(defs_of(["FLOAT_TEXELS"]));
-    }
-    defs.extend(placement.defs());
-    Ok(ShaderLibrary::new(float_atomics, defs, COMMON_MODULES)?)
+    Registry::builtin().shader_library(float_atomics, scene, placement)
+}
+
+/// The graphs shipped in `graphs/`, by name (the file name without `.ron`), with the path
+/// errors name them by and their text, compiled into the library.
+pub const BUNDLED_GRAPHS: &[(&str, &str, &str)] = &[
+    bundled!("hybrid"),
+    bundled!("pt"),
+    bundled!("hybrid_ppm"),
+    bundled!("hybrid_pppm"),
+    bundled!("hybrid_lbvh"),
+    bundled!("hybrid_grid"),
+    bundled!("hybrid_all_depths"),
+    bundled!("hybrid_first_vertex"),
+    bundled!("hybrid_glossy"),
+    bundled!("ppm_only"),
+];
+
+/// A bundled graph's path (for messages) and text.
+pub fn bundled_graph(name: &str) -> Result<(&'static str, &'static str), crate::Error> {
+    BUNDLED_GRAPHS
+        .iter()
+        .find(|(n, _, _)| *n == name)
+        .map(|(_, file, text)| (*file, *text))
+        .ok_or_else(|| {
+            let names: Vec<&str> = BUNDLED_GRAPHS.iter().map(|g| g.0).collect();
+            crate::Error::Other(format!(
+                "no bundled graph \"{name}\"; the bundled graphs: {}",
+                names.join(", ")
+            ))
+        })
 }
 
 /// Classes of light paths for the partition check (graph/transport.rs), relative to a camera
@@ -225,16 +270,6 @@ pub const SPECULAR_OR_GLOSSY_SURFACE: SceneNeed = SceneNeed {
                   dielectric, plastic) smoother than the glossy_threshold",
     glossy_below: 0.0,
 };
-
-/// Whether a scene with `features` meets `need` (pruning asks).
-pub fn scene_meets(features: &SceneFeatures, need: &SceneNeed) -> bool {
-    match need.name {
-        "specular_surface" => features.has_specular_surface(),
-        "specular_or_glossy_surface" => features.has_specular_or_glossy_surface(need.glossy_below),
-        // A need no pass declares here is one no scene can be said to meet.
-        _ => false,
-    }
-}
 
 /// Depth at which Russian roulette starts when a path's depth is unbounded and no other start is
 /// given (Mitsuba's default `rr_depth`).

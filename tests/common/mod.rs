@@ -26,7 +26,7 @@ pub fn gpu() -> GpuContext {
 }
 
 pub fn load_graph(relative: &str) -> ValidGraph {
-    graph::load_graph(&repo_path(relative), hppm::passes::registry())
+    graph::load_graph(&repo_path(relative), hppm::passes::builtin_kinds())
         .unwrap_or_else(|e| panic!("{relative}: {e}"))
 }
 

@@ -1,0 +1,982 @@
+//! The `hppm` command line: render, info, graph, bench.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::app::bench;
+use crate::app::render::{Budget, Renderer};
+use crate::app::state::{Origin, StateFile, checkpoint_file, graph_fingerprint, shard_file};
+use crate::gpu::{GpuContext, GpuError};
+use crate::graph::pass::Schedule;
+use crate::image::{OutputFormat, Provenance};
+use crate::passes::Registry;
+use crate::{Error, scene};
+use clap::{Args, Parser, Subcommand};
+
+/// hppm: path tracing + progressive photon mapping on the GPU, as a render graph.
+#[derive(Parser)]
+#[command(name = "hppm", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene through a graph.
+    Render(RenderArgs),
+    /// List GPU adapters and the features hppm uses.
+    Info,
+    /// Print the Mitsuba 3 plugins and properties the scene loader reads, with Mitsuba's
+    /// defaults and what hppm does with each (the README's table, in Markdown).
+    Plugins,
+    /// Check a scene file: every problem in it at once, each with file:line:col, as errors
+    /// (it cannot render) and warnings (it renders without that); exits 0 when it renders.
+    Check {
+        scene: PathBuf,
+        /// Set a scene parameter (see `render -D`).
+        #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+        defines: Vec<(String, String)>,
+    },
+    /// Validate a graph file and print its schedule.
+    Graph {
+        file: PathBuf,
+        /// Print Graphviz instead of the schedule.
+        #[arg(long)]
+        dot: bool,
+        /// Prune the graph for this scene first (drop what the scene has no use for).
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// Set a parameter of the --scene (see `render -D`).
+        #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+        defines: Vec<(String, String)>,
+    },
+    /// Render several graphs for the same time and plot their error against time.
+    Compare(CompareArgs),
+    /// Sum the shards of one render (`hppm render --shard k/n`) into its image.
+    Merge(MergeArgs),
+    /// Measure rays/s and samples/s of path_trace on the bundled Cornell scenes; with
+    /// --hybrid, the hybrid's figures (node times, BVH build, report workload, equal-time error);
+    /// with --gather, the hit-point structures (CPU SAH BVH, GPU LBVH, hash grid: build + gather).
+    Bench(BenchArgs),
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file (.xml Mitsuba 3, .ron, .obj); default: the bundled Cornell box.
+    scene: Option<PathBuf>,
+    /// Set a scene parameter, as `mitsuba -D name=value`: replaces the Mitsuba scene's
+    /// `<default name="name">` and fills every `$name` (repeat for each).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+    defines: Vec<(String, String)>,
+    /// Render graph (RON); default: graphs/hybrid.ron.
+    #[arg(long)]
+    graph: Option<PathBuf>,
+    /// Samples per pixel to render.
+    #[arg(long, conflicts_with = "time")]
+    spp: Option<u64>,
+    /// Seconds to render for.
+    #[arg(long)]
+    time: Option<f64>,
+    /// Photons to emit in total (graphs with a photon pass); stops at whichever budget comes
+    /// first.
+    #[arg(long)]
+    photons: Option<u64>,
+    /// Stop once the estimated relMSE (printed as the render runs) falls below this; --time,
+    /// --spp or --photons caps the render.
+    #[arg(long, value_name = "RELMSE")]
+    target_error: Option<f64>,
+    /// With --target-error: pixels whose estimated error is below the target stop receiving
+    /// samples (path tracing graphs such as graphs/pt.ron; --spp then caps each pixel).
+    #[arg(long)]
+    adaptive: bool,
+    /// Also write every image output of the graph's output node (e.g. `pt`, `caustic`,
+    /// `radius` of `resolve`) next to `--out`, as OUT.SLOT.EXT, and the per-pixel error
+    /// estimate as OUT.error.exr.
+    #[arg(long)]
+    aovs: bool,
+    /// Image size WxH (default: the scene's film).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Seed of every random stream (default 0; a resumed render takes the checkpoint's).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Output image: .exr (linear float) or .png (sRGB); with --shard, the shard's
+    /// accumulators (a state file for `hppm merge`, any name).
+    #[arg(long, default_value = "render.exr")]
+    out: PathBuf,
+    /// Render only iterations K, K+N, K+2N, ... of the budget (0 <= K < N), and write raw
+    /// accumulators to --out for `hppm merge`. Needs a budget in --spp or --photons.
+    #[arg(long, value_parser = parse_shard)]
+    shard: Option<(u64, u64)>,
+    /// Write the render's full state to FILE (atomically) every --checkpoint-every seconds,
+    /// at the end and on Ctrl-C.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(long, default_value_t = 300.0)]
+    checkpoint_every: f64,
+    /// Continue the render saved in this checkpoint (same scene, graph and shard) to the
+    /// budget given now; the image is the one the uninterrupted render would have made.
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Adapter index (see `hppm info`) or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Time every node (GPU timestamps where the adapter has them, CPU wall clock always) and
+    /// print a table; nodes then run one at a time, so the render is slower.
+    #[arg(long)]
+    profile: bool,
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// Shard files written by `hppm render --shard k/n`.
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// Output image: .exr (linear float) or .png (sRGB).
+    #[arg(long)]
+    out: PathBuf,
+    /// Merge the shards present even when some of the n are missing (an image of fewer
+    /// samples, still unbiased for pt and pppm).
+    #[arg(long)]
+    partial: bool,
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// Scene file (.xml Mitsuba 3, .ron, .obj).
+    scene: PathBuf,
+    /// Set a scene parameter, as `mitsuba -D name=value`: replaces the Mitsuba scene's
+    /// `<default name="name">` and fills every `$name` (repeat for each).
+    #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
+    defines: Vec<(String, String)>,
+    /// Reference image (EXR) the same size as the renders; without one, the error is only
+    /// estimated (from the render itself).
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// A graph to render (repeat for each).
+    #[arg(long = "graph", required = true)]
+    graphs: Vec<PathBuf>,
+    /// Seconds of rendering per graph (readback for the snapshots is not counted).
+    #[arg(long)]
+    time: f64,
+    /// Snapshots per graph, log-spaced from 1% of --time to --time.
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    snapshots: u64,
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// CSV of another renderer's measurements (columns seconds,relmse,label) to plot too.
+    #[arg(long)]
+    peer: Option<PathBuf>,
+    /// Measure only the pixels where this EXR image is zero.
+    #[arg(long)]
+    mask: Option<PathBuf>,
+    /// Output folder: errors.csv, errors.png, one EXR per graph (and profile.csv).
+    #[arg(long)]
+    out: PathBuf,
+    /// Time every node (see `render --profile`); store the table in DIR/profile.csv.
+    #[arg(long)]
+    profile: bool,
+    /// Image size WxH (default: the scene's film).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Adapter index (see `hppm info`) or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// Adapter index (see `hppm info`) or part of its name.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Samples per pixel for each measurement.
+    #[arg(long, default_value_t = 64)]
+    spp: u64,
+    /// Append the results to this Markdown file (e.g. BENCHMARKS.md).
+    #[arg(long)]
+    write: Option<PathBuf>,
+    /// Benchmark the hybrid instead (needs tests/refs from the source tree).
+    #[arg(long)]
+    hybrid: bool,
+    /// Benchmark the hit-point structures instead (CPU SAH BVH, GPU LBVH, hash grid; build +
+    /// gather at 16K, 262K and 1M hit points).
+    #[arg(long, alias = "lbvh", conflicts_with = "hybrid")]
+    gather: bool,
+    /// Wall-clock budgets for the equal-time error table, comma-separated (with --hybrid).
+    #[arg(long, value_delimiter = ',', default_value = "10,60")]
+    seconds: Vec<f64>,
+    /// Iterations of the 512x512 report workload to run (with --hybrid).
+    #[arg(long, default_value_t = 4)]
+    workload_iterations: u64,
+    /// Render the seed report's Cornell workload whole (512x512, 512 spp, 2M photons) with pt,
+    /// ppm_only and hybrid: whole-run seconds, per-node times, rays/s.
+    #[arg(long, conflicts_with_all = ["hybrid", "gather"])]
+    seed_workload: bool,
+    /// Fraction of the seed workload's samples and photons to render (with --seed-workload).
+    #[arg(long, default_value_t = 1.0, requires = "seed_workload")]
+    scale: f64,
+}
+
+/// `NAME=VALUE` of `-D`: a name as Mitsuba's `$name` references spell it (letters, digits,
+/// `_`), any value.
+fn parse_define(text: &str) -> Result<(String, String), String> {
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("expected NAME=VALUE, e.g. -D spp=16, got {text:?}"))?;
+    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(format!(
+            "parameter name {name:?} must be letters, digits and _ (as in $name)"
+        ));
+    }
+    Ok((name.to_string(), value.to_string()))
+}
+
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WxH, e.g. 512x512, got {text:?}"))?;
+    let parse = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&v| (1..=scene::MAX_FILM_SIDE).contains(&v))
+            .ok_or_else(|| {
+                format!(
+                    "size {s:?} is not a whole number from 1 to {}",
+                    scene::MAX_FILM_SIDE
+                )
+            })
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+/// `k/n` with 0 <= k < n.
+fn parse_shard(text: &str) -> Result<(u64, u64), String> {
+    let (k, n) = text
+        .split_once('/')
+        .ok_or_else(|| format!("expected K/N, e.g. 0/4, got {text:?}"))?;
+    let k: u64 = k
+        .trim()
+        .parse()
+        .map_err(|_| format!("shard index {k:?} is not a whole number"))?;
+    let n: u64 = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("shard count {n:?} is not a whole number"))?;
+    if n == 0 || k >= n {
+        return Err(format!("shard {k}/{n}: need 0 <= K < N"));
+    }
+    Ok((k, n))
+}
+
+/// A file shipped with hppm, found relative to the working directory or, failing that, to the
+/// source tree the binary was built from.
+fn bundled(relative: &str) -> PathBuf {
+    let local = PathBuf::from(relative);
+    if local.exists() {
+        return local;
+    }
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+fn cancel_flag() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let handler_flag = flag.clone();
+    // A second handler cannot be installed (e.g. in an embedding program): rendering still works,
+    // only Ctrl-C then ends the process without writing.
+    let _ = ctrlc::set_handler(move || handler_flag.store(true, Ordering::Relaxed));
+    flag
+}
+
+fn progress_bar(budget: Budget) -> indicatif::ProgressBar {
+    let (length, template) = match (budget.spp, budget.seconds) {
+        (Some(spp), _) => (spp, "{bar:40} {pos}/{len} spp  {msg}  eta {eta}"),
+        (None, Some(s)) => ((s * 1000.0) as u64, "{bar:40} {msg}  eta {eta}"),
+        (None, None) => (0, "{msg}"),
+    };
+    let bar = indicatif::ProgressBar::new(length);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(template) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
+    let scene_path = args
+        .scene
+        .unwrap_or_else(|| bundled("scenes/cornell_box.ron"));
+    let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron"));
+    if args.shard.is_none() {
+        OutputFormat::of(&args.out)?;
+    }
+    // A missing or read-only folder is found now, not after the render.
+    crate::image::check_writable(&args.out)?;
+    if let Some(checkpoint) = &args.checkpoint {
+        crate::image::check_writable(checkpoint)?;
+        if !(args.checkpoint_every.is_finite() && args.checkpoint_every > 0.0) {
+            return Err(Error::Other(format!(
+                "--checkpoint-every must be a positive number of seconds, got {}",
+                args.checkpoint_every
+            )));
+        }
+    }
+    let resume = match &args.resume {
+        Some(path) => Some((path.clone(), StateFile::read(path)?)),
+        None => None,
+    };
+    let graph_text = std::fs::read_to_string(&graph_path)
+        .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
+    let loading = std::time::Instant::now();
+    let scene = load_scene(&scene_path, &args.defines)?;
+    let features = scene.features();
+    eprintln!(
+        "scene: {features} ({} triangles, loaded in {:.2} s)",
+        scene.triangles.len(),
+        loading.elapsed().as_secs_f64()
+    );
+    if !features.has_lights() {
+        eprintln!(
+            "warning: {} has no light (no emitting shape, no point light): the image will be black",
+            scene_path.display()
+        );
+    }
+    let graph = registry.load_graph(&graph_path)?;
+    for warning in &graph.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let gpu = GpuContext::new(args.adapter.as_deref())?;
+    eprintln!("adapter: {}", gpu.adapter_label());
+    let saved = resume.as_ref().map(|(_, f)| &f.header);
+    let (width, height) = args.size.unwrap_or(match saved {
+        Some(h) => (h.width, h.height),
+        None => (scene.camera.width, scene.camera.height),
+    });
+    let seed = args.seed.or(saved.map(|h| h.seed)).unwrap_or(0);
+    let (shard, shards) = args
+        .shard
+        .or(saved.map(|h| (h.shard, h.shards)))
+        .unwrap_or((0, 1));
+    let implicit_spp = args.time.is_none() && args.photons.is_none() && args.target_error.is_none();
+    let budget = Budget {
+        spp: args
+            .spp
+            .or(if implicit_spp {
+                scene.spp_hint.map(u64::from)
+            } else {
+                None
+            })
+            .or(if implicit_spp { Some(64) } else { None }),
+        seconds: args.time,
+        photons: args.photons,
+        target_error: args.target_error,
+        adaptive: args.adaptive,
+    };
+    budget.check()?;
+    if args.shard.is_some() && args.target_error.is_some() {
+        return Err(Error::Other(
+            "--shard and --target-error: a shard renders a fixed share of the iterations, so \
+             it cannot stop at an error"
+                .into(),
+        ));
+    }
+    if args.shard.is_some() && budget.spp.is_none() && budget.photons.is_none() {
+        return Err(Error::Other(
+            "--shard needs a budget in --spp or --photons: a time budget ends at a different \
+             iteration on every machine, so the shards would not add up to one render"
+                .into(),
+        ));
+    }
+    let schedule = Schedule {
+        first: shard,
+        stride: shards,
+    };
+    let preparing = std::time::Instant::now();
+    let mut renderer = Renderer::builder(&gpu, &scene, graph)
+        .registry(registry.clone())
+        .size(width, height)
+        .seed(seed)
+        .schedule(schedule)
+        .build()?;
+    eprintln!(
+        "prepared in {:.2} s (scene BVH built and uploaded, graph's buffers and pipelines)",
+        preparing.elapsed().as_secs_f64()
+    );
+    let uniform_tables = renderer.placement().uniform_defs();
+    if !uniform_tables.is_empty() {
+        eprintln!(
+            "scene tables in uniform buffers: {}",
+            uniform_tables.join(" ")
+        );
+    }
+    let chunked = renderer.placement().chunked_report();
+    if !chunked.is_empty() {
+        eprintln!(
+            "scene tables larger than one binding, in chunks: {}",
+            chunked.join(", ")
+        );
+    }
+    if let Some(budget) = renderer.placement().node_budget() {
+        eprintln!(
+            "scene BVH collapsed to at most {budget} nodes (a few larger leaves) to fit a uniform binding"
+        );
+    }
+    if let Some((triangles, spheres)) = renderer.placement().every_prim() {
+        eprintln!(
+            "rays test every primitive instead of the BVH ({triangles} triangles, {spheres} spheres)"
+        );
+    }
+    for pruned in renderer.pruned() {
+        eprintln!("{pruned}");
+    }
+    if args.shard.is_some() {
+        if let Some((node, why)) = renderer.shard_refusal() {
+            return Err(Error::Other(format!(
+                "--shard: {} cannot be rendered in shards: {node}: {why}",
+                graph_path.display()
+            )));
+        }
+        renderer.read_terms().map_err(|e| {
+            Error::Other(format!(
+                "--shard: {}'s output cannot be summed over shards: {e}",
+                graph_path.display()
+            ))
+        })?;
+    }
+    let origin = Origin {
+        scene: scene_path.display().to_string(),
+        graph: graph_path.display().to_string(),
+        graph_hash: graph_fingerprint(&graph_text),
+        total_iterations: renderer.total_iterations(budget),
+    };
+    if let Some((path, file)) = &resume {
+        crate::app::state::resume(&mut renderer, &origin, path, file)?;
+        eprintln!(
+            "resumed {}: {} iterations done ({} spp)",
+            path.display(),
+            renderer.iterations(),
+            renderer.samples_per_pixel()
+        );
+    }
+    if args.profile {
+        // The first iteration compiles the pipelines: time the ones after it, when there are.
+        let total = renderer
+            .total_iterations(budget)
+            .map(|t| renderer.schedule().local_count(t));
+        let warm_up = total.is_none_or(|t| t > renderer.iterations() + 1);
+        renderer.profile_from(renderer.iterations() + u64::from(warm_up))?;
+    }
+    if renderer.bands() > 1 {
+        eprintln!(
+            "{width}x{height} does not fit the adapter's bindings whole: rendering it in {} bands \
+             of rows (the photons traced once, for the whole image, and read by every band)",
+            renderer.bands()
+        );
+    }
+    if let Some(warning) = renderer.unsampled_light_warning() {
+        eprintln!("{warning}");
+    }
+    let cancel = cancel_flag();
+    // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
+    eprintln!(
+        "rendering {width}x{height} through {} (Ctrl-C stops and writes the image so far)",
+        graph_path.display()
+    );
+    let bar = progress_bar(budget);
+    if args.shard.is_none() {
+        renderer.watch_error();
+    }
+    let mut last_checkpoint = 0.0;
+    let mut checkpoint_error = None;
+    let summary = renderer.run(budget, &cancel, |r, seconds| {
+        if let Some(path) = &args.checkpoint
+            && seconds - last_checkpoint >= args.checkpoint_every
+            && checkpoint_error.is_none()
+        {
+            last_checkpoint = seconds;
+            if let Err(e) = checkpoint_file(r, &origin).and_then(|f| f.write(path)) {
+                checkpoint_error = Some(e);
+            }
+        }
+        let spp = r.samples_per_pixel();
+        match budget.spp {
+            Some(_) => bar.set_position(spp),
+            None => bar.set_position((seconds * 1000.0) as u64),
+        }
+        let rate = spp as f64 / seconds.max(1e-9);
+        let sampling = match budget.adaptive {
+            true => format!("  sampling {:.0}% of pixels", 100.0 * r.sampled_share()),
+            false => String::new(),
+        };
+        bar.set_message(match r.latest_error() {
+            Some(e) => format!(
+                "{rate:.1} spp/s  estimated relMSE {:.3e}{sampling}",
+                e.relmse
+            ),
+            None => format!("{rate:.1} spp/s{sampling}"),
+        });
+    })?;
+    bar.finish_and_clear();
+    // The estimate at the image written, not the last one made on the way.
+    let (image, estimate) = match args.shard {
+        Some(_) => (None, None),
+        None => {
+            let (image, estimate) = renderer.image_and_error_estimate()?;
+            (Some(image), estimate)
+        }
+    };
+    let unsampled = renderer.unsampled_light_warning().is_some();
+    report_stop(&summary, budget, estimate.as_ref(), unsampled);
+    if let Some(e) = checkpoint_error {
+        return Err(e);
+    }
+    if let Some(path) = &args.checkpoint {
+        checkpoint_file(&renderer, &origin)?.write(path)?;
+        eprintln!(
+            "checkpoint {}: {} iterations",
+            path.display(),
+            renderer.iterations()
+        );
+    }
+    let counters = renderer.counters()?;
+    let mut provenance = Provenance::default()
+        .with("hppm_adapter", gpu.adapter_label())
+        .with("hppm_scene", scene_path.display())
+        .with("hppm_graph", graph_path.display())
+        .with("hppm_spp", renderer.samples_per_pixel())
+        .with("hppm_seed", seed)
+        .with("hppm_seconds", format!("{:.3}", summary.seconds));
+    if budget.adaptive {
+        provenance = provenance.with(
+            "hppm_mean_spp",
+            format!("{:.3}", renderer.mean_samples_per_pixel()),
+        );
+    }
+    if let Some(e) = &estimate {
+        provenance = provenance
+            .with("hppm_estimated_relmse", format!("{:.6e}", e.relmse))
+            .with("hppm_estimated_variance", format!("{:.6e}", e.variance))
+            .with("hppm_estimated_bias", format!("{:.6e}", e.bias));
+    }
+    if !args.defines.is_empty() {
+        let defines: Vec<String> = args
+            .defines
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        provenance = provenance.with("hppm_defines", defines.join(" "));
+    }
+    match image {
+        Some(image) => image.write(&args.out, &provenance)?,
+        None => shard_file(&renderer, &origin)?.write(&args.out)?,
+    }
+    if args.aovs {
+        for (slot, aov) in renderer.aovs()? {
+            let path = aov_path(&args.out, slot);
+            aov.write(&path, &provenance.clone().with("hppm_aov", slot))?;
+            println!("{}: {slot}", path.display());
+        }
+        if let Some(e) = &estimate {
+            let path = aov_path(&args.out.with_extension("exr"), "error");
+            e.per_pixel
+                .write(&path, &provenance.clone().with("hppm_aov", "error"))?;
+            println!(
+                "{}: error (estimated relative squared error)",
+                path.display()
+            );
+        }
+    }
+    let dropped = counters.get("photon_hits_dropped");
+    if dropped > 0 {
+        eprintln!(
+            "warning: {dropped} photon hits did not fit their buffer and were left out (caustics too dark); \
+             lower photons_per_iteration"
+        );
+    }
+    if budget.photons.is_some() && renderer.photons_per_iteration() == 0 {
+        eprintln!("warning: --photons ignored: the graph emits no photons");
+    }
+    if summary.cancelled {
+        eprintln!("interrupted: wrote what was rendered so far");
+    }
+    if args.profile {
+        print!(
+            "{}",
+            crate::app::compare::profile_table(
+                &renderer.node_times(),
+                renderer.profiled_iterations(),
+                &gpu.adapter_label()
+            )
+        );
+    }
+    let spp = match budget.adaptive {
+        true => format!(
+            "{:.1} spp on average (at most {})",
+            renderer.mean_samples_per_pixel(),
+            renderer.samples_per_pixel()
+        ),
+        false => format!("{} spp", renderer.samples_per_pixel()),
+    };
+    println!(
+        "{}: {}x{}, {spp} and {} photons in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
+        args.out.display(),
+        width,
+        height,
+        renderer.photons(),
+        summary.seconds,
+        counters.get("rays") as f64 / summary.seconds.max(1e-9) / 1e6,
+        counters.get("discarded_samples"),
+        gpu.adapter_label()
+    );
+    Ok(())
+}
+
+/// Says what ended the render and the error estimate at its end.
+fn report_stop(
+    summary: &crate::app::render::RunSummary,
+    budget: Budget,
+    estimate: Option<&crate::app::error_estimate::ErrorEstimate>,
+    unsampled_light: bool,
+) {
+    use crate::app::render::Stop;
+    let why = match summary.stop {
+        Stop::Count if budget.spp.is_some() => "the samples asked for (--spp) were rendered",
+        Stop::Count => "the photons asked for (--photons) were emitted",
+        Stop::Time => "the time budget (--time) ran out",
+        Stop::TargetError => "the estimated error fell below --target-error",
+        Stop::Cancelled => "interrupted",
+    };
+    let lower_bound = match unsampled_light {
+        true => ", a lower bound: the caustics this graph cannot sample are missing from it",
+        false => "",
+    };
+    let estimate = estimate.map_or("no error estimate (fewer than 2 iterations)".into(), |e| {
+        format!(
+            "estimated relMSE {:.3e} (noise {:.3e}, kernel bias {:.3e}{lower_bound})",
+            e.relmse, e.variance, e.bias
+        )
+    });
+    match budget.target_error {
+        Some(target) if summary.stop != Stop::TargetError => {
+            eprintln!("stopped before --target-error {target:e}: {why}; {estimate}")
+        }
+        _ => eprintln!("stopped: {why}; {estimate}"),
+    }
+}
+
+/// `render.exr` + `pt` -> `render.pt.exr`.
+fn aov_path(out: &Path, slot: &str) -> PathBuf {
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match out.extension() {
+        Some(ext) => format!("{stem}.{slot}.{}", ext.to_string_lossy()),
+        None => format!("{stem}.{slot}"),
+    };
+    out.with_file_name(name)
+}
+
+fn merge(args: MergeArgs) -> Result<(), Error> {
+    OutputFormat::of(&args.out)?;
+    crate::image::check_writable(&args.out)?;
+    let shards = args
+        .shards
+        .iter()
+        .map(|path| Ok((path.clone(), StateFile::read(path)?)))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let merged = crate::app::state::merge(&shards, args.partial)?;
+    let h = &merged.header;
+    let provenance = Provenance::default()
+        .with("hppm_scene", &h.scene)
+        .with("hppm_graph", &h.graph)
+        .with("hppm_spp", merged.samples_per_pixel)
+        .with("hppm_seed", h.seed)
+        .with(
+            "hppm_shards",
+            format!("{:?} of {}", merged.shards, merged.of),
+        );
+    merged.image.write(&args.out, &provenance)?;
+    println!(
+        "{}: {} of {} shards, {}x{}, {} spp and {} photons",
+        args.out.display(),
+        merged.shards.len(),
+        merged.of,
+        h.width,
+        h.height,
+        merged.samples_per_pixel,
+        merged.photons
+    );
+    Ok(())
+}
+
+fn info(registry: &Registry) -> Result<(), Error> {
+    let adapters = crate::gpu::list_adapters();
+    if adapters.is_empty() {
+        return Err(GpuError::NoAdapter.into());
+    }
+    for (i, (info, features, limits)) in adapters.iter().enumerate() {
+        println!("{i}: {}", crate::gpu::adapter_label(info));
+        println!("   driver: {} {}", info.driver, info.driver_info);
+        if let Some(warning) = crate::gpu::old_lavapipe_warning(info) {
+            println!("   {warning}");
+        }
+        let has = |f: wgpu::Features| if features.contains(f) { "yes" } else { "no" };
+        println!(
+            "   float32 atomics: {}   timestamp queries: {}   subgroups: {}",
+            has(wgpu::Features::SHADER_FLOAT32_ATOMIC),
+            has(wgpu::Features::TIMESTAMP_QUERY),
+            has(wgpu::Features::SUBGROUP)
+        );
+        println!(
+            "   max storage binding: {} MiB   max uniform binding: {} KiB   max buffer: {} MiB",
+            limits.max_storage_buffer_binding_size >> 20,
+            limits.max_uniform_buffer_binding_size >> 10,
+            limits.max_buffer_size >> 20
+        );
+    }
+    println!("pass kinds:");
+    for kind in registry.kinds() {
+        println!("   {:<20} {}", kind.name, kind.description);
+    }
+    Ok(())
+}
+
+fn check_scene(path: &Path, defines: &[(String, String)]) -> Result<(), Error> {
+    let report = scene::check_with(path, defines);
+    for warning in &report.warnings {
+        println!("warning: {warning}");
+    }
+    for error in report.errors.iter().flat_map(|e| e.problems()) {
+        println!("error: {error}");
+    }
+    let (errors, warnings) = (
+        report
+            .errors
+            .iter()
+            .map(|e| e.problems().len())
+            .sum::<usize>(),
+        report.warnings.len(),
+    );
+    match report.scene {
+        Some(scene) if errors == 0 => {
+            println!(
+                "{}: renders ({}; {warnings} warnings)",
+                path.display(),
+                scene.features()
+            );
+            Ok(())
+        }
+        _ => Err(Error::Other(format!(
+            "{}: does not render ({errors} errors, {warnings} warnings)",
+            path.display()
+        ))),
+    }
+}
+
+/// The scene at `path`, its warnings printed.
+fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<scene::Scene, Error> {
+    let scene = scene::load_reporting(path, defines, |w| eprintln!("warning: {w}"))?;
+    Ok(scene)
+}
+
+fn show_graph(
+    registry: &Registry,
+    file: &Path,
+    dot: bool,
+    scene_path: Option<&Path>,
+    defines: &[(String, String)],
+) -> Result<(), Error> {
+    let mut graph = registry.load_graph(file)?;
+    for warning in &graph.warnings {
+        eprintln!("warning: {warning}");
+    }
+    if let Some(scene_path) = scene_path {
+        let scene = load_scene(scene_path, defines)?;
+        let features = scene.features();
+        println!("scene: {features}");
+        for pruned in graph.prune(|need| registry.scene_meets(&scene, &features, need))? {
+            println!("{pruned}");
+        }
+    }
+    graph.check_transport(&crate::passes::paths::CLASSES)?;
+    if dot {
+        print!("{}", graph.to_dot());
+    } else {
+        print!("{}", graph.schedule_text());
+    }
+    Ok(())
+}
+
+fn compare(args: CompareArgs, registry: &Registry) -> Result<(), Error> {
+    let gpu = GpuContext::new(args.adapter.as_deref())?;
+    eprintln!("adapter: {}", gpu.adapter_label());
+    let options = crate::app::compare::CompareOptions {
+        registry: registry.clone(),
+        scene: args.scene,
+        defines: args.defines,
+        reference: args.reference,
+        graphs: args.graphs,
+        seconds: args.time,
+        snapshots: args.snapshots as usize,
+        seed: args.seed,
+        peer: args.peer,
+        mask: args.mask,
+        out: args.out,
+        profile: args.profile,
+        size: args.size,
+    };
+    let cancel = cancel_flag();
+    let report = crate::app::compare::compare(&gpu, &options, &cancel, |line| eprintln!("{line}"))?;
+    for run in &report.runs {
+        let last = run.snapshots.last();
+        println!(
+            "{:<20} relMSE {} (estimated {}) after {:.1} s ({} spp); slope {}",
+            run.label,
+            last.and_then(|s| s.metrics)
+                .map_or("-".into(), |m| format!("{:.3e}", m.relmse)),
+            last.and_then(|s| s.estimated)
+                .map_or("-".into(), |e| format!("{:.3e}", e.relmse)),
+            last.map_or(0.0, |s| s.seconds),
+            last.map_or(0, |s| s.spp),
+            run.slope
+                .map_or("n/a (fewer than 2 snapshots)".into(), |s| format!("{s:.2}"))
+        );
+        if options.profile {
+            print!(
+                "{}",
+                crate::app::compare::profile_table(
+                    &run.node_times,
+                    run.profiled_iterations,
+                    &gpu.adapter_label()
+                )
+            );
+        }
+    }
+    for (label, points) in crate::app::compare::peer_groups(&report.peers) {
+        let slope =
+            crate::app::compare::log_log_slope(&points).map_or("n/a".into(), |s| format!("{s:.2}"));
+        println!("{label:<20} (peer) slope {slope}");
+    }
+    println!("{}", report.errors_csv.display());
+    if let Some(plot) = &report.plot {
+        println!("{}", plot.display());
+    }
+    if let Some(profile) = &report.profile_csv {
+        println!("{}", profile.display());
+    }
+    Ok(())
+}
+
+fn bench_hybrid(args: &BenchArgs) -> Result<(), Error> {
+    let options = crate::app::bench_hybrid::HybridBenchOptions {
+        adapter: args.adapter.as_deref(),
+        seconds: args.seconds.clone(),
+        workload_iterations: args.workload_iterations.max(1),
+    };
+    let text = crate::app::bench_hybrid::run(&options, bundled)?;
+    print!("{text}");
+    if let Some(path) = &args.write {
+        bench::append_markdown(path, &text)?;
+    }
+    Ok(())
+}
+
+fn bench_seed(args: &BenchArgs) -> Result<(), Error> {
+    let options = crate::app::bench_seed::SeedWorkloadOptions {
+        adapter: args.adapter.as_deref(),
+        scale: args.scale,
+    };
+    let text = crate::app::bench_seed::run(&options, bundled)?;
+    print!("{text}");
+    if let Some(path) = &args.write {
+        bench::append_markdown(path, &text)?;
+    }
+    Ok(())
+}
+
+fn bench_gather(args: &BenchArgs) -> Result<(), Error> {
+    let text = crate::app::bench_gather::run(args.adapter.as_deref(), bundled)?;
+    print!("{text}");
+    if let Some(path) = &args.write {
+        bench::append_markdown(path, &text)?;
+    }
+    Ok(())
+}
+
+/// On a headless machine Mesa's Vulkan and EGL drivers try to reach a Wayland compositor while
+/// wgpu opens them, and libwayland prints "error: XDG_RUNTIME_DIR is invalid or not set" when
+/// the variable is missing: two lines a user reads as errors of the render. Pointing it at the
+/// temporary folder lets the (failing, harmless) connection attempt stay quiet.
+fn quiet_headless_wayland_probe() {
+    let valid = std::env::var_os("XDG_RUNTIME_DIR")
+        .is_some_and(|dir| Path::new(&dir).is_absolute() && Path::new(&dir).is_dir());
+    if !valid {
+        // SAFETY: `run` is called first thing in `main` (its documented contract), before any
+        // other thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+}
+
+/// Runs the `hppm` command line (`render`, `compare`, `graph`, `info`, ...) on the process's
+/// arguments with the pass kinds, WGSL modules and scene needs of `registry`: a program that
+/// registers passes of its own gets the whole CLI with them in it. Call it first thing in
+/// `main`, before other threads start (it may set `XDG_RUNTIME_DIR` for wgpu's probe).
+pub fn run(registry: Registry) -> ExitCode {
+    run_from(std::env::args_os(), registry)
+}
+
+/// [`run`] on the given arguments (the first is the program's name).
+pub fn run_from(
+    args: impl IntoIterator<Item = impl Into<std::ffi::OsString> + Clone>,
+    registry: Registry,
+) -> ExitCode {
+    quiet_headless_wayland_probe();
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    let result = match cli.command {
+        Command::Render(args) => render(args, &registry),
+        Command::Compare(args) => compare(args, &registry),
+        Command::Merge(args) => merge(args),
+        Command::Info => info(&registry),
+        Command::Check { scene, defines } => check_scene(&scene, &defines),
+        Command::Plugins => {
+            print!("{}", scene::plugins::markdown());
+            Ok(())
+        }
+        Command::Graph {
+            file,
+            dot,
+            scene,
+            defines,
+        } => show_graph(&registry, &file, dot, scene.as_deref(), &defines),
+        Command::Bench(args) if args.hybrid => bench_hybrid(&args),
+        Command::Bench(args) if args.gather => bench_gather(&args),
+        Command::Bench(args) if args.seed_workload => bench_seed(&args),
+        Command::Bench(args) => bench::run(
+            args.adapter.as_deref(),
+            args.spp,
+            args.write.as_deref(),
+            bundled,
+        ),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error}");
+            match error {
+                Error::Gpu(GpuError::NoAdapter) => ExitCode::from(2),
+                _ => ExitCode::FAILURE,
+            }
+        }
+    }
+}

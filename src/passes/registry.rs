@@ -1,0 +1,177 @@
+//! The registry a render is built from: the pass kinds a graph file may name, the WGSL modules
+//! their shaders may import, and how each scene need a pass declares is answered. The built-in
+//! passes are one registry ([`Registry::builtin`]); a program adds its own kinds, modules and
+//! needs to it as values, without changing hppm:
+//!
+//! ```no_run
+//! # use hppm::passes::Registry;
+//! # static MY_KIND: hppm::graph::pass::PassKind = hppm::passes::resolve::KIND;
+//! let registry = Registry::builtin().with(&MY_KIND);
+//! let graph = registry.load_graph(std::path::Path::new("graphs/mine.ron"))?;
+//! # Ok::<(), hppm::graph::GraphErrors>(())
+//! ```
+
+use std::path::Path;
+
+use super::scene_resources::TablePlacement;
+use crate::gpu::shaders::{ShaderFile, ShaderLibrary, defs_of};
+use crate::graph::pass::{PassKind, SceneNeed};
+use crate::graph::{GraphErrors, ValidGraph};
+use crate::scene::{Scene, SceneFeatures};
+
+/// Whether a scene meets a need: the scene, its features (computed once per render) and the
+/// need as the pass declared it.
+pub type NeedTest = fn(&Scene, &SceneFeatures, &SceneNeed) -> bool;
+
+/// Pass kinds, importable WGSL modules and scene-need tests, by value.
+#[derive(Clone)]
+pub struct Registry {
+    kinds: Vec<&'static PassKind>,
+    modules: Vec<ShaderFile>,
+    needs: Vec<(&'static str, NeedTest)>,
+}
+
+impl std::fmt::Debug for Registry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kinds: Vec<&str> = self.kinds.iter().map(|k| k.name).collect();
+        let modules: Vec<&str> = self.modules.iter().map(|m| m.path).collect();
+        let needs: Vec<&str> = self.needs.iter().map(|n| n.0).collect();
+        f.debug_struct("Registry")
+            .field("kinds", &kinds)
+            .field("modules", &modules)
+            .field("needs", &needs)
+            .finish()
+    }
+}
+
+impl Default for Registry {
+    fn default() -> Self {
+        Self::builtin()
+    }
+}
+
+impl Registry {
+    /// hppm's own passes, shared WGSL modules (`shaders/common/`) and scene needs.
+    pub fn builtin() -> Self {
+        Self {
+            kinds: super::builtin_kinds().to_vec(),
+            modules: super::COMMON_MODULES.to_vec(),
+            needs: vec![
+                (super::SPECULAR_SURFACE.name, |_, features, _| {
+                    features.has_specular_surface()
+                }),
+                (
+                    super::SPECULAR_OR_GLOSSY_SURFACE.name,
+                    |_, features, need| features.has_specular_or_glossy_surface(need.glossy_below),
+                ),
+            ],
+        }
+    }
+
+    /// Adds a pass kind; one of the same name replaces the kind registered before (a program
+    /// may swap a built-in's implementation).
+    pub fn with(mut self, kind: &'static PassKind) -> Self {
+        match self.kinds.iter_mut().find(|k| k.name == kind.name) {
+            Some(old) => *old = kind,
+            None => self.kinds.push(kind),
+        }
+        self
+    }
+
+    /// Adds an importable WGSL module (its file's `#define_import_path` names it), after the
+    /// ones already registered: it may import those, and later ones may import it.
+    pub fn with_module(mut self, module: ShaderFile) -> Self {
+        self.modules.push(module);
+        self
+    }
+
+    /// Adds (or replaces) the test that answers the scene need `name` (a [`SceneNeed`] a pass
+    /// declares in [`crate::graph::pass::Pass::needs`]). A need no test answers is never met,
+    /// so its node is pruned.
+    pub fn with_need(mut self, name: &'static str, test: NeedTest) -> Self {
+        self.needs.retain(|(n, _)| *n != name);
+        self.needs.push((name, test));
+        self
+    }
+
+    /// The kinds, built-in first, in the order `hppm info` lists them.
+    pub fn kinds(&self) -> &[&'static PassKind] {
+        &self.kinds
+    }
+
+    pub fn kind(&self, name: &str) -> Option<&'static PassKind> {
+        self.kinds.iter().find(|k| k.name == name).copied()
+    }
+
+    /// The importable modules, in dependency order.
+    pub fn modules(&self) -> &[ShaderFile] {
+        &self.modules
+    }
+
+    /// Whether `scene` (with `features`) meets `need`, as the need's registered test says.
+    pub fn scene_meets(&self, scene: &Scene, features: &SceneFeatures, need: &SceneNeed) -> bool {
+        self.needs
+            .iter()
+            .find(|(name, _)| *name == need.name)
+            .is_some_and(|(_, test)| test(scene, features, need))
+    }
+
+    /// Reads and validates a graph file against these kinds.
+    pub fn load_graph(&self, path: &Path) -> Result<ValidGraph, GraphErrors> {
+        crate::graph::load_graph(path, &self.kinds)
+    }
+
+    /// Validates graph `text` (read from `path`, which errors name) against these kinds.
+    pub fn parse_graph(&self, path: &Path, text: &str) -> Result<ValidGraph, GraphErrors> {
+        crate::graph::parse_graph(path, text, &self.kinds)
+    }
+
+    /// One of the graphs shipped in hppm's `graphs/` folder, by name (`"hybrid"`, `"pt"`, ...;
+    /// see [`super::bundled_graphs`]), validated against these kinds.
+    pub fn bundled_graph(&self, name: &str) -> Result<ValidGraph, crate::Error> {
+        let (file, text) = super::bundled_graph(name)?;
+        Ok(self.parse_graph(Path::new(file), text)?)
+    }
+
+    /// The shader library these passes compose against for `scene` on a device with or without
+    /// float atomics, with its tables bound as `placement` says.
+    pub fn shader_library(
+        &self,
+        float_atomics: bool,
+        scene: &Scene,
+        placement: &TablePlacement,
+    ) -> Result<ShaderLibrary, crate::Error> {
+        let mut defs = super::scene_defs(&scene.features());
+        if crate::scene::texture::has_float_bitmaps(&scene.textures) {
+            defs.extend(defs_of(["FLOAT_TEXELS"]));
+        }
+        defs.extend(placement.defs());
+        Ok(ShaderLibrary::new(float_atomics, defs, &self.modules)?)
+    }
+
+    /// Checks every struct a registered kind uploads (its `layouts`, see
+    /// [`crate::struct_layout!`]) against the WGSL struct it mirrors, composed with every scene
+    /// def: the number checked, or every difference found. A pass's own test calls this.
+    pub fn check_layouts(&self) -> Result<usize, Vec<String>> {
+        let mut defs = super::all_scene_defs();
+        defs.extend(defs_of(["FLOAT_TEXELS"]));
+        let library =
+            ShaderLibrary::new(true, defs, &self.modules).map_err(|e| vec![e.to_string()])?;
+        let mut problems = Vec::new();
+        let mut checked = 0;
+        for layout in self.kinds.iter().flat_map(|k| k.layouts) {
+            match library.compose(&layout.shader) {
+                Ok(module) => match layout.check(&module) {
+                    Ok(()) => checked += 1,
+                    Err(e) => problems.push(e),
+                },
+                Err(e) => problems.push(format!("{}: {e}", layout.shader.path)),
+            }
+        }
+        if problems.is_empty() {
+            Ok(checked)
+        } else {
+            Err(problems)
+        }
+    }
+}
