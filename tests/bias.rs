@@ -38,7 +38,7 @@ const DIFFUSE: &str = "tests/refs/scenes/cornell_diffuse/scene.xml";
 const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const POINT_LIGHT: &str = "tests/refs/scenes/point_light_caustic/scene.xml";
 const WATER: &str = "tests/refs/scenes/water_glass/scene.xml";
-/// The water_glass reference's own noise as relMSE (../shared/refs/README.md: 314,624 spp).
+/// The water_glass reference's own noise as relMSE (tests/refs/README.md: 314,624 spp).
 const WATER_REFERENCE_RELMSE: f64 = 1.4e-4;
 
 /// Own noise of the Mitsuba path-traced references, as relMSE (tests/refs/README.md). The

@@ -1,5 +1,5 @@
 //! Glossy caustics (issue 14): a microfacet lobe smoother than a graph's `glossy_threshold` is a
-//! specular vertex of the light-transport partition (design.md section 1). After a photon-mapped
+//! specular vertex of the light-transport partition (docs/design.md section 1). After a photon-mapped
 //! vertex the camera leaves the light through it to photons, and caustic photons continue
 //! through it; whatever the threshold, `hybrid` must render `pt`'s image.
 //!

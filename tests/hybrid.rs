@@ -1,4 +1,4 @@
-//! The hybrid as a whole (design.md section 1): every path is counted once, so the hybrid graphs
+//! The hybrid as a whole (docs/design.md section 1): every path is counted once, so the hybrid graphs
 //! converge to what path tracing converges to, and render the caustics that path tracing cannot
 //! (from a point light). Tolerances come from measured runs, recorded in BENCHMARKS.md.
 

@@ -47,9 +47,11 @@ fn violations(layer: &str, forbidden: &[&str]) -> Vec<String> {
 #[test]
 fn layers_point_one_way() {
     let rules: &[(&str, &[&str])] = &[
-        ("gpu", &["graph", "passes", "scene", "app", "image"]),
-        ("graph", &["passes", "scene", "app", "image"]),
-        ("scene", &["graph", "passes", "app", "gpu"]),
+        ("gpu", &["graph", "passes", "scene", "app", "cli", "image"]),
+        ("graph", &["passes", "scene", "app", "cli", "image"]),
+        ("scene", &["graph", "passes", "app", "cli", "gpu"]),
+        ("passes", &["app", "cli"]),
+        ("app", &["cli"]),
     ];
     let mut all = Vec::new();
     for (layer, forbidden) in rules {

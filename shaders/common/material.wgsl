@@ -105,7 +105,7 @@ fn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance:
 }
 
 #ifdef GLOSSY
-// The light-transport partition's specular lobes (design.md section 1): every delta lobe, and a
+// The light-transport partition's specular lobes (docs/design.md section 1): every delta lobe, and a
 // microfacet lobe whose roughness at the surface point (the larger of alpha_u and alpha_v,
 // after textures) is below the graph's `glossy_threshold`. Rough plastic's base never is.
 fn microfacet_is_specular(m: Material, threshold: f32) -> bool {

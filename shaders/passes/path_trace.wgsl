@@ -4,7 +4,7 @@
 // invocation renders one or more pixels in turn (`main`, src/passes/lanes.rs).
 //
 // With `merge_depth` > 0 the first `merge_depth` diffuse vertices of the first sample are
-// photon-mapped (design.md section 1): each is recorded as a hit point, and emission reached from
+// photon-mapped (docs/design.md section 1): each is recorded as a hit point, and emission reached from
 // it through one or more specular vertices is dropped, because photon mapping adds exactly that.
 // Only Lambertian vertices are photon-mapped (a hit point's weight is albedo / pi): glossy and
 // plastic-base vertices are path traced (NEE with MIS), and emission reached from them through

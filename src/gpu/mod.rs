@@ -92,6 +92,24 @@ impl GpuContext {
         Self::open(adapter)
     }
 
+    /// Renders on a device a host program already has (its adapter, device and queue; wgpu's
+    /// handles are clones of one device). hppm uses the optional features it wants that the
+    /// device was created with (float atomics, timestamps) and the device's limits. The host's
+    /// uncaptured-error handler stays in place, so GPU errors reach the host, not
+    /// [`GpuContext::check_errors`].
+    pub fn from_device(adapter: wgpu::Adapter, device: wgpu::Device, queue: wgpu::Queue) -> Self {
+        Self {
+            info: adapter.get_info(),
+            features: device.features() & WANTED_FEATURES,
+            limits: device.limits(),
+            adapter,
+            device,
+            queue,
+            first_error: Arc::new(Mutex::new(None)),
+            cache: pipeline_cache::PipelineCache::default(),
+        }
+    }
+
     fn open(adapter: wgpu::Adapter) -> Result<Self, GpuError> {
         let info = adapter.get_info();
         let features = adapter.features() & WANTED_FEATURES;

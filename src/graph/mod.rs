@@ -80,6 +80,24 @@ pub struct ValidGraph {
     pub warnings: Vec<GraphError>,
 }
 
+impl std::fmt::Debug for ValidGraph {
+    /// The file, each node as `name (kind) params`, and the output.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let nodes: Vec<String> = self
+            .nodes
+            .iter()
+            .map(|n| format!("{} ({}) {}", n.name, n.kind.name, n.params))
+            .collect();
+        let (node, slot) = self.output;
+        let output = format!("{}.{slot}", self.nodes.get(node).map_or("?", |n| &n.name));
+        f.debug_struct("ValidGraph")
+            .field("file", &self.file)
+            .field("nodes", &nodes)
+            .field("output", &output)
+            .finish()
+    }
+}
+
 impl ValidGraph {
     /// The same graph with every pass constructed anew from its params: a render that splits
     /// its image into tiles prepares one per tile.

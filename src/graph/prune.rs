@@ -1,5 +1,5 @@
 //! Pruning: after validation, nodes whose needs the scene lacks are removed with their edges
-//! (design.md section 3). Removal cascades: a node loses its place when a required input came
+//! (docs/design.md section 3). Removal cascades: a node loses its place when a required input came
 //! from a removed node, or when everything it fed was removed. Optional inputs of the survivors
 //! simply become unconnected (`resolve` without `caustic` is path tracing alone).
 

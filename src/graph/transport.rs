@@ -33,7 +33,7 @@ impl std::fmt::Display for Depth {
 }
 
 /// The roughness below which a source counts a microfacet lobe as specular (`glossy_threshold`,
-/// design.md section 1), and the node that says so. Sources that split paths into classes at
+/// docs/design.md section 1), and the node that says so. Sources that split paths into classes at
 /// specular vertices must agree on it: a lobe one of them calls specular and the other not is
 /// counted by both or by neither.
 #[derive(Debug, Clone, Copy)]

@@ -194,7 +194,7 @@ pub fn bundled_graph(name: &str) -> Result<(&'static str, &'static str), crate::
 }
 
 /// Classes of light paths for the partition check (graph/transport.rs), relative to a camera
-/// path's photon-mapped vertices (its first `merge_depth` diffuse vertices, design.md section
+/// path's photon-mapped vertices (its first `merge_depth` diffuse vertices, docs/design.md section
 /// 1). A hybrid counts each exactly once: the camera pass all but `CAUSTIC`, the photon pass
 /// and estimator `CAUSTIC`.
 pub mod paths {

@@ -105,7 +105,7 @@ pub struct PathTraceParams {
     /// alone).
     pub trace_beyond: bool,
     /// Microfacet lobes whose roughness (the larger of alpha_u and alpha_v, at the surface
-    /// point) is below this are specular vertices of the partition (design.md section 1): after
+    /// point) is below this are specular vertices of the partition (docs/design.md section 1): after
     /// a photon-mapped vertex the light through them is left to photon mapping. Must equal the
     /// photon pass's; 0 (the default): only delta lobes are specular.
     pub glossy_threshold: f32,

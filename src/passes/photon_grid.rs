@@ -1,6 +1,6 @@
 //! `photon_grid`: this iteration's caustic photon hits in a hash grid with one global search
-//! radius, for the camera pass to look up at diffuse vertices past its hit points (design.md
-//! section 2, "caustics at every depth"). The radius shrinks with the global iteration number
+//! radius, for the camera pass to look up at diffuse vertices past its hit points (docs/design.md
+//! section 1, the photon grid). The radius shrinks with the global iteration number
 //! by Knaus & Zwicker's schedule (2011, "Progressive Photon Mapping: A Probabilistic Approach",
 //! eq. 20): r_i^2 = r_1^2 * prod_{k<i} (k + alpha) / (k + 1). Each iteration's lookups are an
 //! independent density estimate; the camera's running mean averages them, so the looked-up

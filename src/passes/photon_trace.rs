@@ -91,7 +91,7 @@ pub struct PhotonTraceParams {
     pub aim: bool,
     /// Caustic mode: microfacet lobes whose roughness (the larger of alpha_u and alpha_v, at
     /// the surface point) is below this are specular vertices, through which caustic photons
-    /// continue (design.md section 1). Must equal the camera pass's; 0 (the default): only
+    /// continue (docs/design.md section 1). Must equal the camera pass's; 0 (the default): only
     /// delta lobes.
     pub glossy_threshold: f32,
 }

@@ -1,7 +1,7 @@
 //! `sppm` (default estimator): stochastic progressive photon mapping (Hachisuka & Jensen 2009).
 //! Every iteration the camera pass regenerates the hit points; per pixel and photon-mapped
 //! depth this node keeps N, R and tau across iterations and merges each iteration's deposits
-//! with the update of design.md section 2. Its `radiance` output is the photon-mapped radiance
+//! with the update of docs/design.md section 2. Its `radiance` output is the photon-mapped radiance
 //! (w = 1), its `kernel_bias` output that estimate's bias from its kernel (docs/error-estimate.md);
 //! its `radii` output, the radius of every hit-point slot after its rule, is state it
 //! owns and the camera pass reads in the next iteration. `ppm` (src/passes/ppm.rs) runs the same
