@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::app::bench;
-use crate::app::render::{Budget, Renderer};
+use crate::app::render::{Budget, BudgetField, Renderer};
 use crate::app::state::{Origin, StateFile, checkpoint_file, graph_fingerprint, shard_file};
 use crate::gpu::{GpuContext, GpuError};
 use crate::graph::pass::Schedule;
@@ -283,6 +283,17 @@ fn bundled(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
 }
 
+/// The `render` flag that sets a budget field, for messages.
+fn flag_of(field: BudgetField) -> &'static str {
+    match field {
+        BudgetField::Spp => "--spp",
+        BudgetField::Photons => "--photons",
+        BudgetField::Seconds => "--time",
+        BudgetField::TargetError => "--target-error",
+        BudgetField::Adaptive => "--adaptive",
+    }
+}
+
 fn cancel_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let handler_flag = flag.clone();
@@ -375,7 +386,7 @@ fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
         target_error: args.target_error,
         adaptive: args.adaptive,
     };
-    budget.check()?;
+    budget.check_named(flag_of)?;
     if args.shard.is_some() && args.target_error.is_some() {
         return Err(Error::Other(
             "--shard and --target-error: a shard renders a fixed share of the iterations, so \

@@ -1,10 +1,40 @@
 //! hppm: a GPU renderer that combines path tracing with progressive photon mapping, built as a
 //! render graph of wgpu compute passes described in RON.
 //!
+//! Path tracing renders every light path except caustics (`L S+ D`), which photon mapping
+//! renders at the camera paths' diffuse vertices; each path is counted once
+//! (docs/design.md). A graph file names the passes and wires their slots; the registry
+//! ([`passes::Registry`]) says which pass kinds exist, and a program may add its own.
+//!
+//! Render the bundled Cornell box through the bundled hybrid graph, into memory:
+//!
+//! ```
+//! use hppm::app::render::Renderer;
+//! use hppm::passes::Registry;
+//!
+//! # fn main() -> Result<(), hppm::Error> {
+//! let gpu = hppm::gpu::GpuContext::new(None)?;
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell_box.ron");
+//! let scene = hppm::scene::load(std::path::Path::new(path))?;
+//! let registry = Registry::builtin();
+//! let graph = registry.bundled_graph("hybrid")?;
+//! let mut renderer = Renderer::builder(&gpu, &scene, graph)
+//!     .registry(registry)
+//!     .size(16, 16)
+//!     .build()?;
+//! renderer.iterate()?;
+//! let image = renderer.image()?;
+//! assert_eq!(image.pixels.len(), 16 * 16);
+//! # Ok(())
+//! # }
+//! ```
+//!
 //! Layers point one way: `gpu` (device, buffers, shader composition, radix sort) knows nothing
 //! above it; `graph` (schema, validation, pruning, schedule, allocation, execution) knows `gpu`
 //! only; `scene` knows neither graph nor passes; `passes` knows all three; `app` (render loop,
-//! compare, bench, plots) is one client of them.
+//! compare, bench, checkpoints) and `cli` (the command line, behind the default `cli` feature)
+//! are clients of them. docs/library.md lists the calls a program uses,
+//! docs/writing-a-pass.md how a pass is added from another crate.
 
 pub mod app;
 #[cfg(feature = "cli")]

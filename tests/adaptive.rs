@@ -175,7 +175,7 @@ fn adaptive_sampling_is_refused_where_it_would_be_wrong() {
     let error = r.run(budget, &never, |_, _| {}).expect_err("refused");
     let text = error.to_string();
     assert!(
-        text.contains("--adaptive") && text.contains("camera"),
+        text.contains("adaptive sampling") && text.contains("camera"),
         "{text}"
     );
     assert_eq!(r.iterations(), 0);
@@ -185,5 +185,5 @@ fn adaptive_sampling_is_refused_where_it_would_be_wrong() {
         ..Default::default()
     };
     let text = no_target.check().expect_err("refused").to_string();
-    assert!(text.contains("--target-error"), "{text}");
+    assert!(text.contains("adaptive needs target_error"), "{text}");
 }

@@ -447,3 +447,127 @@ fn pruning_the_output_node_is_an_error() {
         "{error}"
     );
 }
+
+/// A pass that needs a scene feature only a program's own test can answer.
+struct NeedsEmissiveSphere;
+
+const EMISSIVE_SPHERE: hppm::graph::pass::SceneNeed = hppm::graph::pass::SceneNeed {
+    name: "emissive_sphere",
+    description: "sphere that emits",
+    glossy_below: 0.0,
+};
+
+impl Pass for NeedsEmissiveSphere {
+    fn prepare(&mut self, _: PrepareCtx<'_>) -> Result<(), hppm::Error> {
+        Ok(())
+    }
+    fn execute(&mut self, _: &ExecCtx<'_>, _: &mut Recorder<'_>) -> Result<(), hppm::Error> {
+        Ok(())
+    }
+    fn needs(&self) -> Vec<hppm::graph::pass::SceneNeed> {
+        vec![EMISSIVE_SPHERE]
+    }
+}
+
+/// A pass-through on images with a scene need of its own.
+static GLOW: PassKind = PassKind {
+    name: "glow",
+    description: "test pass-through",
+    slots: &[
+        SlotDecl::input("image", Radiance),
+        SlotDecl::output("glowing", Radiance, Size::Pixels),
+    ],
+    shaders: &[],
+    layouts: &[],
+    construct: |params| {
+        parse_params::<NoParams>(params).map(|_| Box::new(NeedsEmissiveSphere) as Box<dyn Pass>)
+    },
+};
+
+/// The registry is a value: a kind added from outside resolves in a graph file (and hppm's own
+/// registry refuses the same file), a kind of a built-in's name replaces it, a need is met only
+/// as the test registered for it says (a need no test answers never is, so its node is pruned),
+/// and modules are added after hppm's. Would catch a registry that ignores what is added to it,
+/// or pruning that asks something other than the registry.
+#[test]
+fn a_registry_takes_kinds_needs_and_modules_from_outside() {
+    use hppm::passes::Registry;
+    let path = PathBuf::from("glow.ron");
+    let text = r#"(
+        version: 1,
+        nodes: [
+            (name: "camera", pass: "path_trace", params: ()),
+            (name: "glow", pass: "glow"),
+        ],
+        edges: ["camera.radiance -> glow.image"],
+        output: "glow.glowing",
+    )"#;
+    let err = Registry::builtin()
+        .parse_graph(&path, text)
+        .expect_err("hppm does not know glow")
+        .to_string();
+    assert!(err.contains("unknown pass kind \"glow\""), "{err}");
+
+    let scene = hppm::scene::load(
+        &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box.ron"),
+    )
+    .expect("scene");
+    let features = scene.features();
+    let has_sphere_light = |scene: &hppm::scene::Scene,
+                            _: &hppm::scene::SceneFeatures,
+                            _: &hppm::graph::pass::SceneNeed| {
+        scene
+            .spheres
+            .iter()
+            .any(|s| scene.materials[s.material as usize].emission.max_element() > 0.0)
+    };
+    let always = |_: &hppm::scene::Scene,
+                  _: &hppm::scene::SceneFeatures,
+                  _: &hppm::graph::pass::SceneNeed| true;
+    for (registry, kept) in [
+        (Registry::builtin().with(&GLOW), false),
+        (
+            Registry::builtin()
+                .with(&GLOW)
+                .with_need("emissive_sphere", has_sphere_light),
+            false,
+        ),
+        (
+            Registry::builtin()
+                .with(&GLOW)
+                .with_need("emissive_sphere", always),
+            true,
+        ),
+    ] {
+        let mut graph = registry
+            .parse_graph(&path, text)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let pruned = graph.prune(|need| registry.scene_meets(&scene, &features, need));
+        match (kept, pruned) {
+            (true, Ok(pruned)) => assert!(pruned.iter().all(|p| p.node != "glow"), "{pruned:?}"),
+            (false, Err(e)) => assert!(
+                e.to_string().contains("the scene has no sphere that emits"),
+                "{e}"
+            ),
+            (kept, other) => panic!("kept {kept}: {other:?}"),
+        }
+    }
+
+    // Replacing a built-in: the graph resolves `resolve` to the replacement.
+    static MY_RESOLVE: PassKind = PassKind {
+        name: "resolve",
+        description: "a program's own resolve",
+        ..GLOW
+    };
+    let registry = Registry::builtin().with(&MY_RESOLVE);
+    assert_eq!(registry.kinds().len(), hppm::passes::builtin_kinds().len());
+    assert_eq!(
+        registry.kind("resolve").map(|k| k.description),
+        Some("a program's own resolve")
+    );
+    let modules = Registry::builtin()
+        .with_module(hppm::shader_file!("shaders/common/rng.wgsl"))
+        .modules()
+        .len();
+    assert_eq!(modules, hppm::passes::COMMON_MODULES.len() + 1);
+}

@@ -36,45 +36,81 @@ pub struct Budget {
     pub adaptive: bool,
 }
 
+/// A field of a [`Budget`], for messages: the library names it as the field, the command line
+/// as its flag ([`Budget::check_named`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BudgetField {
+    Spp,
+    Photons,
+    Seconds,
+    TargetError,
+    Adaptive,
+}
+
+impl BudgetField {
+    /// The field's name in [`Budget`].
+    pub fn field_name(self) -> &'static str {
+        match self {
+            BudgetField::Spp => "spp",
+            BudgetField::Photons => "photons",
+            BudgetField::Seconds => "seconds",
+            BudgetField::TargetError => "target_error",
+            BudgetField::Adaptive => "adaptive",
+        }
+    }
+}
+
 impl Budget {
     /// Refuses a budget that would render nothing or never end, before any work.
     pub fn check(&self) -> Result<(), Error> {
+        self.check_named(BudgetField::field_name)
+    }
+
+    /// As [`Budget::check`], each field called by `name` in the message.
+    pub fn check_named(&self, name: impl Fn(BudgetField) -> &'static str) -> Result<(), Error> {
+        use BudgetField::*;
         let refuse = |m: String| Err(Error::Other(m));
         if self.spp == Some(0) {
-            return refuse("--spp must be at least 1".into());
+            return refuse(format!("{} must be at least 1", name(Spp)));
         }
         if self.photons == Some(0) {
-            return refuse("--photons must be at least 1".into());
+            return refuse(format!("{} must be at least 1", name(Photons)));
         }
         if let Some(s) = self.seconds
             && !(s.is_finite() && s > 0.0)
         {
             return refuse(format!(
-                "--time must be a positive, finite number of seconds, got {s}"
+                "{} must be a positive, finite number of seconds, got {s}",
+                name(Seconds)
             ));
         }
         if self.adaptive && self.target_error.is_none() {
-            return refuse(
-                "--adaptive needs --target-error: pixels whose estimated error is below the \
-                 target stop receiving samples"
-                    .into(),
-            );
+            return refuse(format!(
+                "{} needs {}: pixels whose estimated error is below the target stop receiving \
+                 samples",
+                name(Adaptive),
+                name(TargetError)
+            ));
         }
         if let Some(e) = self.target_error
             && !(e.is_finite() && e > 0.0)
         {
             return refuse(format!(
-                "--target-error must be a positive, finite relMSE, got {e}"
+                "{} must be a positive, finite relMSE, got {e}",
+                name(TargetError)
             ));
         }
         if self.spp.is_none() && self.seconds.is_none() && self.photons.is_none() {
-            let message = if self.target_error.is_some() {
-                "--target-error needs a cap as well: give --time, --spp or --photons (an \
-                 estimate may never reach the target on a scene whose error falls slowly)"
+            let caps = format!("{}, {} or {}", name(Seconds), name(Spp), name(Photons));
+            return refuse(if self.target_error.is_some() {
+                format!(
+                    "{} needs a cap as well: give {caps} (an estimate may never reach the \
+                     target on a scene whose error falls slowly)",
+                    name(TargetError)
+                )
             } else {
-                "no budget: give --spp, --time or --photons"
-            };
-            return refuse(message.into());
+                format!("no budget: give {caps}")
+            });
         }
         Ok(())
     }
@@ -739,8 +775,8 @@ impl<'a> Renderer<'a> {
         let first = self.tiles.first()?;
         first.graph.adaptive_refusal().map(|(node, why)| {
             format!(
-                "--adaptive: {node} cannot skip converged pixels: {why}; adaptive sampling \
-                 works with path tracing alone (graphs/pt.ron)"
+                "adaptive sampling: {node} cannot skip converged pixels: {why}; it works with \
+                 path tracing alone (graphs/pt.ron)"
             )
         })
     }
@@ -910,8 +946,8 @@ impl<'a> Renderer<'a> {
             && budget.seconds.is_none()
         {
             return Err(Error::Other(
-                "--photons: this graph emits no photons (for this scene, after pruning), so a \
-                 photon budget would never be met; give --spp or --time"
+                "a photon budget: this graph emits no photons (for this scene, after pruning), \
+                 so it would never be met; give a budget of samples or seconds"
                     .into(),
             ));
         }

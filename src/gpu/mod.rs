@@ -29,7 +29,7 @@ pub enum GpuError {
          apt-get install -y mesa-vulkan-drivers"
     )]
     NoAdapter,
-    #[error("no adapter matches --adapter {requested:?}; available adapters:\n{available}")]
+    #[error("no adapter matches {requested:?}; available adapters:\n{available}")]
     AdapterNotFound {
         requested: String,
         available: String,

@@ -127,7 +127,7 @@ impl Registry {
     }
 
     /// One of the graphs shipped in hppm's `graphs/` folder, by name (`"hybrid"`, `"pt"`, ...;
-    /// see [`super::bundled_graphs`]), validated against these kinds.
+    /// see [`super::BUNDLED_GRAPHS`]), validated against these kinds.
     pub fn bundled_graph(&self, name: &str) -> Result<ValidGraph, crate::Error> {
         let (file, text) = super::bundled_graph(name)?;
         Ok(self.parse_graph(Path::new(file), text)?)

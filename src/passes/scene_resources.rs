@@ -78,7 +78,7 @@ pub struct TablePlacement {
 
 /// A storage table split over several bindings because it is larger than the adapter binds at
 /// once (a mesh of millions of triangles on lavapipe's 128 MiB): chunks of 2^`shift` entries,
-/// chunk 0 at the table's binding and chunk k at its [`ChunkableTable::base`] + k - 1.
+/// chunk 0 at the table's binding and chunk k at its `ChunkableTable::base` + k - 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Chunked {
     table: &'static ChunkableTable,

@@ -478,7 +478,7 @@ fn partition(items: &mut [Item], goes_left: impl Fn(Vec3) -> bool) -> [Aabb; 2] 
 
 impl Bvh {
     /// The surface area heuristic's expected cost of a ray that enters the root, in primitive
-    /// tests (a box test costs [`TRAVERSAL_COST`] of one).
+    /// tests (a box test costs `TRAVERSAL_COST` of one).
     pub fn sah_cost(&self) -> f32 {
         let tests = self.expected_tests();
         TRAVERSAL_COST * tests.boxes + tests.primitives

@@ -91,7 +91,7 @@ pub fn rectangle_mesh() -> MeshData {
     }
 }
 
-/// Mitsuba 3's `cube` ([-1,1]^3, outward), triangle for triangle: each face maps onto [0,1]^2
+/// Mitsuba 3's `cube` (`[-1,1]^3`, outward), triangle for triangle: each face maps onto `[0,1]^2`
 /// in uv space the way Mitsuba's does (its faces' corner tables, src/shapes/cube.cpp).
 pub fn cube_mesh() -> MeshData {
     // Corner c is at (+-1, +-1, +-1), bit k of c giving the sign of axis k; each face lists its

@@ -13,7 +13,7 @@ use super::bsdf::{Mode, fresnel, reflect, refract, square_to_cosine_hemisphere};
 use super::texture::luminance;
 use super::{Distribution, Microfacet};
 
-/// Bits of [`Principled::has`]: Mitsuba's `m_has_*`, set when the file gives the parameter (a
+/// Bits of [`Principled`]'s `has`: Mitsuba's `m_has_*`, set when the file gives the parameter (a
 /// texture, or a float other than 0). They change more than the weight: a lobe's sampling
 /// probability, the roughness's aspect, which Fresnel terms exist.
 pub const HAS_ANISOTROPIC: u32 = 1;

@@ -23,7 +23,7 @@ pub struct References {
 /// The scene's primitive boxes, with the largest triangle references split in two at the middle
 /// of their box's longest axis, largest first, until there are `1 + extra` references per
 /// primitive (spheres are never split; their boxes fit). A reference is split only where both
-/// halves hold part of the triangle and its box is worth splitting ([`worth_splitting`]).
+/// halves hold part of the triangle and its box is worth splitting (`worth_splitting`).
 pub fn split_references(scene: &Scene, extra: f32) -> References {
     let boxes = scene_boxes(scene);
     let prims: Vec<u32> = (0..boxes.len() as u32).collect();

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec2, Vec3};
 
-/// Mitsuba's `to_uv`: an affine map of the plane, u' = m[0] . (u, v, 1), v' = m[1] . (u, v, 1).
+/// Mitsuba's `to_uv`: an affine map of the plane, `u' = m[0] . (u, v, 1)`, `v' = m[1] . (u, v, 1)`.
 /// A 4x4 `<transform>` keeps its upper-left 2x2 block and the x, y of its translation (Mitsuba's
 /// `Transform::extract`).
 #[derive(Debug, Clone, Copy, PartialEq)]
