@@ -1,0 +1,398 @@
+//! Emitters as Mitsuba's src/emitters reads them: area, point, spot, projector, directional,
+//! constant and envmap.
+
+use super::*;
+
+impl<'a, 'input> Reader<'a, 'input> {
+    pub(super) fn read_area_emitter(&self, node: Node<'a, 'input>) -> Result<Vec3, SceneError> {
+        let kind = self.required_attr(node, "type")?;
+        if kind != "area" {
+            return Err(self.attr_error(
+                node,
+                "type",
+                format!("emitter type \"{kind}\" inside a shape: only \"area\" is supported"),
+            ));
+        }
+        let mut props = self.props(node, &[])?;
+        self.ignore_sampling_weight(&mut props)?;
+        // Mitsuba's default radiance is 1.
+        let radiance = match props.take("radiance") {
+            Some(n) => self.non_negative_color(n)?,
+            None => Vec3::ONE,
+        };
+        self.finish(props, node)?;
+        Ok(radiance)
+    }
+
+    /// Mitsuba's `sampling_weight` of an emitter: how often its light sampling picks it, which
+    /// changes only its noise. hppm picks lights by power; the value is checked and dropped.
+    pub(super) fn ignore_sampling_weight(&self, props: &mut Props) -> Result<(), SceneError> {
+        if let Some(n) = props.take("sampling_weight") {
+            let v = self.float(n)?;
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(self.attr_error(
+                    n,
+                    "value",
+                    format!("sampling_weight {v}: expected a number of 0 or more"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// A scene-level emitter: `point`, `spot`, `directional`, `constant` or `envmap`.
+    pub(super) fn read_emitter(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let kind = self.required_attr(node, "type")?;
+        let mut props = self.props(node, &[])?;
+        self.ignore_sampling_weight(&mut props)?;
+        match kind.as_str() {
+            "point" => self.read_point_light(&mut props, node)?,
+            "spot" => self.read_spot_light(&mut props, node)?,
+            "projector" => self.read_projector(&mut props, node)?,
+            "directional" => self.read_directional_light(&mut props, node)?,
+            "constant" | "envmap" => {
+                if self.scene.emitters.environment.is_some() {
+                    return Err(self.error(
+                        node,
+                        "a second environment emitter (constant or envmap): Mitsuba allows one \
+                         per scene",
+                    ));
+                }
+                let environment = if kind == "constant" {
+                    // A constant light looks the same turned any way.
+                    if let Some(n) = props.take("to_world") {
+                        self.transform(n)?;
+                    }
+                    Environment::Constant {
+                        radiance: self.color_or(&mut props, "radiance", Vec3::ONE)?,
+                    }
+                } else {
+                    Environment::Map(self.read_envmap(&mut props, node)?)
+                };
+                self.scene.emitters.environment = Some(environment);
+            }
+            "area" => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    "an \"area\" emitter goes inside the <shape> that emits",
+                ));
+            }
+            _ => {
+                return Err(self.attr_error(
+                    node,
+                    "type",
+                    format!(
+                        "emitter type \"{kind}\" is not supported ({}; area inside a shape)",
+                        plugins::kinds_of("emitter").replace("area, ", "")
+                    ),
+                ));
+            }
+        }
+        self.finish(props, node)
+    }
+
+    /// A non-negative colour property, or `default` when it is absent.
+    pub(super) fn color_or(
+        &self,
+        props: &mut Props,
+        name: &str,
+        default: Vec3,
+    ) -> Result<Vec3, SceneError> {
+        props
+            .take(name)
+            .map(|n| self.non_negative_color(n))
+            .transpose()
+            .map(|c| c.unwrap_or(default))
+    }
+
+    /// A float property in degrees, or `default`, as radians within [0, 180].
+    pub(super) fn angle_or(
+        &self,
+        props: &mut Props,
+        name: &str,
+        default: f32,
+    ) -> Result<f32, SceneError> {
+        let Some(n) = props.take(name) else {
+            return Ok(default.to_radians());
+        };
+        let degrees = self.float(n)?;
+        if !(0.0..=180.0).contains(&degrees) {
+            return Err(self.attr_error(
+                n,
+                "value",
+                format!("{}: an angle from 0 to 180 degrees", describe(n)),
+            ));
+        }
+        Ok(degrees.to_radians())
+    }
+
+    pub(super) fn check_light_reach(
+        &self,
+        node: Node,
+        what: &str,
+        position: Vec3,
+    ) -> Result<(), SceneError> {
+        let reach = position.abs().max_element() as f64;
+        match crate::scene::beyond_extent(what, reach) {
+            Some(message) => Err(self.error(node, message)),
+            None => Ok(()),
+        }
+    }
+
+    pub(super) fn read_point_light(
+        &mut self,
+        props: &mut Props,
+        node: Node,
+    ) -> Result<(), SceneError> {
+        let mut position = props
+            .take("position")
+            .map(|n| self.point(n))
+            .transpose()?
+            .unwrap_or(Vec3::ZERO);
+        if let Some(n) = props.take("to_world") {
+            position = self.transform(n)?.transform_point3(position);
+        }
+        let intensity = self.color_or(props, "intensity", Vec3::ONE)?;
+        self.check_light_reach(node, "this point light", position)?;
+        self.scene.point_lights.push(PointLight {
+            position,
+            intensity,
+        });
+        Ok(())
+    }
+
+    /// A light's texture parameter `name`: a `<texture>` or `<ref>` to one (added to the
+    /// scene's textures), as Mitsuba's spot requires ("must be spatially varying"); `None`
+    /// when absent.
+    pub(super) fn light_texture(
+        &self,
+        props: &mut Props<'a, 'input>,
+        name: &str,
+        what: &str,
+    ) -> Result<Option<u32>, SceneError> {
+        let Some(n) = props.take(name) else {
+            return Ok(None);
+        };
+        match self.texture_node(n, name)? {
+            Some((_, index)) => Ok(Some(index)),
+            None => Err(self.error(
+                n,
+                format!(
+                    "{}: {what}'s {name} must be a <texture> (bitmap or checkerboard) or a                      <ref> to one; Mitsuba refuses a constant here",
+                    describe(n)
+                ),
+            )),
+        }
+    }
+
+    /// Mitsuba's `spot`: it shines along `to_world`'s +z from its translation; a `texture`
+    /// is laid across its local x and y.
+    pub(super) fn read_spot_light(
+        &mut self,
+        props: &mut Props<'a, 'input>,
+        node: Node,
+    ) -> Result<(), SceneError> {
+        let texture = self.light_texture(props, "texture", "a spot light")?;
+        let to_world = match props.take("to_world") {
+            Some(n) => {
+                let m = self.transform(n)?;
+                if !is_similarity(Mat3::from_mat4(m)) {
+                    return Err(self.error(
+                        n,
+                        "a spot light's to_world must be a rotation, uniform scale and \
+                         translation (its cone would not be round)",
+                    ));
+                }
+                m
+            }
+            None => Mat4::IDENTITY,
+        };
+        let intensity = self.color_or(props, "intensity", Vec3::ONE)?;
+        let cutoff = self.angle_or(props, "cutoff_angle", 20.0)?;
+        let beam_width = self.angle_or(props, "beam_width", cutoff.to_degrees() * 0.75)?;
+        if beam_width > cutoff {
+            return Err(self.error(
+                node,
+                "beam_width is larger than cutoff_angle (Mitsuba requires beam_width <= \
+                 cutoff_angle)",
+            ));
+        }
+        let position = to_world.transform_point3(Vec3::ZERO);
+        let axis = to_world.transform_vector3(Vec3::Z).normalize_or_zero();
+        let frame = [Vec3::X, Vec3::Y].map(|v| to_world.transform_vector3(v).normalize_or_zero());
+        self.check_light_reach(node, "this spot light", position)?;
+        self.scene.emitters.spots.push(SpotLight {
+            position,
+            axis,
+            intensity,
+            cutoff,
+            beam_width,
+            frame,
+            texture,
+        });
+        Ok(())
+    }
+
+    /// Mitsuba's `projector`: a pinhole at `to_world`'s translation facing its +z, projecting
+    /// `irradiance` (a colour or a texture) times `scale` through the frustum of the
+    /// perspective camera with the same `fov` / `fov_axis` / `focal_length` and an image of
+    /// the texture's resolution.
+    pub(super) fn read_projector(
+        &mut self,
+        props: &mut Props<'a, 'input>,
+        node: Node<'a, 'input>,
+    ) -> Result<(), SceneError> {
+        let scale = match props.take("scale") {
+            Some(n) => {
+                let v = self.float(n)?;
+                if v < 0.0 {
+                    return Err(self.attr_error(n, "value", "scale must not be negative"));
+                }
+                v
+            }
+            None => 1.0,
+        };
+        let (irradiance, texture) = match props.take("irradiance") {
+            None => (Vec3::ONE, None),
+            Some(n) => match self.texture_node(n, "irradiance")? {
+                Some((_, index)) => (Vec3::ONE, Some(index)),
+                None => (self.non_negative_color(n)?, None),
+            },
+        };
+        // Mitsuba's `Texture::resolution`: a bitmap's, (1, 1) for anything else.
+        let aspect = match texture.and_then(|t| self.textures.borrow().get(t as usize).cloned()) {
+            Some(Texture::Bitmap(b)) => b.width as f64 / b.height as f64,
+            _ => 1.0,
+        };
+        let to_world = match props.take("to_world") {
+            Some(n) => {
+                let m = self.transform(n)?;
+                let linear = Mat3::from_mat4(m);
+                // Mitsuba's projector takes the local point's z and the transformed +z (not
+                // normalised) as they come, and its photons' directions unnormalised: only a
+                // unit scale makes the two agree.
+                let unit = is_similarity(linear) && (linear.x_axis.length() - 1.0).abs() < 1e-3;
+                if !unit {
+                    return Err(self.error(
+                        n,
+                        "a projector's to_world must be a rotation and translation (Mitsuba's \
+                         scaled projector disagrees with itself)",
+                    ));
+                }
+                m
+            }
+            None => Mat4::IDENTITY,
+        };
+        let view = self.view_angle(props, node)?;
+        let fov_x = self.horizontal_fov(view.axis_node, view.fov, &view.axis, aspect)?;
+        let tan_half_fov = (fov_x.to_radians() * 0.5).tan();
+        if !(tan_half_fov > 0.0 && tan_half_fov.is_finite()) {
+            return Err(self.error(node, "the projector's field of view is empty or too wide"));
+        }
+        let position = to_world.transform_point3(Vec3::ZERO);
+        let frame =
+            [Vec3::X, Vec3::Y, Vec3::Z].map(|v| to_world.transform_vector3(v).normalize_or_zero());
+        self.check_light_reach(node, "this projector", position)?;
+        self.scene.emitters.projectors.push(Projector {
+            position,
+            frame,
+            irradiance: irradiance * scale,
+            texture,
+            tan_half_fov,
+            aspect: aspect as f32,
+        });
+        Ok(())
+    }
+
+    /// Mitsuba's `directional`: `direction` (or `to_world`'s +z) is where its light travels.
+    pub(super) fn read_directional_light(
+        &mut self,
+        props: &mut Props,
+        node: Node,
+    ) -> Result<(), SceneError> {
+        let direction = match (props.take("direction"), props.take("to_world")) {
+            (Some(_), Some(n)) => {
+                return Err(self.error(
+                    n,
+                    "give a directional light `direction` or `to_world`, not both",
+                ));
+            }
+            (Some(n), None) => (self.point(n)?, n),
+            (None, Some(n)) => (self.transform(n)?.transform_vector3(Vec3::Z), n),
+            (None, None) => (Vec3::Z, node),
+        };
+        let Some(unit) = direction.0.try_normalize() else {
+            return Err(self.error(direction.1, "the light's direction is zero"));
+        };
+        let irradiance = self.color_or(props, "irradiance", Vec3::ONE)?;
+        self.scene.emitters.directionals.push(DirectionalLight {
+            direction: unit,
+            irradiance,
+        });
+        Ok(())
+    }
+
+    /// Mitsuba's `envmap`: a lat-long image (EXR, or Radiance HDR), times `scale`, turned by
+    /// `to_world` (a rotation).
+    pub(super) fn read_envmap(&self, props: &mut Props, node: Node) -> Result<EnvMap, SceneError> {
+        let Some(file_node) = props.take("filename") else {
+            return Err(self.error(
+                node,
+                "<emitter type=\"envmap\"> needs <string name=\"filename\" value=\"...\"/>",
+            ));
+        };
+        let file = self.relative(&self.string(file_node)?);
+        let scale = match props.take("scale") {
+            Some(n) => {
+                let v = self.float(n)?;
+                if !(v >= 0.0 && v.is_finite()) {
+                    return Err(self.attr_error(n, "value", "scale must be a non-negative number"));
+                }
+                v
+            }
+            None => 1.0,
+        };
+        let to_world = match props.take("to_world") {
+            Some(n) => {
+                let m = Mat3::from_mat4(self.transform(n)?);
+                if !is_similarity(m) || (m.determinant() - 1.0).abs() > 1e-3 {
+                    return Err(self.error(n, "an envmap's to_world must be a rotation"));
+                }
+                m
+            }
+            None => Mat3::IDENTITY,
+        };
+        for name in ["mis_compensation", "filter_type"] {
+            if let Some(n) = props.take(name) {
+                let ok = match name {
+                    "filter_type" => self.string(n)? == "bilinear",
+                    _ => !self.boolean(n)?,
+                };
+                if !ok {
+                    return Err(
+                        self.error(n, format!("{} is not supported for envmap", describe(n)))
+                    );
+                }
+            }
+        }
+        let (width, height, texels) =
+            texture::read_image(&file, false).map_err(|e| self.error(file_node, e))?;
+        if height < 2 {
+            return Err(self.error(
+                file_node,
+                format!(
+                    "{}: an environment map needs at least 2 rows",
+                    file.display()
+                ),
+            ));
+        }
+        Ok(EnvMap {
+            width,
+            height,
+            texels: texels.into_iter().map(|t| t * scale).collect(),
+            to_world,
+            source: file,
+        })
+    }
+}
