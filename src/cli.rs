@@ -27,8 +27,12 @@ struct Cli {
 enum Command {
     /// Render a scene through a graph.
     Render(RenderArgs),
-    /// List GPU adapters and the features hppm uses.
-    Info,
+    /// List GPU adapters and the features hppm uses, and the pass kinds.
+    Info {
+        /// Print the pass kinds' reference (slots, params) in Markdown instead.
+        #[arg(long)]
+        markdown: bool,
+    },
     /// Print the Mitsuba 3 plugins and properties the scene loader reads, with Mitsuba's
     /// defaults and what hppm does with each (the README's table, in Markdown).
     Plugins,
@@ -958,7 +962,11 @@ pub fn run_from(
         Command::Render(args) => render(args, &registry),
         Command::Compare(args) => compare(args, &registry),
         Command::Merge(args) => merge(args),
-        Command::Info => info(&registry),
+        Command::Info { markdown: true } => {
+            print!("{}", registry.markdown());
+            Ok(())
+        }
+        Command::Info { markdown: false } => info(&registry),
         Command::Check { scene, defines } => check_scene(&scene, &defines),
         Command::Plugins => {
             print!("{}", scene::plugins::markdown());

@@ -571,3 +571,29 @@ fn a_registry_takes_kinds_needs_and_modules_from_outside() {
         .len();
     assert_eq!(modules, hppm::passes::COMMON_MODULES.len() + 1);
 }
+
+/// docs/pass-kinds.md is the registry's own reference (`hppm info --markdown`): a slot or param
+/// added to a kind without regenerating it fails here. Each built-in kind's params are read
+/// from its params struct, so none is missing.
+#[test]
+fn the_pass_kind_reference_is_the_registrys() {
+    let registry = hppm::passes::Registry::builtin();
+    let generated = registry.markdown();
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("docs/pass-kinds.md");
+    let written = std::fs::read_to_string(&path).expect("docs/pass-kinds.md");
+    assert!(
+        written == generated,
+        "docs/pass-kinds.md differs from `hppm info --markdown`: regenerate it"
+    );
+    for kind in registry.kinds() {
+        assert!(
+            kind.param_names().is_some(),
+            "{} accepts unknown params",
+            kind.name
+        );
+    }
+    let path_trace = registry.kind("path_trace").and_then(|k| k.param_names());
+    assert!(
+        path_trace.is_some_and(|p| p.contains(&"merge_depth") && p.contains(&"glossy_threshold"))
+    );
+}

@@ -561,6 +561,67 @@ impl PassKind {
     pub fn slot(&self, name: &str) -> Option<&'static SlotDecl> {
         self.slots.iter().find(|s| s.name == name)
     }
+
+    /// The params its constructor knows, as its params struct names them (read from the error
+    /// an unknown param gives, so never out of date); `None` when it accepts unknown ones.
+    pub fn param_names(&self) -> Option<&'static [&'static str]> {
+        match (self.construct)("(no_such_param_: 0)") {
+            Err(e) => match e.code {
+                ron::Error::NoSuchStructField { expected, .. } => Some(expected),
+                _ => None,
+            },
+            Ok(_) => None,
+        }
+    }
+
+    /// Its reference in Markdown: description, slots (kind, size, flags) and params.
+    pub fn markdown(&self) -> String {
+        let mut out = format!("### `{}`\n\n{}.\n\n", self.name, self.description);
+        out.push_str("| slot | direction | resource | size | flags |\n|---|---|---|---|---|\n");
+        for slot in self.slots {
+            let (dir, size) = match slot.dir {
+                SlotDir::In => ("in", String::new()),
+                SlotDir::Out => (
+                    "out",
+                    match slot.size {
+                        Size::Pixels => "one per pixel".to_string(),
+                        Size::LikeInput(input) => format!("as input `{input}`"),
+                        Size::Computed => "computed by the pass".to_string(),
+                    },
+                ),
+            };
+            let flags: Vec<&str> = [
+                (slot.persistent, "persistent"),
+                (slot.optional, "optional"),
+                (slot.previous_iteration, "previous iteration"),
+                (slot.kept, "kept"),
+                (slot.observe_only, "observe only"),
+                (slot.exclusive, "exclusive"),
+                (slot.required, "required"),
+            ]
+            .iter()
+            .filter(|f| f.0)
+            .map(|f| f.1)
+            .collect();
+            out.push_str(&format!(
+                "| `{}` | {dir} | {} | {size} | {} |\n",
+                slot.name,
+                slot.kind.name,
+                flags.join(", ")
+            ));
+        }
+        let params = match self.param_names() {
+            Some([]) => "none".to_string(),
+            Some(names) => names
+                .iter()
+                .map(|n| format!("`{n}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            None => "any (not checked)".to_string(),
+        };
+        out.push_str(&format!("\nParams: {params}.\n"));
+        out
+    }
 }
 
 /// Parses a pass's params from the text of its `params` field.
