@@ -413,9 +413,9 @@ fn every_uploaded_struct_matches_its_wgsl_layout() {
     eprintln!("checked {} layouts: {}", checked.len(), checked.join(", "));
     assert!(problems.is_empty(), "{}", problems.join("\n"));
     for name in [
-        "PathTraceParams",
-        "PhotonParams",
-        "MergeParams",
+        "PathTraceUniform",
+        "PhotonUniform",
+        "MergeUniform",
         "HitPoint",
         "PhotonHit",
     ] {

@@ -39,7 +39,7 @@ const MIN_CELL_FRACTION: f32 = 6.103515625e-5; // 2^-14
 // Beyond any finite f32 but the largest: photons at FAR or farther (infinite, NaN) are skipped.
 const FAR: f32 = 3.0e38;
 
-struct GridParams {
+struct GridUniform {
     // Hit-point slots.
     slots: u32,
     // Buckets - 1 (buckets is a power of two).
@@ -72,7 +72,7 @@ struct Grid {
     words: array<atomic<u32>>,
 }
 
-@group(1) @binding(3) var<uniform> params: GridParams;
+@group(1) @binding(3) var<uniform> params: GridUniform;
 @group(1) @binding(4) var<storage, read_write> grid: Grid;
 
 // A hit point as the BVH builders take them (a pixel and a positive radius), at a finite

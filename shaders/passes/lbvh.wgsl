@@ -30,7 +30,7 @@ const FAR: f32 = 3.0e38;
 // Morton cells per axis (10 bits each).
 const MORTON_CELLS: f32 = 1024.0;
 
-struct LbvhParams {
+struct LbvhUniform {
     // Hit-point slots (leaves).
     count: u32,
     pad_a: u32,
@@ -62,7 +62,7 @@ struct Box {
     hi: vec3<f32>,
 }
 
-@group(1) @binding(0) var<uniform> params: LbvhParams;
+@group(1) @binding(0) var<uniform> params: LbvhUniform;
 @group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
 // Morton keys, then (after the sort) in sorted order.
 @group(1) @binding(2) var<storage, read_write> keys: array<u32>;

@@ -18,7 +18,7 @@
 #import common::hit_points::{HitPointBuffer, RadiusBuffer, NO_PIXEL}
 #import common::deposit_sums::{deposited_flux, inner_flux, deposit_count}
 
-struct MergeParams {
+struct MergeUniform {
     alpha: f32,
     // 1 / iterations so far (including this one).
     inv_iterations: f32,
@@ -50,7 +50,7 @@ struct SlotStats {
     pad_c: u32,
 }
 
-@group(1) @binding(0) var<uniform> params: MergeParams;
+@group(1) @binding(0) var<uniform> params: MergeUniform;
 @group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
 // Binding 2: the deposits (common::deposit_sums).
 @group(1) @binding(3) var<storage, read_write> stats: array<SlotStats>;

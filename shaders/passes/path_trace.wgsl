@@ -59,7 +59,7 @@
 #import common::photon_grid::{PhotonGridInfo, photon_cell, photon_bucket}
 #import gpu::sample_mask::{SampleMask, SAMPLED}
 
-struct PathTraceParams {
+struct PathTraceUniform {
     sample_base: u32,
     samples_per_iteration: u32,
     seed: u32,
@@ -88,7 +88,7 @@ struct PhotonGridIn {
     words: array<u32>,
 }
 
-@group(1) @binding(0) var<uniform> params: PathTraceParams;
+@group(1) @binding(0) var<uniform> params: PathTraceUniform;
 @group(1) @binding(1) var<storage, read_write> radiance: array<vec4<f32>>;
 // The counters, [rays low, rays high, discarded low, discarded high] (64-bit totals from 32-bit
 // atomics), then this iteration's splatted samples (radiance, and 1 in w, or 1 / the draw

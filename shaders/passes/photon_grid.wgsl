@@ -6,7 +6,7 @@
 #import common::photon_grid::{PhotonGridInfo, photon_cell, photon_bucket}
 #import gpu::dispatch::{WORKGROUP_SIZE, flat_invocation}
 
-struct PhotonGridParams {
+struct PhotonGridUniform {
     radius: f32,
     inv_cell: f32,
     bucket_mask: u32,
@@ -22,7 +22,7 @@ struct PhotonGridOut {
 }
 
 @group(0) @binding(0) var<storage, read> photon_hits: PhotonHitsIn;
-@group(0) @binding(1) var<uniform> params: PhotonGridParams;
+@group(0) @binding(1) var<uniform> params: PhotonGridUniform;
 @group(0) @binding(2) var<storage, read_write> grid: PhotonGridOut;
 
 fn listed_count() -> u32 {

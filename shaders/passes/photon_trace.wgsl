@@ -52,7 +52,7 @@
 #import common::hit_points::{PhotonHitsOut, PhotonHit}
 #import gpu::dispatch::next_item
 
-struct PhotonParams {
+struct PhotonUniform {
     photons: u32,
     seed: u32,
     iteration: u32,
@@ -75,7 +75,7 @@ struct PhotonParams {
     aim_radius: f32,
 }
 
-@group(1) @binding(0) var<uniform> params: PhotonParams;
+@group(1) @binding(0) var<uniform> params: PhotonUniform;
 @group(1) @binding(1) var<storage, read_write> photon_hits: PhotonHitsOut;
 // [segments low, segments high, hits dropped low, high]: 64-bit totals from 32-bit atomics.
 // (Photon counts are exact on the CPU: every iteration emits `photons`.)

@@ -8,7 +8,7 @@
 #import common::hit_points::{HitPointBuffer, RadiusBuffer, NO_PIXEL}
 #import common::deposit_sums::{deposited_flux, inner_flux, deposit_count}
 
-struct PppmParams {
+struct PppmUniform {
     width: u32,
     height: u32,
     slots_per_pixel: u32,
@@ -16,7 +16,7 @@ struct PppmParams {
     next_scale: f32,
 }
 
-@group(1) @binding(0) var<uniform> params: PppmParams;
+@group(1) @binding(0) var<uniform> params: PppmUniform;
 @group(1) @binding(1) var<storage, read> hit_points: HitPointBuffer;
 // Binding 2: the deposits (common::deposit_sums).
 @group(1) @binding(3) var<storage, read_write> radiance: array<vec4<f32>>;

@@ -3,14 +3,14 @@
 
 #import common::hit_points::HitPointBuffer
 
-struct ResolveParams {
+struct ResolveUniform {
     width: u32,
     height: u32,
     has_caustic: u32,
     has_hit_points: u32,
 }
 
-@group(1) @binding(0) var<uniform> params: ResolveParams;
+@group(1) @binding(0) var<uniform> params: ResolveUniform;
 @group(1) @binding(1) var<storage, read> pt: array<vec4<f32>>;
 @group(1) @binding(2) var<storage, read> caustic: array<vec4<f32>>;
 @group(1) @binding(3) var<storage, read> hit_points: HitPointBuffer;

@@ -1,6 +1,6 @@
 //! Rust structs that are uploaded to WGSL structs, described so that a test can hold each
 //! against the composed naga module instead of trusting that the two were written alike:
-//! `struct_layout!(GpuParams => "PathTraceParams" { sample_base, seed })` records the Rust size
+//! `struct_layout!(PathTraceUniform => "PathTraceUniform" { sample_base, seed })` records the Rust size
 //! and the named fields' offsets; `check` compares them with what naga lays out.
 
 use wgpu::naga;

@@ -27,17 +27,17 @@ const SHADER: ShaderFile = shader_file!("shaders/passes/lbvh.wgsl");
 /// `WORKGROUP_SIZE` in shaders/gpu/dispatch.wgsl.
 const WORKGROUP: u32 = 256;
 
-/// `LbvhParams` in the shader.
+/// `LbvhUniform` in the shader (the graph file's params are `LbvhParams`).
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct LbvhUniform {
     /// Hit-point slots (leaves).
     count: u32,
     _pad: [u32; 3],
 }
 
 const PARAMS_LAYOUT: crate::gpu::layout::StructLayout =
-    crate::struct_layout!(GpuParams => "LbvhParams" in SHADER, { count });
+    crate::struct_layout!(LbvhUniform => "LbvhUniform" in SHADER, { count });
 
 static SLOTS: &[SlotDecl] = &[
     SlotDecl::input("hit_points", HIT_POINTS),
@@ -185,7 +185,7 @@ impl Pass for HitPointBvhLbvh {
         let values = gpu.create_buffer("lbvh values", words(count as u64), storage)?;
         let node_slots = gpu.create_buffer("lbvh node slots", words(2 * count as u64), storage)?;
         let parents = gpu.create_buffer("lbvh parents", words(2 * count as u64), storage)?;
-        let params = GpuParams {
+        let params = LbvhUniform {
             count,
             _pad: [0; 3],
         };

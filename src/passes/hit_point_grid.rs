@@ -65,10 +65,10 @@ pub struct GridInfo {
 
 pub const GRID_INFO_BYTES: u64 = std::mem::size_of::<GridInfo>() as u64;
 
-/// `GridParams` in the shader: what the kernels index by, fixed when the node is prepared.
+/// `GridUniform` in the shader: what the kernels index by, fixed when the node is prepared.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct GridUniform {
     slots: u32,
     bucket_mask: u32,
     buckets: u32,
@@ -77,7 +77,7 @@ struct GpuParams {
 
 /// The structs above against their WGSL twins.
 const LAYOUTS: &[StructLayout] = &[
-    struct_layout!(GpuParams => "GridParams" in SHADER, { slots, bucket_mask, buckets }),
+    struct_layout!(GridUniform => "GridUniform" in SHADER, { slots, bucket_mask, buckets }),
     struct_layout!(GridInfo => "GridInfo" in SHADER, {
         max_radius, magnitude, valid, inserted, clipped, cell, inv_cell
     }),
@@ -181,7 +181,7 @@ impl Pass for HitPointGrid {
         let buckets = bucket_count(slots.into()) as u32;
         let params = gpu.create_buffer_init(
             "hit_point_grid params",
-            bytemuck::bytes_of(&GpuParams {
+            bytemuck::bytes_of(&GridUniform {
                 slots,
                 bucket_mask: buckets - 1,
                 buckets,

@@ -50,8 +50,8 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::input("photon_grid", PHOTON_GRID).optional(),
 ];
 
-/// `GpuParams` against `PathTraceParams` in the shader.
-const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PathTraceParams" in SHADER, {
+/// `PathTraceUniform` against its namesake in the shader.
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(PathTraceUniform => "PathTraceUniform" in SHADER, {
     sample_base, samples_per_iteration, seed, max_depth, rr_depth, merge_depth, record, trace_beyond, lookups,
     glossy_threshold
 });
@@ -169,7 +169,7 @@ impl<'de> Deserialize<'de> for MergeDepth {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct PathTraceUniform {
     sample_base: u32,
     samples_per_iteration: u32,
     seed: u32,
@@ -290,7 +290,7 @@ impl Pass for PathTrace {
         let hit_points = ctx.output("hit_points")?;
         let params = gpu.create_buffer(
             "path_trace params",
-            std::mem::size_of::<GpuParams>() as u64,
+            std::mem::size_of::<PathTraceUniform>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let splat = splats(&scene.uniform);
@@ -451,7 +451,7 @@ impl Pass for PathTrace {
         };
         let record = ctx.first || !p.keep_hit_points;
         let spp = self.params.samples_per_iteration;
-        let gpu_params = GpuParams {
+        let gpu_params = PathTraceUniform {
             sample_base: (ctx.iteration as u32).wrapping_mul(spp),
             samples_per_iteration: spp,
             seed: crate::passes::rng::camera_seed(ctx.seed),

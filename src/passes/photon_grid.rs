@@ -64,10 +64,10 @@ pub struct PhotonGridInfo {
     pub _pad: u32,
 }
 
-/// `PhotonGridParams` in the shader, written every iteration.
+/// `PhotonGridUniform` in the shader, written every iteration.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct PhotonGridUniform {
     radius: f32,
     inv_cell: f32,
     bucket_mask: u32,
@@ -77,7 +77,7 @@ struct GpuParams {
 }
 
 const LAYOUTS: &[StructLayout] = &[
-    struct_layout!(GpuParams => "PhotonGridParams" in SHADER, { radius, inv_cell, bucket_mask, center }),
+    struct_layout!(PhotonGridUniform => "PhotonGridUniform" in SHADER, { radius, inv_cell, bucket_mask, center }),
     struct_layout!(PhotonGridInfo => "PhotonGridInfo" in SHADER, {
         radius, inv_cell, bucket_mask, count, center
     }),
@@ -217,7 +217,7 @@ impl Pass for PhotonGrid {
         let bucket_mask = (bucket_count(hits) - 1) as u32;
         let params = gpu.create_buffer(
             "photon_grid params",
-            std::mem::size_of::<GpuParams>() as u64,
+            std::mem::size_of::<PhotonGridUniform>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let (layout, bind_group) = bind_buffers(
@@ -256,7 +256,7 @@ impl Pass for PhotonGrid {
             return Ok(());
         };
         let radius = ((p.first_radius * scale) as f32).max(p.min_radius);
-        let params = GpuParams {
+        let params = PhotonGridUniform {
             radius,
             inv_cell: 1.0 / (2.0 * radius * (1.0 + CELL_MARGIN)),
             bucket_mask: p.bucket_mask,

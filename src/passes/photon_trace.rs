@@ -37,8 +37,8 @@ pub const ALL_MODE_HITS_PER_PHOTON: u64 = 8;
 
 static SLOTS: &[SlotDecl] = &[SlotDecl::output("photon_hits", PHOTON_HITS, Size::Computed)];
 
-/// `GpuParams` against `PhotonParams` in the shader.
-const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PhotonParams" in SHADER, {
+/// `PhotonUniform` against its namesake in the shader.
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(PhotonUniform => "PhotonUniform" in SHADER, {
     photons, seed, iteration, mode, max_depth, rr_depth, flux_scale, groups_per_row, aim,
     glossy_threshold, invocations, aim_center, aim_radius
 });
@@ -111,7 +111,7 @@ impl Default for PhotonTraceParams {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct PhotonUniform {
     photons: u32,
     seed: u32,
     iteration: u32,
@@ -219,7 +219,7 @@ impl Pass for PhotonTrace {
         let photons = self.photons(&ctx);
         let params = gpu.create_buffer(
             "photon_trace params",
-            std::mem::size_of::<GpuParams>() as u64,
+            std::mem::size_of::<PhotonUniform>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let counters = gpu.create_buffer(
@@ -286,7 +286,7 @@ impl Pass for PhotonTrace {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let gpu_params = GpuParams {
+        let gpu_params = PhotonUniform {
             photons: p.photons,
             seed: crate::passes::rng::photon_seed(ctx.seed),
             iteration: ctx.iteration as u32,

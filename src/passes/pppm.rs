@@ -35,8 +35,8 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output(KERNEL_BIAS, IMAGE, Size::Pixels).persistent(),
 ];
 
-/// `GpuParams` against `PppmParams` in the shader.
-const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "PppmParams" in SHADER, {
+/// `PppmUniform` against its namesake in the shader.
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(PppmUniform => "PppmUniform" in SHADER, {
     width, height, slots_per_pixel, next_scale
 });
 
@@ -56,7 +56,7 @@ fn construct(params: &str) -> Result<Box<dyn Pass>, ron::error::SpannedError> {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct PppmUniform {
     width: u32,
     height: u32,
     slots_per_pixel: u32,
@@ -154,7 +154,7 @@ impl Pass for Pppm {
             .write_buffer(&radii.buffer, 0, bytemuck::bytes_of(&rule));
         let params = gpu.create_buffer(
             "pppm params",
-            std::mem::size_of::<GpuParams>() as u64,
+            std::mem::size_of::<PppmUniform>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let discarded = gpu.create_buffer(
@@ -197,7 +197,7 @@ impl Pass for Pppm {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let gpu_params = GpuParams {
+        let gpu_params = PppmUniform {
             width: p.width,
             height: p.height,
             slots_per_pixel: p.slots_per_pixel,

@@ -29,8 +29,8 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("radius", IMAGE, Size::Pixels),
 ];
 
-/// `GpuParams` against `ResolveParams` in the shader.
-const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "ResolveParams" in SHADER, {
+/// `ResolveUniform` against its namesake in the shader.
+const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(ResolveUniform => "ResolveUniform" in SHADER, {
     width, height, has_caustic, has_hit_points
 });
 
@@ -55,7 +55,7 @@ struct ResolveParams {}
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct ResolveUniform {
     width: u32,
     height: u32,
     has_caustic: u32,
@@ -86,7 +86,7 @@ impl Pass for Resolve {
             gpu.create_buffer("resolve placeholder", 64, wgpu::BufferUsages::STORAGE)?;
         let combined = ctx.output("combined")?;
         let radius = ctx.output("radius")?;
-        let params = GpuParams {
+        let params = ResolveUniform {
             width: ctx.width,
             height: ctx.height,
             has_caustic: caustic.is_some() as u32,

@@ -51,8 +51,8 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output(KERNEL_BIAS, IMAGE, Size::Pixels),
 ];
 
-/// `GpuParams` against `MergeParams` in the shader.
-pub(crate) const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(GpuParams => "MergeParams" in SHADER, {
+/// `MergeUniform` against its namesake in the shader.
+pub(crate) const PARAMS_LAYOUT: crate::gpu::layout::StructLayout = crate::struct_layout!(MergeUniform => "MergeUniform" in SHADER, {
     alpha, inv_iterations, slots_per_pixel, width, height, one
 });
 
@@ -128,7 +128,7 @@ impl Default for MergeParams {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct MergeUniform {
     alpha: f32,
     inv_iterations: f32,
     slots_per_pixel: u32,
@@ -225,7 +225,7 @@ impl Pass for Merge {
         )?;
         let params = gpu.create_buffer(
             "merge params",
-            std::mem::size_of::<GpuParams>() as u64,
+            std::mem::size_of::<MergeUniform>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let (layout, bind_group) = bind_buffers(
@@ -263,7 +263,7 @@ impl Pass for Merge {
         let Some(p) = &self.prepared else {
             return Ok(());
         };
-        let gpu_params = GpuParams {
+        let gpu_params = MergeUniform {
             alpha: self.params.alpha,
             inv_iterations: (1.0 / (ctx.iteration as f64 + 1.0)) as f32,
             slots_per_pixel: p.slots_per_pixel,

@@ -3,14 +3,14 @@
 
 #import custom::tone_curves::tone_curve
 
-struct TonemapParams {
+struct TonemapUniform {
     width: u32,
     height: u32,
     curve: u32,
     scale: f32,
 }
 
-@group(0) @binding(0) var<uniform> params: TonemapParams;
+@group(0) @binding(0) var<uniform> params: TonemapUniform;
 @group(0) @binding(1) var<storage, read> image: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> mapped: array<vec4<f32>>;
 

@@ -29,7 +29,7 @@ static SLOTS: &[SlotDecl] = &[
     SlotDecl::output("mapped", IMAGE, Size::Pixels),
 ];
 
-const PARAMS_LAYOUT: StructLayout = hppm::struct_layout!(GpuParams => "TonemapParams" in SHADER, {
+const PARAMS_LAYOUT: StructLayout = hppm::struct_layout!(TonemapUniform => "TonemapUniform" in SHADER, {
     width, height, curve, scale
 });
 
@@ -110,7 +110,7 @@ pub fn tonemap(rgb: [f32; 3], params: TonemapParams) -> [f32; 3] {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
+struct TonemapUniform {
     width: u32,
     height: u32,
     curve: u32,
@@ -139,7 +139,7 @@ impl Pass for Tonemap {
             Curve::Reinhard => 1,
             Curve::Aces => 2,
         };
-        let params = GpuParams {
+        let params = TonemapUniform {
             width: ctx.width,
             height: ctx.height,
             curve,
