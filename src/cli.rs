@@ -34,7 +34,7 @@ enum Command {
         markdown: bool,
     },
     /// Print the Mitsuba 3 plugins and properties the scene loader reads, with Mitsuba's
-    /// defaults and what hppm does with each (the README's table, in Markdown).
+    /// defaults and what hppm does with each (docs/scenes.md's table, in Markdown).
     Plugins,
     /// Check a scene file: every problem in it at once, each with file:line:col, as errors
     /// (it cannot render) and warnings (it renders without that); exits 0 when it renders.

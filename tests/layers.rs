@@ -1,4 +1,4 @@
-//! The layers point one way (README, Architecture): `gpu/` names nothing above it, `graph/`
+//! The layers point one way (docs/architecture.md): `gpu/` names nothing above it, `graph/`
 //! names only `gpu/`, `scene/` names no graph and no pass. A `use crate::passes::...` slipped
 //! into the graph core, or a scene loader reaching for a pass, fails here with file and line.
 

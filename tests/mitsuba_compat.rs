@@ -832,7 +832,7 @@ fn host(object: &str, kind: &str, property: &str) -> String {
     }
 }
 
-/// The plugin table (src/scene/plugins.rs, which the README's table and the loader's messages
+/// The plugin table (src/scene/plugins.rs, which docs/scenes.md's table and the loader's messages
 /// come from) and the loader agree both ways: each listed plugin loads with what it needs; a
 /// listed property is read (given a value of the wrong type, the loader says so rather than
 /// calling it unknown); and every property the loader looks for is listed. A property added to
@@ -888,20 +888,25 @@ fn the_plugin_table_is_what_the_loader_reads() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The README's plugin table is the code's (`hppm plugins`): edit src/scene/plugins.rs, then
-/// paste `hppm plugins` between the README's `plugins:begin` and `plugins:end` markers.
+/// The plugin table of docs/scenes.md is the code's (`hppm plugins`): edit
+/// src/scene/plugins.rs, then paste `hppm plugins` between docs/scenes.md's `plugins:begin` and
+/// `plugins:end` markers.
 #[test]
-fn the_readme_table_is_generated_from_the_code() {
-    let readme = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
-        .expect("README.md");
+fn the_plugin_table_of_docs_is_generated_from_the_code() {
+    let doc = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("docs")
+            .join("scenes.md"),
+    )
+    .expect("docs/scenes.md");
     let begin = "<!-- plugins:begin -->\n";
-    let start = readme.find(begin).expect("plugins:begin marker") + begin.len();
-    let end = readme
+    let start = doc.find(begin).expect("plugins:begin marker") + begin.len();
+    let end = doc
         .find("<!-- plugins:end -->")
         .expect("plugins:end marker");
     assert!(
-        readme[start..end] == hppm::scene::plugins::markdown(),
-        "README.md's plugin table differs from `hppm plugins`: regenerate it"
+        doc[start..end] == hppm::scene::plugins::markdown(),
+        "docs/scenes.md's plugin table differs from `hppm plugins`: regenerate it"
     );
 }
 

@@ -164,7 +164,7 @@ fn compare(
 /// height map, the flags off, and `twosided` inside and outside both plugins, seen from both
 /// sides; grazing rays make Mitsuba flip invalid normals (36 rows). Skipped: 8 rows where
 /// Mitsuba's `twosided` picks a side by the shading or perturbed normal that the geometric
-/// normal does not (hppm picks by the latter, see README), and any where the flip is a tie.
+/// normal does not (hppm picks by the latter, see docs/scenes.md, normal and bump maps), and any where the flip is a tie.
 /// Would catch the tangent not following dp_du, the normal map's x or y reversed, the bump
 /// gradient's transpose or scale wrong, a twosided back perturbed in the wrong frame, the flip
 /// or the terminator differing.

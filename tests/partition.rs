@@ -1,5 +1,5 @@
 //! Graphs that would count light twice or not at all are refused before any GPU work, with the
-//! file, the line of the node where the conflict arises and the reason (README, "Render
+//! file, the line of the node where the conflict arises and the reason (docs/graphs.md, "Render
 //! graphs"). Each case edits a bundled graph in memory the way a user would get it wrong; each
 //! of these rendered a wrong image before the check existed (about 2x too bright, or with the
 //! caustic missing). The bundled graphs themselves must pass.

@@ -1,6 +1,6 @@
 //! The Mitsuba 3 plugins the XML loader reads, with every property each one reads, its default
 //! and what hppm does with it: the one list the loader's messages, `hppm plugins` and the
-//! README's table come from. Tests hold it to the loader: every property listed is one the
+//! table of docs/scenes.md come from. Tests hold it to the loader: every property listed is one the
 //! loader reads, and every property the loader reads is listed (tests/mitsuba_compat.rs).
 
 /// One plugin (or several that read the same properties): its object tag, its `type`s, the
@@ -106,7 +106,7 @@ const MESH_FILE: &[Property] = &[
     p("silhouette_sampling_weight", "1"),
 ];
 
-/// Every plugin the loader reads, in the order the README lists them.
+/// Every plugin the loader reads, in the order docs/scenes.md lists them.
 pub const PLUGINS: &[Plugin] = &[
     Plugin {
         object: "integrator",
@@ -681,7 +681,7 @@ pub fn properties_of(object: &str, kind: &str) -> String {
     }
 }
 
-/// The table in Markdown (`hppm plugins`, the README).
+/// The table in Markdown (`hppm plugins`, docs/scenes.md).
 pub fn markdown() -> String {
     let mut out = String::from("| object | type | properties (Mitsuba's defaults) | notes |\n");
     out.push_str("|---|---|---|---|\n");
