@@ -51,7 +51,7 @@
 #ifdef ENVIRONMENT
 #import common::environment::escaped
 #endif
-#import common::bsdf::reflect_about
+#import common::bsdf::{BsdfSample, reflect_about}
 #ifdef DIELECTRIC
 #import common::bsdf::sample_dielectric
 #endif
@@ -293,6 +293,31 @@ fn full_weight(path: PathState) -> bool {
     return path.after_delta || path.through_null;
 }
 
+// Per channel, the share of the light a path reaches now that path tracing counts: all of it,
+// but for light reached from a photon-mapped vertex through specular vertices only, whose
+// photons' share photon mapping counts (docs/design.md section 1). Without glossy lobes in the
+// partition that share is all or nothing and the state is two flags; with them it is `mapped`.
+fn path_traced_share(path: PathState) -> vec3<f32> {
+#ifdef GLOSSY
+    return select(vec3<f32>(1.0), vec3<f32>(1.0) - path.mapped, path.after_specular);
+#else
+    return select(vec3<f32>(1.0), vec3<f32>(0.0), path.after_delta && path.after_merge);
+#endif
+}
+
+// After a bounce off a non-Lambertian BSDF: a specular lobe (delta, or glossy below the
+// threshold) keeps the photons' share of what the path reaches next; any other lobe is a
+// path-traced vertex, after which that light is path tracing's.
+fn keep_photon_share(path: ptr<function, PathState>, material: Material, wi: vec3<f32>, s: BsdfSample) {
+#ifdef GLOSSY
+    (*path).mapped *= material_specular_share(material, wi, s, params.glossy_threshold);
+    (*path).after_merge = max_component((*path).mapped) > 0.0;
+    (*path).after_specular = true;
+#else
+    (*path).after_merge = (*path).after_merge && s.delta;
+#endif
+}
+
 #ifdef ENVIRONMENT
 // The environment seen by a path that escapes, under the same rules as an area light's
 // emission: dropped when photon mapping counts it (reached from a photon-mapped vertex through
@@ -302,14 +327,10 @@ fn environment_emission(path: PathState) -> vec3<f32> {
     if scene_info.environment == NO_LIGHT {
         return vec3<f32>(0.0);
     }
-#ifdef GLOSSY
-    let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - path.mapped, path.after_specular);
-#else
-    if path.after_delta && path.after_merge {
+    let kept = path_traced_share(path);
+    if max_component(kept) <= 0.0 {
         return vec3<f32>(0.0);
     }
-    let kept = vec3<f32>(1.0);
-#endif
     let seen = escaped(path.dir);
     var weight = 1.0;
     if !full_weight(path) {
@@ -389,26 +410,15 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     var cos_o = dot(wo, surface.normal);
     (*path).travelled += hit.t;
 
-#ifdef GLOSSY
-    if surface.light != NO_LIGHT && cos_o > 0.0 && !hidden {
-        // Reached through specular lobes only from a photon-mapped vertex, the `mapped` share
-        // is the photons'; the rest keeps its MIS weight (a glossy lobe's pdf, not delta's).
-        let kept = select(vec3<f32>(1.0), vec3<f32>(1.0) - (*path).mapped, (*path).after_specular);
+    let kept = path_traced_share(*path);
+    if surface.light != NO_LIGHT && cos_o > 0.0 && !hidden && max_component(kept) > 0.0 {
+        // The rest keeps its MIS weight (after a glossy lobe, its pdf, not a delta's).
         var weight = 1.0;
         if !full_weight(*path) {
             weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
         }
         (*path).radiance += (*path).throughput * kept * material.emission * weight;
     }
-#else
-    if surface.light != NO_LIGHT && cos_o > 0.0 && !hidden && !((*path).after_delta && (*path).after_merge) {
-        var weight = 1.0;
-        if !full_weight(*path) {
-            weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
-        }
-        (*path).radiance += (*path).throughput * material.emission * weight;
-    }
-#endif
     // A twosided material's back is its own BSDF, seen with the normal flipped; a blend
     // scatters with one of its children.
     let chosen = choose_material(surface.material, cos_o, surface.uv, rng);
@@ -533,17 +543,8 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         (*path).after_delta = s.delta;
         if !s.delta {
             (*path).bsdf_pdf = s.pdf;
-#ifndef GLOSSY
-            // A path-traced vertex: what it reaches through specular vertices is ours.
-            (*path).after_merge = false;
-#endif
         }
-#ifdef GLOSSY
-        // A specular lobe (delta or glossy) keeps the photons' share; any other lobe ends it.
-        (*path).mapped *= material_specular_share(material, wi, s, params.glossy_threshold);
-        (*path).after_merge = max_component((*path).mapped) > 0.0;
-        (*path).after_specular = true;
-#endif
+        keep_photon_share(path, material, wi, s);
     }
     (*path).origin = spawn_origin(surface, (*path).dir);
     if max_component((*path).throughput) <= 0.0 {
