@@ -28,8 +28,9 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, Material, Surface, Hit, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, intersect_scene, unoccluded, surface_at, spawn_origin}
-#import common::material::{material_eval, material_sample, material_has_continuous_lobe}
+#import common::scene::{scene_info, materials, Material, Surface, Hit, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::material::{material_eval, material_has_continuous_lobe}
+#import common::scatter::{scatter, seen_from}
 #import common::blend::choose_material
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
@@ -51,10 +52,7 @@
 #ifdef ENVIRONMENT
 #import common::environment::escaped
 #endif
-#import common::bsdf::{BsdfSample, reflect_about}
-#ifdef DIELECTRIC
-#import common::bsdf::sample_dielectric
-#endif
+#import common::bsdf::BsdfSample
 #import common::hit_points::{HitPoint, HitPointBuffer, RadiusBuffer, PhotonHitsIn, NO_PIXEL, initial_radius}
 #import common::photon_grid::{PhotonGridInfo, photon_cell, photon_bucket}
 #import gpu::sample_mask::{SampleMask, SAMPLED}
@@ -424,11 +422,8 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     let chosen = choose_material(surface.material, cos_o, surface.uv, rng);
     material = chosen.material;
     let back = chosen.back;
-    if back {
-        surface.normal = -surface.normal;
-        surface.shading_normal = -surface.shading_normal;
-        cos_o = -cos_o;
-    }
+    surface = seen_from(surface, back);
+    cos_o = select(cos_o, -cos_o, back);
 #ifdef TEXTURES
     // Before any use of the colours: NEE, the bounce, hit-point weights, grid lookups.
     material = textured_material(material, surface.uv);
@@ -507,44 +502,19 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         (*path).bsdf_pdf = cos_i * INV_PI;
         (*path).after_delta = false;
         (*path).dir = dir;
-    } else if material.kind == MATERIAL_MIRROR {
-        if cos_o <= 0.0 || dot(surface.shading_normal, wo) <= 0.0 {
-            return false;
-        }
-        (*path).dir = reflect_about(wo, surface.shading_normal);
-        (*path).throughput *= frame_factor(shading, (*path).dir);
-        (*path).after_delta = true;
-#ifdef GLOSSY
-        (*path).after_specular = true;
-#endif
-    } else if material.kind == MATERIAL_DIELECTRIC {
-#ifdef DIELECTRIC
-        let s = sample_dielectric(wo, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), true);
-        let tint = select(material.albedo, material.specular, s.reflected);
-        (*path).throughput *= tint * s.weight * frame_factor(shading, s.dir);
-        (*path).dir = s.dir;
-        (*path).after_delta = true;
-#ifdef GLOSSY
-        (*path).after_specular = true;
-#endif
-#else
-        return false;
-#endif
     } else {
-        // Every other BSDF, in the shading frame of the side it is seen from.
-        let frame = shading.frame;
-        let u1 = rng_next_f32(rng);
-        let s = material_sample(material, wi, u1, rng_next_vec2(rng), true);
-        if !s.valid {
+        // Every other kind, in the shading frame of the side it is seen from.
+        let out = scatter(material, shading, cos_o, wo, true, rng);
+        if !out.sample.valid {
             return false;
         }
-        (*path).dir = normalize(frame * s.wo);
-        (*path).throughput *= s.weight * frame_factor(shading, (*path).dir);
-        (*path).after_delta = s.delta;
-        if !s.delta {
-            (*path).bsdf_pdf = s.pdf;
+        (*path).dir = out.dir;
+        (*path).throughput *= out.weight * frame_factor(shading, out.dir);
+        (*path).after_delta = out.sample.delta;
+        if !out.sample.delta {
+            (*path).bsdf_pdf = out.sample.pdf;
         }
-        keep_photon_share(path, material, wi, s);
+        keep_photon_share(path, material, wi, out.sample);
     }
     (*path).origin = spawn_origin(surface, (*path).dir);
     if max_component((*path).throughput) <= 0.0 {

@@ -21,8 +21,8 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
-#import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, MATERIAL_MIRROR, MATERIAL_DIELECTRIC, LIGHT_POINT, LIGHT_SPOT, LIGHT_PROJECTOR, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
-#import common::material::material_sample
+#import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, LIGHT_POINT, LIGHT_SPOT, LIGHT_PROJECTOR, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
+#import common::scatter::{scatter, seen_from}
 #import common::blend::choose_material
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
@@ -38,16 +38,12 @@
 #ifdef ENVIRONMENT
 #import common::environment::sample_environment_light
 #endif
-#import common::bsdf::reflect_about
 #ifdef TEXTURES
 #import common::texture::textured_material
 #endif
 #import common::normal_map::{plain_frame, frame_factor}
 #ifdef NORMAL_MAPS
 #import common::normal_map::shading_frame
-#endif
-#ifdef DIELECTRIC
-#import common::bsdf::sample_dielectric
 #endif
 #import common::hit_points::{PhotonHitsOut, PhotonHit}
 #import gpu::dispatch::next_item
@@ -345,11 +341,8 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     let chosen = choose_material(surface.material, cos_i, surface.uv, rng);
     var material = chosen.material;
     let back = chosen.back;
-    if back {
-        surface.normal = -surface.normal;
-        surface.shading_normal = -surface.shading_normal;
-        cos_i = -cos_i;
-    }
+    surface = seen_from(surface, back);
+    cos_i = select(cos_i, -cos_i, back);
 #ifdef BLENDS
     if material.kind == MATERIAL_NULL {
         // A mask's pass-through: the photon goes on unchanged, its class with it.
@@ -399,51 +392,32 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         // Cosine sampling: f cos / pdf = albedo.
         photon.flux *= material.albedo * factor * photon_shading_correction(surface, wi, photon.dir);
         after_specular = false;
-    } else if material.kind == MATERIAL_MIRROR {
-        if cos_i <= 0.0 || dot(wi, surface.shading_normal) <= 0.0 {
-            return false;
-        }
-        photon.dir = reflect_about(wi, surface.shading_normal);
-        photon.flux *= factor * photon_shading_correction(surface, wi, photon.dir);
-        after_specular = true;
-    } else if material.kind == MATERIAL_DIELECTRIC {
-#ifdef DIELECTRIC
-        // Photons carry flux, not radiance: no (n_i/n_t)^2 factor on refraction.
-        let s = sample_dielectric(wi, surface.shading_normal, material.int_ior, material.ext_ior, rng_next_f32(rng), false);
-        let tint = select(material.albedo, material.specular, s.reflected);
-        photon.flux *= tint * s.weight * factor * photon_shading_correction(surface, wi, s.dir);
-        photon.dir = s.dir;
-        after_specular = true;
-#else
-        return false;
-#endif
     } else {
-        let frame = shading.frame;
-        let u1 = rng_next_f32(rng);
-        let s = material_sample(material, wi * frame, u1, rng_next_vec2(rng), false);
-        if !s.valid {
+        // Every other kind, as the camera pass scatters but carrying flux.
+        let out = scatter(material, shading, cos_i, wi, false, rng);
+        if !out.sample.valid {
             return false;
         }
 #ifdef GLOSSY
         var share = vec3<f32>(1.0);
         if params.mode == MODE_CAUSTIC {
-            share = material_specular_share(material, wi * frame, s, params.glossy_threshold);
+            share = material_specular_share(material, wi * shading.frame, out.sample, params.glossy_threshold);
             if max_component(share) <= 0.0 {
                 return false;
             }
         }
 #else
-        if !s.delta && params.mode == MODE_CAUSTIC {
+        if !out.sample.delta && params.mode == MODE_CAUSTIC {
             return false;
         }
 #endif
-        photon.dir = normalize(frame * s.wo);
-        photon.flux *= s.weight * factor * photon_shading_correction(surface, wi, photon.dir);
+        photon.dir = out.dir;
+        photon.flux *= out.weight * factor * photon_shading_correction(surface, wi, photon.dir);
 #ifdef GLOSSY
         photon.flux *= share;
-        after_specular = s.delta || params.mode == MODE_CAUSTIC;
+        after_specular = out.sample.delta || params.mode == MODE_CAUSTIC;
 #else
-        after_specular = s.delta;
+        after_specular = out.sample.delta;
 #endif
     }
     photon.origin = spawn_origin(surface, photon.dir);

@@ -88,6 +88,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/normal_map.wgsl"),
     shader_file!("shaders/common/blend.wgsl"),
     shader_file!("shaders/common/material.wgsl"),
+    shader_file!("shaders/common/scatter.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
     shader_file!("shaders/common/deposit_sums.wgsl"),
