@@ -209,12 +209,12 @@ pub fn compare(
 ) -> Result<CompareReport, Error> {
     if !(options.seconds.is_finite() && options.seconds > 0.0) {
         return Err(Error::Other(format!(
-            "--time must be a positive number of seconds, got {}",
+            "the time per graph must be a positive number of seconds, got {}",
             options.seconds
         )));
     }
     if options.graphs.is_empty() {
-        return Err(Error::Other("give at least one --graph".into()));
+        return Err(Error::Other("give at least one graph".into()));
     }
     let scene = scene::load_reporting(&options.scene, &options.defines, |w| {
         eprintln!("warning: {w}")
@@ -227,7 +227,7 @@ pub fn compare(
             let reference = Image::read_exr(path)?;
             if (reference.width, reference.height) != (width, height) {
                 return Err(Error::Other(format!(
-                    "{}: the reference is {}x{} but the renders are {width}x{height} (set --size)",
+                    "{}: the reference is {}x{} but the renders are {width}x{height} (set the render size)",
                     path.display(),
                     reference.width,
                     reference.height

@@ -369,7 +369,7 @@ pub fn merge(shards: &[(PathBuf, StateFile)], partial: bool) -> Result<Merged, E
         if h.kind != StateKind::Shard {
             return Err(bad(
                 path,
-                "is a checkpoint, not a shard (resume it with hppm render --resume)",
+                "is a checkpoint, not a shard (a render resumes from it)",
             ));
         }
         let f = &first.header;
@@ -406,7 +406,7 @@ pub fn merge(shards: &[(PathBuf, StateFile)], partial: bool) -> Result<Merged, E
         }
         if h.shards != f.shards {
             return mismatch(
-                "shards (n of --shard k/n)",
+                "shard count (n of shard k of n)",
                 f.shards.to_string(),
                 h.shards.to_string(),
             );
@@ -452,7 +452,7 @@ pub fn merge(shards: &[(PathBuf, StateFile)], partial: bool) -> Result<Merged, E
         .collect();
     if !missing.is_empty() && !partial {
         return Err(Error::Other(format!(
-            "shards {} of {} are missing (give every shard, or --partial to merge those present)",
+            "shards {} of {} are missing (give every shard, or merge those present as a partial render)",
             missing.join(", "),
             header.shards
         )));
