@@ -565,7 +565,7 @@ fn photon_graphs_are_unbiased_on_the_point_light_caustic() {
 /// S vertex miscounted at one of the four interfaces would show.
 ///
 /// The glass's bottom face lies in the table's plane (y = 0). Until photons gave such ties to
-/// the surface facing them (traverse's `front_wins_ties`, shaders/common/scene.wgsl), about
+/// the surface facing them (traverse's `front_wins_ties`, shaders/common/traversal.wgsl), about
 /// half the photons reaching the contact left through the glass's bottom, and the hybrid was
 /// 0.46% darker than Mitsuba (8 seeds x 2 spp: 1.3x the bound) while `pt` was unbiased; now
 /// -0.16% at 0.44x the bound (and at 8 x 32 spp -0.13%, SE 0.03%, 0.95x that run's bound,

@@ -1,4 +1,4 @@
-//! Closest hits on the GPU (`intersect_scene`, shaders/common/scene.wgsl) against a CPU
+//! Closest hits on the GPU (`intersect_scene`, shaders/common/traversal.wgsl) against a CPU
 //! brute-force intersector in f64, on whatever adapter wgpu finds (lavapipe in CI), in every
 //! octant of ray directions, through the scene BVH and through the unrolled every-primitive path
 //! small scenes take.
@@ -22,7 +22,8 @@ use common::*;
 use glam::{DVec3, Vec3, Vec4};
 use hppm::scene::Scene;
 
-const KERNEL: &str = "#import common::scene::{intersect_scene, NO_HIT}
+const KERNEL: &str = "#import common::scene::NO_HIT
+#import common::traversal::intersect_scene
 @group(1) @binding(0) var<storage, read> rays: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
 @compute @workgroup_size(64)

@@ -134,7 +134,7 @@ fn assert_caught(fault: Fault) {
 fn a_traversal_fault_in_one_direction_is_caught() {
     assert_caught(Fault {
         name: "far child skipped for dir.x < 0",
-        file: "shaders/common/scene.wgsl",
+        file: "shaders/common/traversal.wgsl",
         correct: "if t_far < T_INFINITE && top < BVH_STACK_SIZE {",
         faulty: "if t_far < T_INFINITE && top < BVH_STACK_SIZE && dir.x >= 0.0 {",
         graph: "graphs/pt.ron",

@@ -1,4 +1,4 @@
-//! Ray offsets (pbrt-v4's error bounds, shaders/common/scene.wgsl) and the scale range a scene
+//! Ray offsets (pbrt-v4's error bounds, shaders/common/surface.wgsl) and the scale range a scene
 //! may have. A small object next to a huge one must render as it does next to a small one, and
 //! no spawned ray may hit the surface it leaves (a furnace would darken); scenes beyond what f32
 //! can render are refused, and those inside the range render the same at any scale.

@@ -204,7 +204,7 @@ fn cpu_caustic_deposits(
                     after_specular = true;
                     let side = if dir.dot(normal) >= 0.0 { 1.0 } else { -1.0 };
                     // The shaders leave a surface by its rounding-error bound (offset_ray_origin
-                    // in shaders/common/scene.wgsl), a few roundoffs of the position's
+                    // in shaders/common/surface.wgsl), a few roundoffs of the position's
                     // magnitude; the model leaves it by as much.
                     let offset = 4.0 * f32::EPSILON * position.abs().max_element();
                     origin = position + side * offset * normal;

@@ -155,7 +155,7 @@ fn uniform_scene_tables_render_the_same_image_as_storage_tables() {
 }
 
 /// Small scenes (every primitive tested on lavapipe) with each block size of the unrolled tests
-/// in shaders/common/scene.wgsl: 36 triangles (32 + 4; the cubes' blocks culled by their boxes),
+/// in shaders/common/traversal.wgsl: 36 triangles (32 + 4; the cubes' blocks culled by their boxes),
 /// 12 and 2 spheres (8 + 4 and 2), 24 and 3 (16 + 8 and 2 + 1), 2 and 1 (a point light's
 /// caustic: photons' coplanar tie rule).
 const SMALL_SCENES: [&str; 4] = [

@@ -10,7 +10,9 @@ use common::pass_harness::PassHarness;
 use common::*;
 use glam::{Vec2, Vec3, Vec4};
 
-const KERNEL: &str = "#import common::scene::{intersect_scene, surface_at, NO_HIT}
+const KERNEL: &str = "#import common::scene::NO_HIT
+#import common::traversal::intersect_scene
+#import common::surface::surface_at
 @group(1) @binding(0) var<storage, read> rays: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
 @compute @workgroup_size(64)

@@ -1,11 +1,13 @@
 #define_import_path common::lights
 
-#import common::scene::{scene_info, lights, light_cdf, triangle_at, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, LIGHT_PROJECTOR, NO_TEXTURE, SurfacePoint, triangle_point}
+#import common::scene::{scene_info, lights, light_cdf, triangle_at, Light, LIGHT_TRIANGLE, LIGHT_SPHERE, LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, LIGHT_PROJECTOR, NO_TEXTURE}
+#import common::surface::{SurfacePoint, triangle_point}
 #ifdef TEXTURES
 #import common::texture::texture_eval
 #endif
 #ifdef SPHERES
-#import common::scene::{spheres, sphere_point}
+#import common::scene::spheres
+#import common::surface::sphere_point
 #endif
 #import common::sampling::{sample_triangle_barycentrics, sample_uniform_sphere}
 #ifdef ENVIRONMENT

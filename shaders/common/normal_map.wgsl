@@ -7,7 +7,8 @@
 
 #import common::sampling::basis_from_normal
 #ifdef NORMAL_MAPS
-#import common::scene::{Material, Surface, scene_info, triangle_at, triangle_uvs_at, spheres}
+#import common::scene::{Material, scene_info, triangle_at, triangle_uvs_at, spheres}
+#import common::surface::Surface
 #ifdef TEXTURES
 #import common::texture::{texture_eval, texture_eval_1_grad}
 #endif

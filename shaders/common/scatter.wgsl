@@ -5,7 +5,8 @@
 // which carry flux and take no 1/eta^2 at a refraction), as pbrt-v4 samples its BSDFs. The
 // Lambertian lobe stays with each pass: that is where they differ (hit points, deposits).
 
-#import common::scene::{Material, Surface, MATERIAL_MIRROR, MATERIAL_DIELECTRIC}
+#import common::scene::{Material, MATERIAL_MIRROR, MATERIAL_DIELECTRIC}
+#import common::surface::Surface
 #import common::rng::{rng_next_f32, rng_next_vec2}
 #import common::bsdf::{BsdfSample, no_sample, reflect_about}
 #ifdef DIELECTRIC

@@ -28,7 +28,10 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
-#import common::scene::{scene_info, materials, Material, Surface, Hit, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE, intersect_scene, unoccluded, surface_at, spawn_origin}
+#import common::scene::{scene_info, materials, Material, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE}
+#import common::intersection::Hit
+#import common::traversal::intersect_scene
+#import common::surface::{Surface, unoccluded, surface_at, spawn_origin}
 #import common::material::{material_eval, material_has_continuous_lobe}
 #import common::scatter::{scatter, seen_from}
 #import common::blend::choose_material

@@ -21,7 +21,9 @@
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
-#import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, LIGHT_POINT, LIGHT_SPOT, LIGHT_PROJECTOR, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP, intersect_photon, surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
+#import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, LIGHT_POINT, LIGHT_SPOT, LIGHT_PROJECTOR, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP}
+#import common::traversal::intersect_photon
+#import common::surface::{surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
 #import common::scatter::{scatter, seen_from}
 #import common::blend::choose_material
 #ifdef BLENDS

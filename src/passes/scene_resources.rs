@@ -60,7 +60,7 @@ pub const LAYOUTS: &[StructLayout] = &[
 /// `HPPM_SCENE_TABLES=storage` or `=uniform` overrides the choice (to measure both).
 ///
 /// A small scene whose triangles and spheres are uniform tables is also intersected without its
-/// BVH, by testing every primitive in unrolled code (`EVERY_PRIM` in shaders/common/scene.wgsl):
+/// BVH, by testing every primitive in unrolled code (`EVERY_PRIM` in shaders/common/traversal.wgsl):
 /// lavapipe loads a uniform entry at a constant index once for all lanes, and that beats the
 /// BVH's divergent loads up to [`EVERY_PRIM_LIMIT`] primitives (BENCHMARKS.md).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -161,10 +161,10 @@ pub const MAX_COLLAPSE_GROWTH: f32 = 0.10;
 
 /// The most primitives a scene may have for its rays to test every one instead of walking the
 /// BVH (where its triangles and spheres are uniform tables). The unrolled blocks in
-/// shaders/common/scene.wgsl go up to 127 triangles and 15 spheres.
+/// shaders/common/traversal.wgsl go up to 127 triangles and 15 spheres.
 pub const EVERY_PRIM_LIMIT: usize = 48;
 
-/// Block sizes of the unrolled tests, largest first (shaders/common/scene.wgsl).
+/// Block sizes of the unrolled tests, largest first (shaders/common/traversal.wgsl).
 const TRIANGLE_BLOCKS: [u32; 7] = [64, 32, 16, 8, 4, 2, 1];
 const SPHERE_BLOCKS: [u32; 4] = [8, 4, 2, 1];
 

@@ -907,7 +907,7 @@ impl GpuScene {
 
 /// (centre, radius) padded so that rounding never lets a surface poke out of the sphere: the
 /// GPU's points on those surfaces are within a few roundoffs of their magnitude, at most
-/// |center| + radius (shaders/common/scene.wgsl, triangle_point and sphere_point), far inside
+/// |center| + radius (shaders/common/surface.wgsl, triangle_point and sphere_point), far inside
 /// 1e-4 of it. All zero for `None`.
 fn padded_sphere(sphere: Option<(Vec3, f32)>) -> [f32; 4] {
     match sphere {
