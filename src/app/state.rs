@@ -406,7 +406,7 @@ pub fn merge(shards: &[(PathBuf, StateFile)], partial: bool) -> Result<Merged, E
         }
         if h.shards != f.shards {
             return mismatch(
-                "shard count (n of shard k of n)",
+                "shards (n of shard k of n)",
                 f.shards.to_string(),
                 h.shards.to_string(),
             );
