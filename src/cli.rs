@@ -6,10 +6,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::app::bench;
+use crate::app::job::{JobWatcher, RenderJob};
 use crate::app::render::{Budget, BudgetField, Renderer};
-use crate::app::state::{Origin, StateFile, checkpoint_file, graph_fingerprint, shard_file};
+use crate::app::state::StateFile;
 use crate::gpu::{GpuContext, GpuError};
-use crate::graph::pass::Schedule;
 use crate::image::{OutputFormat, Provenance};
 use crate::passes::Registry;
 use crate::{Error, scene};
@@ -295,6 +295,8 @@ fn flag_of(field: BudgetField) -> &'static str {
         BudgetField::Seconds => "--time",
         BudgetField::TargetError => "--target-error",
         BudgetField::Adaptive => "--adaptive",
+        BudgetField::Shard => "--shard",
+        BudgetField::CheckpointEvery => "--checkpoint-every",
     }
 }
 
@@ -321,201 +323,62 @@ fn progress_bar(budget: Budget) -> indicatif::ProgressBar {
 }
 
 fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
-    let scene_path = args
-        .scene
-        .unwrap_or_else(|| bundled("scenes/cornell_box.ron"));
-    let graph_path = args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron"));
-    if args.shard.is_none() {
-        OutputFormat::of(&args.out)?;
-    }
-    // A missing or read-only folder is found now, not after the render.
-    crate::image::check_writable(&args.out)?;
-    if let Some(checkpoint) = &args.checkpoint {
-        crate::image::check_writable(checkpoint)?;
-        if !(args.checkpoint_every.is_finite() && args.checkpoint_every > 0.0) {
-            return Err(Error::Other(format!(
-                "--checkpoint-every must be a positive number of seconds, got {}",
-                args.checkpoint_every
-            )));
-        }
-    }
-    let resume = match &args.resume {
-        Some(path) => Some((path.clone(), StateFile::read(path)?)),
-        None => None,
-    };
-    let graph_text = std::fs::read_to_string(&graph_path)
-        .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
-    let loading = std::time::Instant::now();
-    let scene = load_scene(&scene_path, &args.defines)?;
-    let features = scene.features();
-    eprintln!(
-        "scene: {features} ({} triangles, loaded in {:.2} s)",
-        scene.triangles.len(),
-        loading.elapsed().as_secs_f64()
-    );
-    if !features.has_lights() {
-        eprintln!(
-            "warning: {} has no light (no emitting shape, no point light): the image will be black",
-            scene_path.display()
-        );
-    }
-    let graph = registry.load_graph(&graph_path)?;
-    for warning in &graph.warnings {
-        eprintln!("warning: {warning}");
-    }
-    let gpu = GpuContext::new(args.adapter.as_deref())?;
-    eprintln!("adapter: {}", gpu.adapter_label());
-    let saved = resume.as_ref().map(|(_, f)| &f.header);
-    let (width, height) = args.size.unwrap_or(match saved {
-        Some(h) => (h.width, h.height),
-        None => (scene.camera.width, scene.camera.height),
-    });
-    let seed = args.seed.or(saved.map(|h| h.seed)).unwrap_or(0);
-    let (shard, shards) = args
-        .shard
-        .or(saved.map(|h| (h.shard, h.shards)))
-        .unwrap_or((0, 1));
-    let implicit_spp = args.time.is_none() && args.photons.is_none() && args.target_error.is_none();
-    let budget = Budget {
-        spp: args
-            .spp
-            .or(if implicit_spp {
-                scene.spp_hint.map(u64::from)
-            } else {
-                None
-            })
-            .or(if implicit_spp { Some(64) } else { None }),
+    let job = RenderJob {
+        scene: args
+            .scene
+            .unwrap_or_else(|| bundled("scenes/cornell_box.ron")),
+        defines: args.defines,
+        graph: args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron")),
+        out: args.out,
+        size: args.size,
+        seed: args.seed,
+        shard: args.shard,
+        spp: args.spp,
         seconds: args.time,
         photons: args.photons,
         target_error: args.target_error,
         adaptive: args.adaptive,
+        checkpoint: args.checkpoint,
+        checkpoint_every: args.checkpoint_every,
+        resume: args.resume,
+        aovs: args.aovs,
+        profile: args.profile,
+        adapter: args.adapter,
     };
-    budget.check_named(flag_of)?;
-    if args.shard.is_some() && args.target_error.is_some() {
-        return Err(Error::Other(
-            "--shard and --target-error: a shard renders a fixed share of the iterations, so \
-             it cannot stop at an error"
-                .into(),
-        ));
+    crate::app::job::run(&job, registry, &mut Terminal::default())
+}
+
+/// The job's watcher on a terminal: notes on stderr, results on stdout, a progress bar, Ctrl-C.
+#[derive(Default)]
+struct Terminal {
+    bar: Option<(indicatif::ProgressBar, Budget)>,
+}
+
+impl JobWatcher for Terminal {
+    fn names(&self) -> fn(BudgetField) -> &'static str {
+        flag_of
     }
-    if args.shard.is_some() && budget.spp.is_none() && budget.photons.is_none() {
-        return Err(Error::Other(
-            "--shard needs a budget in --spp or --photons: a time budget ends at a different \
-             iteration on every machine, so the shards would not add up to one render"
-                .into(),
-        ));
+
+    fn note(&mut self, line: &str) {
+        eprintln!("{line}");
     }
-    let schedule = Schedule {
-        first: shard,
-        stride: shards,
-    };
-    let preparing = std::time::Instant::now();
-    let mut renderer = Renderer::builder(&gpu, &scene, graph)
-        .registry(registry.clone())
-        .size(width, height)
-        .seed(seed)
-        .schedule(schedule)
-        .build()?;
-    eprintln!(
-        "prepared in {:.2} s (scene BVH built and uploaded, graph's buffers and pipelines)",
-        preparing.elapsed().as_secs_f64()
-    );
-    let uniform_tables = renderer.placement().uniform_defs();
-    if !uniform_tables.is_empty() {
-        eprintln!(
-            "scene tables in uniform buffers: {}",
-            uniform_tables.join(" ")
-        );
+
+    fn written(&mut self, line: &str) {
+        println!("{line}");
     }
-    let chunked = renderer.placement().chunked_report();
-    if !chunked.is_empty() {
-        eprintln!(
-            "scene tables larger than one binding, in chunks: {}",
-            chunked.join(", ")
-        );
+
+    fn cancel_flag(&mut self) -> Arc<AtomicBool> {
+        cancel_flag()
     }
-    if let Some(budget) = renderer.placement().node_budget() {
-        eprintln!(
-            "scene BVH collapsed to at most {budget} nodes (a few larger leaves) to fit a uniform binding"
-        );
+
+    fn start(&mut self, budget: Budget) {
+        self.bar = Some((progress_bar(budget), budget));
     }
-    if let Some((triangles, spheres)) = renderer.placement().every_prim() {
-        eprintln!(
-            "rays test every primitive instead of the BVH ({triangles} triangles, {spheres} spheres)"
-        );
-    }
-    for pruned in renderer.pruned() {
-        eprintln!("{pruned}");
-    }
-    if args.shard.is_some() {
-        if let Some((node, why)) = renderer.shard_refusal() {
-            return Err(Error::Other(format!(
-                "--shard: {} cannot be rendered in shards: {node}: {why}",
-                graph_path.display()
-            )));
-        }
-        renderer.read_terms().map_err(|e| {
-            Error::Other(format!(
-                "--shard: {}'s output cannot be summed over shards: {e}",
-                graph_path.display()
-            ))
-        })?;
-    }
-    let origin = Origin {
-        scene: scene_path.display().to_string(),
-        graph: graph_path.display().to_string(),
-        graph_hash: graph_fingerprint(&graph_text),
-        total_iterations: renderer.total_iterations(budget),
-    };
-    if let Some((path, file)) = &resume {
-        crate::app::state::resume(&mut renderer, &origin, path, file)?;
-        eprintln!(
-            "resumed {}: {} iterations done ({} spp)",
-            path.display(),
-            renderer.iterations(),
-            renderer.samples_per_pixel()
-        );
-    }
-    if args.profile {
-        // The first iteration compiles the pipelines: time the ones after it, when there are.
-        let total = renderer
-            .total_iterations(budget)
-            .map(|t| renderer.schedule().local_count(t));
-        let warm_up = total.is_none_or(|t| t > renderer.iterations() + 1);
-        renderer.profile_from(renderer.iterations() + u64::from(warm_up))?;
-    }
-    if renderer.bands() > 1 {
-        eprintln!(
-            "{width}x{height} does not fit the adapter's bindings whole: rendering it in {} bands \
-             of rows (the photons traced once, for the whole image, and read by every band)",
-            renderer.bands()
-        );
-    }
-    if let Some(warning) = renderer.unsampled_light_warning() {
-        eprintln!("{warning}");
-    }
-    let cancel = cancel_flag();
-    // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
-    eprintln!(
-        "rendering {width}x{height} through {} (Ctrl-C stops and writes the image so far)",
-        graph_path.display()
-    );
-    let bar = progress_bar(budget);
-    if args.shard.is_none() {
-        renderer.watch_error();
-    }
-    let mut last_checkpoint = 0.0;
-    let mut checkpoint_error = None;
-    let summary = renderer.run(budget, &cancel, |r, seconds| {
-        if let Some(path) = &args.checkpoint
-            && seconds - last_checkpoint >= args.checkpoint_every
-            && checkpoint_error.is_none()
-        {
-            last_checkpoint = seconds;
-            if let Err(e) = checkpoint_file(r, &origin).and_then(|f| f.write(path)) {
-                checkpoint_error = Some(e);
-            }
-        }
+
+    fn progress(&mut self, r: &Renderer, seconds: f64) {
+        let Some((bar, budget)) = &self.bar else {
+            return;
+        };
         let spp = r.samples_per_pixel();
         match budget.spp {
             Some(_) => bar.set_position(spp),
@@ -533,163 +396,13 @@ fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
             ),
             None => format!("{rate:.1} spp/s{sampling}"),
         });
-    })?;
-    bar.finish_and_clear();
-    // The estimate at the image written, not the last one made on the way.
-    let (image, estimate) = match args.shard {
-        Some(_) => (None, None),
-        None => {
-            let (image, estimate) = renderer.image_and_error_estimate()?;
-            (Some(image), estimate)
-        }
-    };
-    let unsampled = renderer.unsampled_light_warning().is_some();
-    report_stop(&summary, budget, estimate.as_ref(), unsampled);
-    if let Some(e) = checkpoint_error {
-        return Err(e);
     }
-    if let Some(path) = &args.checkpoint {
-        checkpoint_file(&renderer, &origin)?.write(path)?;
-        eprintln!(
-            "checkpoint {}: {} iterations",
-            path.display(),
-            renderer.iterations()
-        );
-    }
-    let counters = renderer.counters()?;
-    let mut provenance = Provenance::default()
-        .with("hppm_adapter", gpu.adapter_label())
-        .with("hppm_scene", scene_path.display())
-        .with("hppm_graph", graph_path.display())
-        .with("hppm_spp", renderer.samples_per_pixel())
-        .with("hppm_seed", seed)
-        .with("hppm_seconds", format!("{:.3}", summary.seconds));
-    if budget.adaptive {
-        provenance = provenance.with(
-            "hppm_mean_spp",
-            format!("{:.3}", renderer.mean_samples_per_pixel()),
-        );
-    }
-    if let Some(e) = &estimate {
-        provenance = provenance
-            .with("hppm_estimated_relmse", format!("{:.6e}", e.relmse))
-            .with("hppm_estimated_variance", format!("{:.6e}", e.variance))
-            .with("hppm_estimated_bias", format!("{:.6e}", e.bias));
-    }
-    if !args.defines.is_empty() {
-        let defines: Vec<String> = args
-            .defines
-            .iter()
-            .map(|(k, v)| format!("{k}={v}"))
-            .collect();
-        provenance = provenance.with("hppm_defines", defines.join(" "));
-    }
-    match image {
-        Some(image) => image.write(&args.out, &provenance)?,
-        None => shard_file(&renderer, &origin)?.write(&args.out)?,
-    }
-    if args.aovs {
-        for (slot, aov) in renderer.aovs()? {
-            let path = aov_path(&args.out, slot);
-            aov.write(&path, &provenance.clone().with("hppm_aov", slot))?;
-            println!("{}: {slot}", path.display());
-        }
-        if let Some(e) = &estimate {
-            let path = aov_path(&args.out.with_extension("exr"), "error");
-            e.per_pixel
-                .write(&path, &provenance.clone().with("hppm_aov", "error"))?;
-            println!(
-                "{}: error (estimated relative squared error)",
-                path.display()
-            );
-        }
-    }
-    let dropped = counters.get("photon_hits_dropped");
-    if dropped > 0 {
-        eprintln!(
-            "warning: {dropped} photon hits did not fit their buffer and were left out (caustics too dark); \
-             lower photons_per_iteration"
-        );
-    }
-    if budget.photons.is_some() && renderer.photons_per_iteration() == 0 {
-        eprintln!("warning: --photons ignored: the graph emits no photons");
-    }
-    if summary.cancelled {
-        eprintln!("interrupted: wrote what was rendered so far");
-    }
-    if args.profile {
-        print!(
-            "{}",
-            crate::app::compare::profile_table(
-                &renderer.node_times(),
-                renderer.profiled_iterations(),
-                &gpu.adapter_label()
-            )
-        );
-    }
-    let spp = match budget.adaptive {
-        true => format!(
-            "{:.1} spp on average (at most {})",
-            renderer.mean_samples_per_pixel(),
-            renderer.samples_per_pixel()
-        ),
-        false => format!("{} spp", renderer.samples_per_pixel()),
-    };
-    println!(
-        "{}: {}x{}, {spp} and {} photons in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
-        args.out.display(),
-        width,
-        height,
-        renderer.photons(),
-        summary.seconds,
-        counters.get("rays") as f64 / summary.seconds.max(1e-9) / 1e6,
-        counters.get("discarded_samples"),
-        gpu.adapter_label()
-    );
-    Ok(())
-}
 
-/// Says what ended the render and the error estimate at its end.
-fn report_stop(
-    summary: &crate::app::render::RunSummary,
-    budget: Budget,
-    estimate: Option<&crate::app::error_estimate::ErrorEstimate>,
-    unsampled_light: bool,
-) {
-    use crate::app::render::Stop;
-    let why = match summary.stop {
-        Stop::Count if budget.spp.is_some() => "the samples asked for (--spp) were rendered",
-        Stop::Count => "the photons asked for (--photons) were emitted",
-        Stop::Time => "the time budget (--time) ran out",
-        Stop::TargetError => "the estimated error fell below --target-error",
-        Stop::Cancelled => "interrupted",
-    };
-    let lower_bound = match unsampled_light {
-        true => ", a lower bound: the caustics this graph cannot sample are missing from it",
-        false => "",
-    };
-    let estimate = estimate.map_or("no error estimate (fewer than 2 iterations)".into(), |e| {
-        format!(
-            "estimated relMSE {:.3e} (noise {:.3e}, kernel bias {:.3e}{lower_bound})",
-            e.relmse, e.variance, e.bias
-        )
-    });
-    match budget.target_error {
-        Some(target) if summary.stop != Stop::TargetError => {
-            eprintln!("stopped before --target-error {target:e}: {why}; {estimate}")
+    fn finish(&mut self) {
+        if let Some((bar, _)) = self.bar.take() {
+            bar.finish_and_clear();
         }
-        _ => eprintln!("stopped: {why}; {estimate}"),
     }
-}
-
-/// `render.exr` + `pt` -> `render.pt.exr`.
-fn aov_path(out: &Path, slot: &str) -> PathBuf {
-    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
-    let name = match out.extension() {
-        Some(ext) => format!("{stem}.{slot}.{}", ext.to_string_lossy()),
-        None => format!("{stem}.{slot}"),
-    };
-    out.with_file_name(name)
 }
 
 fn merge(args: MergeArgs) -> Result<(), Error> {

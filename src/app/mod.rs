@@ -8,6 +8,7 @@ pub mod bench_hybrid;
 pub mod bench_seed;
 pub mod compare;
 pub mod error_estimate;
+pub mod job;
 #[cfg(feature = "cli")]
 pub mod plot;
 pub mod render;

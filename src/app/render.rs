@@ -36,7 +36,7 @@ pub struct Budget {
     pub adaptive: bool,
 }
 
-/// A field of a [`Budget`], for messages: the library names it as the field, the command line
+/// A field of a [`Budget`] (or of a render job), for messages: the library names it as the field, the command line
 /// as its flag ([`Budget::check_named`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BudgetField {
@@ -45,6 +45,9 @@ pub enum BudgetField {
     Seconds,
     TargetError,
     Adaptive,
+    /// A render job's shard and checkpoint interval ([`crate::app::job::RenderJob`]).
+    Shard,
+    CheckpointEvery,
 }
 
 impl BudgetField {
@@ -56,6 +59,8 @@ impl BudgetField {
             BudgetField::Seconds => "seconds",
             BudgetField::TargetError => "target_error",
             BudgetField::Adaptive => "adaptive",
+            BudgetField::Shard => "shard",
+            BudgetField::CheckpointEvery => "checkpoint_every",
         }
     }
 }

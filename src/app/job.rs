@@ -1,0 +1,454 @@
+//! A render job from files to files, as `hppm render` runs it: plan (the scene, the graph, the
+//! budget and size, a shard's or a resumed render's iterations), run (the renderer, with
+//! checkpoints) and write (the image or the shard's accumulators, AOVs, provenance). The command
+//! line maps its arguments to a [`RenderJob`] and watches it through a [`JobWatcher`] (a
+//! progress bar, Ctrl-C, its messages on stderr); a program may run one the same way.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use crate::Error;
+use crate::app::error_estimate::ErrorEstimate;
+use crate::app::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
+use crate::app::state::{Origin, StateFile, checkpoint_file, graph_fingerprint, shard_file};
+use crate::gpu::GpuContext;
+use crate::graph::pass::Schedule;
+use crate::image::{OutputFormat, Provenance};
+use crate::passes::Registry;
+
+/// What to render and where to write it.
+#[derive(Debug, Clone)]
+pub struct RenderJob {
+    /// Mitsuba 3 XML, hppm RON or OBJ.
+    pub scene: PathBuf,
+    /// Mitsuba `-D name=value` scene parameters.
+    pub defines: Vec<(String, String)>,
+    pub graph: PathBuf,
+    /// The image (.exr or .png), or with `shard` the shard's accumulators.
+    pub out: PathBuf,
+    /// Default: the scene's film (or the resumed render's size).
+    pub size: Option<(u32, u32)>,
+    /// Default: 0 (or the resumed render's).
+    pub seed: Option<u64>,
+    /// Shard k of n: iterations k, k + n, ...
+    pub shard: Option<(u64, u64)>,
+    /// Budgets: samples per pixel (default: the scene's sample count, else 64, when no other
+    /// budget is given), seconds, photons, a target error (with `adaptive`, per pixel).
+    pub spp: Option<u64>,
+    pub seconds: Option<f64>,
+    pub photons: Option<u64>,
+    pub target_error: Option<f64>,
+    pub adaptive: bool,
+    /// Write the render's whole state here every `checkpoint_every` seconds and at the end.
+    pub checkpoint: Option<PathBuf>,
+    pub checkpoint_every: f64,
+    /// Continue the render saved in this checkpoint.
+    pub resume: Option<PathBuf>,
+    /// Also write the output node's other images and the per-pixel error estimate.
+    pub aovs: bool,
+    /// Time each node and report the table.
+    pub profile: bool,
+    /// An adapter index or part of its name; default: the best.
+    pub adapter: Option<String>,
+}
+
+/// How a job reports as it runs. Every method has a quiet default.
+pub trait JobWatcher {
+    /// How messages name the budget's and the job's fields (a program: the field names; the
+    /// command line: its flags).
+    fn names(&self) -> fn(BudgetField) -> &'static str {
+        BudgetField::field_name
+    }
+    /// A line about the job: what was loaded, pruned, how it stopped, warnings.
+    fn note(&mut self, _line: &str) {}
+    /// A result: a file written, the profile, the closing summary.
+    fn written(&mut self, _line: &str) {}
+    /// The flag that stops the render (and writes what it has) once set; asked for just before
+    /// the render starts.
+    fn cancel_flag(&mut self) -> Arc<AtomicBool> {
+        Arc::new(AtomicBool::new(false))
+    }
+    /// The render starts with this budget.
+    fn start(&mut self, _budget: Budget) {}
+    /// After each iteration, `seconds` into the render.
+    fn progress(&mut self, _renderer: &Renderer, _seconds: f64) {}
+    /// The render loop ended.
+    fn finish(&mut self) {}
+}
+
+/// Runs `job` with the pass kinds of `registry`.
+pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> Result<(), Error> {
+    use BudgetField::*;
+    let name = watch.names();
+    let scene_path = &job.scene;
+    let graph_path = &job.graph;
+    if job.shard.is_none() {
+        OutputFormat::of(&job.out)?;
+    }
+    // A missing or read-only folder is found now, not after the render.
+    crate::image::check_writable(&job.out)?;
+    if let Some(checkpoint) = &job.checkpoint {
+        crate::image::check_writable(checkpoint)?;
+        if !(job.checkpoint_every.is_finite() && job.checkpoint_every > 0.0) {
+            return Err(Error::Other(format!(
+                "{} must be a positive number of seconds, got {}",
+                name(CheckpointEvery),
+                job.checkpoint_every
+            )));
+        }
+    }
+    let resume = match &job.resume {
+        Some(path) => Some((path.clone(), StateFile::read(path)?)),
+        None => None,
+    };
+    let graph_text = std::fs::read_to_string(graph_path)
+        .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
+    let loading = std::time::Instant::now();
+    let scene = crate::scene::load_reporting(scene_path, &job.defines, |w| {
+        watch.note(&format!("warning: {w}"))
+    })?;
+    let features = scene.features();
+    watch.note(&format!(
+        "scene: {features} ({} triangles, loaded in {:.2} s)",
+        scene.triangles.len(),
+        loading.elapsed().as_secs_f64()
+    ));
+    if !features.has_lights() {
+        watch.note(&format!(
+            "warning: {} has no light (no emitting shape, no point light): the image will be black",
+            scene_path.display()
+        ));
+    }
+    let graph = registry.load_graph(graph_path)?;
+    for warning in &graph.warnings {
+        watch.note(&format!("warning: {warning}"));
+    }
+    let gpu = GpuContext::new(job.adapter.as_deref())?;
+    watch.note(&format!("adapter: {}", gpu.adapter_label()));
+    let saved = resume.as_ref().map(|(_, f)| &f.header);
+    let (width, height) = job.size.unwrap_or(match saved {
+        Some(h) => (h.width, h.height),
+        None => (scene.camera.width, scene.camera.height),
+    });
+    let seed = job.seed.or(saved.map(|h| h.seed)).unwrap_or(0);
+    let (shard, shards) = job
+        .shard
+        .or(saved.map(|h| (h.shard, h.shards)))
+        .unwrap_or((0, 1));
+    let implicit_spp = job.seconds.is_none() && job.photons.is_none() && job.target_error.is_none();
+    let budget = Budget {
+        spp: job
+            .spp
+            .or(if implicit_spp {
+                scene.spp_hint.map(u64::from)
+            } else {
+                None
+            })
+            .or(if implicit_spp { Some(64) } else { None }),
+        seconds: job.seconds,
+        photons: job.photons,
+        target_error: job.target_error,
+        adaptive: job.adaptive,
+    };
+    budget.check_named(name)?;
+    if job.shard.is_some() && job.target_error.is_some() {
+        return Err(Error::Other(format!(
+            "{} and {}: a shard renders a fixed share of the iterations, so it cannot stop at an \
+             error",
+            name(Shard),
+            name(TargetError)
+        )));
+    }
+    if job.shard.is_some() && budget.spp.is_none() && budget.photons.is_none() {
+        return Err(Error::Other(format!(
+            "{} needs a budget in {} or {}: a time budget ends at a different iteration on every \
+             machine, so the shards would not add up to one render",
+            name(Shard),
+            name(Spp),
+            name(Photons)
+        )));
+    }
+    let schedule = Schedule {
+        first: shard,
+        stride: shards,
+    };
+    let preparing = std::time::Instant::now();
+    let mut renderer = Renderer::builder(&gpu, &scene, graph)
+        .registry(registry.clone())
+        .size(width, height)
+        .seed(seed)
+        .schedule(schedule)
+        .build()?;
+    watch.note(&format!(
+        "prepared in {:.2} s (scene BVH built and uploaded, graph's buffers and pipelines)",
+        preparing.elapsed().as_secs_f64()
+    ));
+    let uniform_tables = renderer.placement().uniform_defs();
+    if !uniform_tables.is_empty() {
+        watch.note(&format!(
+            "scene tables in uniform buffers: {}",
+            uniform_tables.join(" ")
+        ));
+    }
+    let chunked = renderer.placement().chunked_report();
+    if !chunked.is_empty() {
+        watch.note(&format!(
+            "scene tables larger than one binding, in chunks: {}",
+            chunked.join(", ")
+        ));
+    }
+    if let Some(budget) = renderer.placement().node_budget() {
+        watch.note(&format!(
+            "scene BVH collapsed to at most {budget} nodes (a few larger leaves) to fit a uniform binding"
+        ));
+    }
+    if let Some((triangles, spheres)) = renderer.placement().every_prim() {
+        watch.note(&format!(
+            "rays test every primitive instead of the BVH ({triangles} triangles, {spheres} spheres)"
+        ));
+    }
+    for pruned in renderer.pruned() {
+        watch.note(&pruned.to_string());
+    }
+    if job.shard.is_some() {
+        if let Some((node, why)) = renderer.shard_refusal() {
+            return Err(Error::Other(format!(
+                "{}: {} cannot be rendered in shards: {node}: {why}",
+                name(Shard),
+                graph_path.display()
+            )));
+        }
+        renderer.read_terms().map_err(|e| {
+            Error::Other(format!(
+                "{}: {}'s output cannot be summed over shards: {e}",
+                name(Shard),
+                graph_path.display()
+            ))
+        })?;
+    }
+    let origin = Origin {
+        scene: scene_path.display().to_string(),
+        graph: graph_path.display().to_string(),
+        graph_hash: graph_fingerprint(&graph_text),
+        total_iterations: renderer.total_iterations(budget),
+    };
+    if let Some((path, file)) = &resume {
+        crate::app::state::resume(&mut renderer, &origin, path, file)?;
+        watch.note(&format!(
+            "resumed {}: {} iterations done ({} spp)",
+            path.display(),
+            renderer.iterations(),
+            renderer.samples_per_pixel()
+        ));
+    }
+    if job.profile {
+        // The first iteration compiles the pipelines: time the ones after it, when there are.
+        let total = renderer
+            .total_iterations(budget)
+            .map(|t| renderer.schedule().local_count(t));
+        let warm_up = total.is_none_or(|t| t > renderer.iterations() + 1);
+        renderer.profile_from(renderer.iterations() + u64::from(warm_up))?;
+    }
+    if renderer.bands() > 1 {
+        watch.note(&format!(
+            "{width}x{height} does not fit the adapter's bindings whole: rendering it in {} bands \
+             of rows (the photons traced once, for the whole image, and read by every band)",
+            renderer.bands()
+        ));
+    }
+    if let Some(warning) = renderer.unsampled_light_warning() {
+        watch.note(&warning);
+    }
+    let cancel = watch.cancel_flag();
+    // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
+    watch.note(&format!(
+        "rendering {width}x{height} through {} (Ctrl-C stops and writes the image so far)",
+        graph_path.display()
+    ));
+    watch.start(budget);
+    if job.shard.is_none() {
+        renderer.watch_error();
+    }
+    let mut last_checkpoint = 0.0;
+    let mut checkpoint_error = None;
+    let summary = renderer.run(budget, &cancel, |r, seconds| {
+        if let Some(path) = &job.checkpoint
+            && seconds - last_checkpoint >= job.checkpoint_every
+            && checkpoint_error.is_none()
+        {
+            last_checkpoint = seconds;
+            if let Err(e) = checkpoint_file(r, &origin).and_then(|f| f.write(path)) {
+                checkpoint_error = Some(e);
+            }
+        }
+        watch.progress(r, seconds);
+    })?;
+    watch.finish();
+    // The estimate at the image written, not the last one made on the way.
+    let (image, estimate) = match job.shard {
+        Some(_) => (None, None),
+        None => {
+            let (image, estimate) = renderer.image_and_error_estimate()?;
+            (Some(image), estimate)
+        }
+    };
+    let unsampled = renderer.unsampled_light_warning().is_some();
+    watch.note(&stop_line(
+        &summary,
+        budget,
+        estimate.as_ref(),
+        unsampled,
+        name,
+    ));
+    if let Some(e) = checkpoint_error {
+        return Err(e);
+    }
+    if let Some(path) = &job.checkpoint {
+        checkpoint_file(&renderer, &origin)?.write(path)?;
+        watch.note(&format!(
+            "checkpoint {}: {} iterations",
+            path.display(),
+            renderer.iterations()
+        ));
+    }
+    let counters = renderer.counters()?;
+    let mut provenance = Provenance::default()
+        .with("hppm_adapter", gpu.adapter_label())
+        .with("hppm_scene", scene_path.display())
+        .with("hppm_graph", graph_path.display())
+        .with("hppm_spp", renderer.samples_per_pixel())
+        .with("hppm_seed", seed)
+        .with("hppm_seconds", format!("{:.3}", summary.seconds));
+    if budget.adaptive {
+        provenance = provenance.with(
+            "hppm_mean_spp",
+            format!("{:.3}", renderer.mean_samples_per_pixel()),
+        );
+    }
+    if let Some(e) = &estimate {
+        provenance = provenance
+            .with("hppm_estimated_relmse", format!("{:.6e}", e.relmse))
+            .with("hppm_estimated_variance", format!("{:.6e}", e.variance))
+            .with("hppm_estimated_bias", format!("{:.6e}", e.bias));
+    }
+    if !job.defines.is_empty() {
+        let defines: Vec<String> = job
+            .defines
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        provenance = provenance.with("hppm_defines", defines.join(" "));
+    }
+    match image {
+        Some(image) => image.write(&job.out, &provenance)?,
+        None => shard_file(&renderer, &origin)?.write(&job.out)?,
+    }
+    if job.aovs {
+        for (slot, aov) in renderer.aovs()? {
+            let path = aov_path(&job.out, slot);
+            aov.write(&path, &provenance.clone().with("hppm_aov", slot))?;
+            watch.written(&format!("{}: {slot}", path.display()));
+        }
+        if let Some(e) = &estimate {
+            let path = aov_path(&job.out.with_extension("exr"), "error");
+            e.per_pixel
+                .write(&path, &provenance.clone().with("hppm_aov", "error"))?;
+            watch.written(&format!(
+                "{}: error (estimated relative squared error)",
+                path.display()
+            ));
+        }
+    }
+    let dropped = counters.get("photon_hits_dropped");
+    if dropped > 0 {
+        watch.note(&format!(
+            "warning: {dropped} photon hits did not fit their buffer and were left out (caustics too dark); \
+             lower photons_per_iteration"
+        ));
+    }
+    if budget.photons.is_some() && renderer.photons_per_iteration() == 0 {
+        watch.note(&format!(
+            "warning: {} ignored: the graph emits no photons",
+            name(Photons)
+        ));
+    }
+    if summary.cancelled {
+        watch.note("interrupted: wrote what was rendered so far");
+    }
+    if job.profile {
+        let table = crate::app::compare::profile_table(
+            &renderer.node_times(),
+            renderer.profiled_iterations(),
+            &gpu.adapter_label(),
+        );
+        watch.written(table.trim_end());
+    }
+    let spp = match budget.adaptive {
+        true => format!(
+            "{:.1} spp on average (at most {})",
+            renderer.mean_samples_per_pixel(),
+            renderer.samples_per_pixel()
+        ),
+        false => format!("{} spp", renderer.samples_per_pixel()),
+    };
+    watch.written(&format!(
+        "{}: {}x{}, {spp} and {} photons in {:.2} s ({:.2} Mrays/s, {} samples discarded as NaN/Inf) on {}",
+        job.out.display(),
+        width,
+        height,
+        renderer.photons(),
+        summary.seconds,
+        counters.get("rays") as f64 / summary.seconds.max(1e-9) / 1e6,
+        counters.get("discarded_samples"),
+        gpu.adapter_label()
+    ));
+    Ok(())
+}
+
+/// Why the render stopped and its estimated error, in one line.
+fn stop_line(
+    summary: &RunSummary,
+    budget: Budget,
+    estimate: Option<&ErrorEstimate>,
+    unsampled_light: bool,
+    name: fn(BudgetField) -> &'static str,
+) -> String {
+    use BudgetField::*;
+    let why = match summary.stop {
+        Stop::Count if budget.spp.is_some() => {
+            format!("the samples asked for ({}) were rendered", name(Spp))
+        }
+        Stop::Count => format!("the photons asked for ({}) were emitted", name(Photons)),
+        Stop::Time => format!("the time budget ({}) ran out", name(Seconds)),
+        Stop::TargetError => format!("the estimated error fell below {}", name(TargetError)),
+        Stop::Cancelled => "interrupted".to_string(),
+    };
+    let lower_bound = match unsampled_light {
+        true => ", a lower bound: the caustics this graph cannot sample are missing from it",
+        false => "",
+    };
+    let estimate = estimate.map_or("no error estimate (fewer than 2 iterations)".into(), |e| {
+        format!(
+            "estimated relMSE {:.3e} (noise {:.3e}, kernel bias {:.3e}{lower_bound})",
+            e.relmse, e.variance, e.bias
+        )
+    });
+    match budget.target_error {
+        Some(target) if summary.stop != Stop::TargetError => format!(
+            "stopped before {} {target:e}: {why}; {estimate}",
+            name(TargetError)
+        ),
+        _ => format!("stopped: {why}; {estimate}"),
+    }
+}
+
+/// `render.exr` + `pt` -> `render.pt.exr`.
+fn aov_path(out: &Path, slot: &str) -> PathBuf {
+    let stem = out.file_stem().unwrap_or_default().to_string_lossy();
+    let name = match out.extension() {
+        Some(ext) => format!("{stem}.{slot}.{}", ext.to_string_lossy()),
+        None => format!("{stem}.{slot}"),
+    };
+    out.with_file_name(name)
+}

@@ -1,0 +1,123 @@
+//! A render job run as a library call (`hppm::app::job::run`), what `hppm render` runs: it
+//! renders and writes its image, reports through the watcher it is given, and names its own
+//! fields, not command-line flags, when it refuses one.
+
+mod common;
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use hppm::app::job::{JobWatcher, RenderJob};
+use hppm::app::render::{Budget, Renderer};
+use hppm::passes::Registry;
+
+#[derive(Default)]
+struct Recorder {
+    notes: Vec<String>,
+    written: Vec<String>,
+    iterations: u32,
+    started: Option<Budget>,
+}
+
+impl JobWatcher for Recorder {
+    fn note(&mut self, line: &str) {
+        self.notes.push(line.to_string());
+    }
+    fn written(&mut self, line: &str) {
+        self.written.push(line.to_string());
+    }
+    fn cancel_flag(&mut self) -> Arc<AtomicBool> {
+        Arc::new(AtomicBool::new(false))
+    }
+    fn start(&mut self, budget: Budget) {
+        self.started = Some(budget);
+    }
+    fn progress(&mut self, _: &Renderer, _: f64) {
+        self.iterations += 1;
+    }
+}
+
+fn job(out: std::path::PathBuf) -> RenderJob {
+    RenderJob {
+        scene: common::repo_path("scenes/cornell_box.ron"),
+        defines: Vec::new(),
+        graph: common::repo_path("graphs/hybrid.ron"),
+        out,
+        size: Some((16, 12)),
+        seed: None,
+        shard: None,
+        spp: Some(3),
+        seconds: None,
+        photons: None,
+        target_error: None,
+        adaptive: false,
+        checkpoint: None,
+        checkpoint_every: 300.0,
+        resume: None,
+        aovs: true,
+        profile: false,
+        adapter: std::env::var("HPPM_TEST_ADAPTER").ok(),
+    }
+}
+
+/// The job renders 3 iterations of the hybrid, writes the PNG and its AOVs, and tells its
+/// watcher what it did (the scene loaded, the stop, the files) and each iteration.
+#[test]
+fn a_job_renders_writes_and_reports_to_its_watcher() {
+    let dir = std::env::temp_dir().join(format!("hppm_job_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let out = dir.join("box.png");
+    let mut watch = Recorder::default();
+    hppm::app::job::run(&job(out.clone()), &Registry::builtin(), &mut watch)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let png = std::fs::read(&out).expect("the image");
+    assert!(png.starts_with(b"\x89PNG"));
+    assert_eq!(watch.iterations, 3);
+    assert_eq!(watch.started.and_then(|b| b.spp), Some(3));
+    assert!(
+        watch.notes.iter().any(|n| n.starts_with("scene: ")),
+        "{:?}",
+        watch.notes
+    );
+    assert!(
+        watch
+            .notes
+            .iter()
+            .any(|n| n.starts_with("stopped: the samples asked for (spp)")),
+        "{:?}",
+        watch.notes
+    );
+    assert!(
+        watch.written.iter().any(|w| w.ends_with("box.pt.png: pt")),
+        "{:?}",
+        watch.written
+    );
+    assert!(dir.join("box.pt.png").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Refusals name the job's fields as a program sets them (`shard`, `target_error`,
+/// `checkpoint_every`), where the command line names its flags.
+#[test]
+fn a_jobs_refusals_name_its_fields() {
+    let out = std::env::temp_dir().join("hppm_job_refused.png");
+    let mut shard = job(out.clone());
+    shard.shard = Some((0, 2));
+    shard.spp = None;
+    shard.target_error = Some(0.01);
+    shard.seconds = Some(1.0);
+    let err = hppm::app::job::run(&shard, &Registry::builtin(), &mut Recorder::default())
+        .expect_err("a shard cannot stop at an error")
+        .to_string();
+    assert!(err.starts_with("shard and target_error:"), "{err}");
+    let mut checkpoint = job(out);
+    checkpoint.checkpoint = Some(std::env::temp_dir().join("hppm_job.state"));
+    checkpoint.checkpoint_every = 0.0;
+    let err = hppm::app::job::run(&checkpoint, &Registry::builtin(), &mut Recorder::default())
+        .expect_err("a zero interval")
+        .to_string();
+    assert!(
+        err.starts_with("checkpoint_every must be a positive"),
+        "{err}"
+    );
+}
