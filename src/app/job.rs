@@ -13,9 +13,11 @@ use crate::app::error_estimate::ErrorEstimate;
 use crate::app::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
 use crate::app::state::{Origin, StateFile, checkpoint_file, graph_fingerprint, shard_file};
 use crate::gpu::GpuContext;
+use crate::graph::ValidGraph;
 use crate::graph::pass::Schedule;
-use crate::image::{OutputFormat, Provenance};
+use crate::image::{Image, OutputFormat, Provenance};
 use crate::passes::Registry;
+use crate::scene::Scene;
 
 /// What to render and where to write it.
 #[derive(Debug, Clone)]
@@ -77,8 +79,35 @@ pub trait JobWatcher {
     fn finish(&mut self) {}
 }
 
-/// Runs `job` with the pass kinds of `registry`.
+/// Runs `job` with the pass kinds of `registry`: plan, prepare, render, write.
 pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> Result<(), Error> {
+    let (plan, graph) = plan(job, registry, watch)?;
+    let (mut renderer, origin) = prepare(job, registry, &plan, graph, watch)?;
+    let rendered = render(job, &plan, &mut renderer, &origin, watch)?;
+    write(job, &plan, &renderer, &origin, rendered, watch)
+}
+
+/// What a job renders, settled before any GPU work: the scene, the device, the graph file's
+/// text (for checkpoints), the size, seed, iterations and budget, the render it resumes.
+struct Plan {
+    scene: Scene,
+    gpu: GpuContext,
+    graph_text: String,
+    width: u32,
+    height: u32,
+    seed: u64,
+    schedule: Schedule,
+    budget: Budget,
+    resume: Option<(PathBuf, StateFile)>,
+}
+
+/// Checks the job, loads the scene and the graph, opens the device, settles size, seed,
+/// iterations and budget.
+fn plan(
+    job: &RenderJob,
+    registry: &Registry,
+    watch: &mut dyn JobWatcher,
+) -> Result<(Plan, ValidGraph), Error> {
     use BudgetField::*;
     let name = watch.names();
     let scene_path = &job.scene;
@@ -173,8 +202,43 @@ pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> 
         first: shard,
         stride: shards,
     };
+    let plan = Plan {
+        scene,
+        gpu,
+        graph_text,
+        width,
+        height,
+        seed,
+        schedule,
+        budget,
+        resume,
+    };
+    Ok((plan, graph))
+}
+
+/// Builds the renderer (pruned graph, pipelines, buffers) and says what it did; refuses a shard
+/// of a graph that cannot be summed; resumes a saved render; starts profiling.
+fn prepare<'p>(
+    job: &RenderJob,
+    registry: &Registry,
+    plan: &'p Plan,
+    graph: ValidGraph,
+    watch: &mut dyn JobWatcher,
+) -> Result<(Renderer<'p>, Origin), Error> {
+    use BudgetField::*;
+    let name = watch.names();
+    let (scene_path, graph_path) = (&job.scene, &job.graph);
+    let (gpu, scene, graph_text, resume) = (&plan.gpu, &plan.scene, &plan.graph_text, &plan.resume);
+    let &Plan {
+        width,
+        height,
+        seed,
+        schedule,
+        budget,
+        ..
+    } = plan;
     let preparing = std::time::Instant::now();
-    let mut renderer = Renderer::builder(&gpu, &scene, graph)
+    let mut renderer = Renderer::builder(gpu, scene, graph)
         .registry(registry.clone())
         .size(width, height)
         .seed(seed)
@@ -230,7 +294,7 @@ pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> 
     let origin = Origin {
         scene: scene_path.display().to_string(),
         graph: graph_path.display().to_string(),
-        graph_hash: graph_fingerprint(&graph_text),
+        graph_hash: graph_fingerprint(graph_text),
         total_iterations: renderer.total_iterations(budget),
     };
     if let Some((path, file)) = &resume {
@@ -260,6 +324,34 @@ pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> 
     if let Some(warning) = renderer.unsampled_light_warning() {
         watch.note(&warning);
     }
+    Ok((renderer, origin))
+}
+
+/// What the render loop leaves for writing.
+struct Rendered {
+    summary: RunSummary,
+    /// None for a shard, which writes its accumulators.
+    image: Option<Image>,
+    estimate: Option<ErrorEstimate>,
+}
+
+/// Runs the render to its budget (or Ctrl-C), checkpointing on the way, and takes the image and
+/// its error estimate.
+fn render(
+    job: &RenderJob,
+    plan: &Plan,
+    renderer: &mut Renderer<'_>,
+    origin: &Origin,
+    watch: &mut dyn JobWatcher,
+) -> Result<Rendered, Error> {
+    let name = watch.names();
+    let graph_path = &job.graph;
+    let &Plan {
+        width,
+        height,
+        budget,
+        ..
+    } = plan;
     let cancel = watch.cancel_flag();
     // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
     watch.note(&format!(
@@ -278,7 +370,7 @@ pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> 
             && checkpoint_error.is_none()
         {
             last_checkpoint = seconds;
-            if let Err(e) = checkpoint_file(r, &origin).and_then(|f| f.write(path)) {
+            if let Err(e) = checkpoint_file(r, origin).and_then(|f| f.write(path)) {
                 checkpoint_error = Some(e);
             }
         }
@@ -304,8 +396,40 @@ pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> 
     if let Some(e) = checkpoint_error {
         return Err(e);
     }
+    Ok(Rendered {
+        summary,
+        image,
+        estimate,
+    })
+}
+
+/// Writes the last checkpoint, the image (or the shard's accumulators) with its provenance,
+/// the AOVs, and the closing lines.
+fn write(
+    job: &RenderJob,
+    plan: &Plan,
+    renderer: &Renderer<'_>,
+    origin: &Origin,
+    rendered: Rendered,
+    watch: &mut dyn JobWatcher,
+) -> Result<(), Error> {
+    use BudgetField::*;
+    let name = watch.names();
+    let (scene_path, graph_path, gpu) = (&job.scene, &job.graph, &plan.gpu);
+    let &Plan {
+        width,
+        height,
+        seed,
+        budget,
+        ..
+    } = plan;
+    let Rendered {
+        summary,
+        image,
+        estimate,
+    } = rendered;
     if let Some(path) = &job.checkpoint {
-        checkpoint_file(&renderer, &origin)?.write(path)?;
+        checkpoint_file(renderer, origin)?.write(path)?;
         watch.note(&format!(
             "checkpoint {}: {} iterations",
             path.display(),
@@ -342,7 +466,7 @@ pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> 
     }
     match image {
         Some(image) => image.write(&job.out, &provenance)?,
-        None => shard_file(&renderer, &origin)?.write(&job.out)?,
+        None => shard_file(renderer, origin)?.write(&job.out)?,
     }
     if job.aovs {
         for (slot, aov) in renderer.aovs()? {
