@@ -9,6 +9,7 @@ use crate::app::bench;
 use crate::app::job::{JobWatcher, RenderJob};
 use crate::app::render::{Budget, BudgetField, Renderer};
 use crate::app::state::StateFile;
+use crate::app::tev::TevView;
 use crate::gpu::{GpuContext, GpuError};
 use crate::image::{OutputFormat, Provenance};
 use crate::passes::Registry;
@@ -101,6 +102,10 @@ struct RenderArgs {
     /// estimate as OUT.error.exr.
     #[arg(long)]
     aovs: bool,
+    /// Show the render live in tev listening at [HOST:]PORT (host 127.0.0.1 by default; tev
+    /// listens on 14158): the image every 250 ms and when done. No viewer there changes nothing.
+    #[arg(long, value_name = "[HOST:]PORT")]
+    tev: Option<String>,
     /// Image size WxH (default: the scene's film).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
@@ -323,6 +328,7 @@ fn progress_bar(budget: Budget) -> indicatif::ProgressBar {
 }
 
 fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
+    let args_tev = args.tev.clone();
     let job = RenderJob {
         scene: args
             .scene
@@ -345,14 +351,29 @@ fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
         profile: args.profile,
         adapter: args.adapter,
     };
-    crate::app::job::run(&job, registry, &mut Terminal::default())
+    let tev = match &args_tev {
+        Some(address) => {
+            let name = job
+                .out
+                .file_name()
+                .map_or("hppm".into(), |n| n.to_string_lossy());
+            Some(TevView::new(address, &name)?)
+        }
+        None => None,
+    };
+    let mut terminal = Terminal { bar: None, tev };
+    crate::app::job::run(&job, registry, &mut terminal)
 }
 
-/// The job's watcher on a terminal: notes on stderr, results on stdout, a progress bar, Ctrl-C.
-#[derive(Default)]
+/// The job's watcher on a terminal: notes on stderr, results on stdout, a progress bar, Ctrl-C,
+/// and a live view in tev when asked for.
 struct Terminal {
     bar: Option<(indicatif::ProgressBar, Budget)>,
+    tev: Option<TevView>,
 }
+
+/// How often the live view is sent the image.
+const TEV_INTERVAL: std::time::Duration = std::time::Duration::from_millis(250);
 
 impl JobWatcher for Terminal {
     fn names(&self) -> fn(BudgetField) -> &'static str {
@@ -376,6 +397,12 @@ impl JobWatcher for Terminal {
     }
 
     fn progress(&mut self, r: &Renderer, seconds: f64) {
+        if let Some(tev) = &mut self.tev
+            && tev.due(TEV_INTERVAL)
+            && let Ok(image) = r.image()
+        {
+            tev.show(&image);
+        }
         let Some((bar, budget)) = &self.bar else {
             return;
         };
@@ -401,6 +428,12 @@ impl JobWatcher for Terminal {
     fn finish(&mut self) {
         if let Some((bar, _)) = self.bar.take() {
             bar.finish_and_clear();
+        }
+    }
+
+    fn image(&mut self, image: &crate::image::Image) {
+        if let Some(tev) = &mut self.tev {
+            tev.show(image);
         }
     }
 }

@@ -77,6 +77,8 @@ pub trait JobWatcher {
     fn progress(&mut self, _renderer: &Renderer, _seconds: f64) {}
     /// The render loop ended.
     fn finish(&mut self) {}
+    /// The finished image, just before it is written (a shard writes accumulators instead).
+    fn image(&mut self, _image: &Image) {}
 }
 
 /// Runs `job` with the pass kinds of `registry`: plan, prepare, render, write.
@@ -463,6 +465,9 @@ fn write(
             .map(|(k, v)| format!("{k}={v}"))
             .collect();
         provenance = provenance.with("hppm_defines", defines.join(" "));
+    }
+    if let Some(image) = &image {
+        watch.image(image);
     }
     match image {
         Some(image) => image.write(&job.out, &provenance)?,

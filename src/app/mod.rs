@@ -13,3 +13,4 @@ pub mod job;
 pub mod plot;
 pub mod render;
 pub mod state;
+pub mod tev;
