@@ -391,27 +391,10 @@ fn scene_features_compile_code_in_and_out() {
 /// retyped on one side only fails here instead of rendering garbage.
 #[test]
 fn every_uploaded_struct_matches_its_wgsl_layout() {
-    let lib = library(true);
-    let layouts = builtin_kinds()
-        .iter()
-        .flat_map(|kind| kind.layouts)
-        .chain(hppm::passes::hit_points::LAYOUTS)
-        .chain(hppm::passes::scene_resources::LAYOUTS)
-        .chain(hppm::gpu::radix_sort::LAYOUTS)
-        .chain(hppm::gpu::odd_iterations::LAYOUTS);
-    let mut checked = Vec::new();
-    let mut problems = Vec::new();
-    for layout in layouts {
-        let module = lib
-            .compose(&layout.shader)
-            .unwrap_or_else(|e| panic!("{}: {e}", layout.shader.path));
-        if let Err(e) = layout.check(&module) {
-            problems.push(e);
-        }
-        checked.push(layout.wgsl);
-    }
+    let checked = hppm::passes::Registry::builtin()
+        .check_layouts()
+        .unwrap_or_else(|problems| panic!("{}", problems.join("\n")));
     eprintln!("checked {} layouts: {}", checked.len(), checked.join(", "));
-    assert!(problems.is_empty(), "{}", problems.join("\n"));
     for name in [
         "PathTraceUniform",
         "PhotonUniform",

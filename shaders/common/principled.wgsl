@@ -108,6 +108,12 @@ fn calc_schlick(r0: vec3<f32>, cos_i: f32, eta: f32) -> vec3<f32> {
     return vec3<f32>(w) * (vec3<f32>(1.0) - r0) + r0;
 }
 
+// Schlick's reflectance at normal incidence for the relative index `eta`.
+fn schlick_r0(eta: f32) -> f32 {
+    let r = (eta - 1.0) / (eta + 1.0);
+    return r * r;
+}
+
 fn compatible(m: vec3<f32>, wi: vec3<f32>, wo: vec3<f32>, cos_i: f32, reflection: bool) -> bool {
     let m_i = mulsign(m, cos_i);
     let m_o = select(-m_i, m_i, reflection);
@@ -124,8 +130,7 @@ fn principled_fresnel(p: Principled, f_dielectric: f32, cos_i: f32, front: bool)
         schlick += p.metallic * calc_schlick(p.base_color, cos_i, p.eta);
     }
     if has(p, HAS_SPEC_TINT) {
-        let r0 = ((eta_it - 1.0) / (eta_it + 1.0)) * ((eta_it - 1.0) / (eta_it + 1.0));
-        schlick += (1.0 - p.metallic) * p.spec_tint * calc_schlick(tint_of(p.base_color) * r0, cos_i, p.eta);
+        schlick += (1.0 - p.metallic) * p.spec_tint * calc_schlick(tint_of(p.base_color) * schlick_r0(eta_it), cos_i, p.eta);
     }
     return vec3<f32>((1.0 - p.metallic) * (1.0 - p.spec_tint) * f_dielectric) + schlick;
 }

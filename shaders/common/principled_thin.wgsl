@@ -12,7 +12,7 @@
 #import common::fresnel::fresnel_full
 #import common::microfacet::{Microfacet, microfacet_d, microfacet_g1, microfacet_pdf, microfacet_sample}
 #import common::sampling::{INV_PI, square_to_cosine_hemisphere}
-#import common::principled::{ggx, mulsign, tint_of, calc_schlick, compatible, diffuse_lobe, sheen_lobe}
+#import common::principled::{ggx, mulsign, tint_of, calc_schlick, schlick_r0, compatible, diffuse_lobe, sheen_lobe}
 
 struct Thin {
     base_color: vec3<f32>,
@@ -58,8 +58,7 @@ fn reflect_fresnel(p: Thin, f_dielectric: f32, cos_i: f32) -> vec3<f32> {
     if p.spec_tint == 0.0 {
         return vec3<f32>(f_dielectric);
     }
-    let r0 = ((p.eta - 1.0) / (p.eta + 1.0)) * ((p.eta - 1.0) / (p.eta + 1.0));
-    return mix(vec3<f32>(f_dielectric), calc_schlick(tint_of(p.base_color) * r0, cos_i, p.eta), p.spec_tint);
+    return mix(vec3<f32>(f_dielectric), calc_schlick(tint_of(p.base_color) * schlick_r0(p.eta), cos_i, p.eta), p.spec_tint);
 }
 
 // wo's mirror image above the sheet, for wi and wo already turned so that wi faces +z.

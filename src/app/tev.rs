@@ -23,7 +23,7 @@ const RETRY: Duration = Duration::from_secs(1);
 
 /// A tev viewer at an address, sent the image of one render.
 pub struct TevView {
-    addr: Option<SocketAddr>,
+    addr: SocketAddr,
     name: String,
     stream: Option<TcpStream>,
     /// The size the viewer's image was created with on this connection.
@@ -49,7 +49,7 @@ impl TevView {
             .next()
             .ok_or_else(|| crate::Error::Other(format!("tev address \"{address}\": no address")))?;
         Ok(Self {
-            addr: Some(addr),
+            addr,
             name: name.to_string(),
             stream: None,
             created: None,
@@ -93,10 +93,7 @@ impl TevView {
         if self.retry_at.is_some_and(|t| Instant::now() < t) {
             return false;
         }
-        let Some(addr) = self.addr else {
-            return false;
-        };
-        match TcpStream::connect_timeout(&addr, PATIENCE) {
+        match TcpStream::connect_timeout(&self.addr, PATIENCE) {
             Ok(stream) => {
                 let _ = stream.set_write_timeout(Some(PATIENCE));
                 let _ = stream.set_nodelay(true);

@@ -171,19 +171,25 @@ impl Registry {
     }
 
     /// Checks every struct a registered kind uploads (its `layouts`, see
-    /// [`crate::struct_layout!`]) against the WGSL struct it mirrors, composed with every scene
-    /// def: the number checked, or every difference found. A pass's own test calls this.
-    pub fn check_layouts(&self) -> Result<usize, Vec<String>> {
+    /// [`crate::struct_layout!`]), and those hppm's shared tables and GPU helpers upload, against
+    /// the WGSL struct each mirrors, composed with every scene def: the WGSL names checked, or
+    /// every difference found. A pass's own test calls this.
+    pub fn check_layouts(&self) -> Result<Vec<&'static str>, Vec<String>> {
         let mut defs = super::all_scene_defs();
         defs.extend(defs_of(["FLOAT_TEXELS"]));
         let library =
             ShaderLibrary::new(true, defs, &self.modules).map_err(|e| vec![e.to_string()])?;
+        let shared = super::hit_points::LAYOUTS
+            .iter()
+            .chain(super::scene_resources::LAYOUTS)
+            .chain(crate::gpu::radix_sort::LAYOUTS)
+            .chain(crate::gpu::odd_iterations::LAYOUTS);
         let mut problems = Vec::new();
-        let mut checked = 0;
-        for layout in self.kinds.iter().flat_map(|k| k.layouts) {
+        let mut checked = Vec::new();
+        for layout in self.kinds.iter().flat_map(|k| k.layouts).chain(shared) {
             match library.compose(&layout.shader) {
                 Ok(module) => match layout.check(&module) {
-                    Ok(()) => checked += 1,
+                    Ok(()) => checked.push(layout.wgsl),
                     Err(e) => problems.push(e),
                 },
                 Err(e) => problems.push(format!("{}: {e}", layout.shader.path)),

@@ -98,7 +98,7 @@ pub fn tonemap(rgb: [f32; 3], params: TonemapParams) -> [f32; 3] {
     match params.curve {
         Curve::Linear => c,
         Curve::Reinhard => {
-            let l = 0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2];
+            let l = hppm::scene::texture::luminance(glam::Vec3::from(c));
             c.map(|v| v / (1.0 + l))
         }
         Curve::Aces => c.map(|v| {

@@ -568,13 +568,10 @@ impl<'a, 'input> Reader<'a, 'input> {
         textures.diffuse = base_texture;
         let mut has = 0;
         // (value, texture), and whether Mitsuba counts it as given (m_has_*: a texture, or a
-        // float other than 0).
+        // float other than 0; every parameter with a bit defaults to 0).
         let mut scalar =
             |name: &str, default: f32, bit: u32| -> Result<(f32, Option<u32>), SceneError> {
-                let Some(n) = props.take(name) else {
-                    return Ok((default, None));
-                };
-                let (value, texture) = self.float_or_texture(n, name)?;
+                let (value, texture) = self.scalar_param(props, name, default)?;
                 if texture.is_some() || value != 0.0 {
                     has |= bit;
                 }
@@ -678,19 +675,13 @@ impl<'a, 'input> Reader<'a, 'input> {
         use crate::scene::principled_thin::PrincipledThin;
         let (base_color, base_texture) = self.color_param(props, "base_color", 0.5)?;
         textures.diffuse = base_texture;
-        let mut scalar = |name: &str, default: f32| -> Result<(f32, Option<u32>), SceneError> {
-            match props.take(name) {
-                Some(n) => self.float_or_texture(n, name),
-                None => Ok((default, None)),
-            }
-        };
-        let (roughness, roughness_texture) = scalar("roughness", 0.5)?;
+        let (roughness, roughness_texture) = self.scalar_param(props, "roughness", 0.5)?;
         textures.alpha_u = roughness_texture;
         let mut values = [0.0; PRINCIPLED_THIN_TEXTURED.len()];
         // The last is eta, which is checked apart.
         let [params @ .., eta_slot] = &PRINCIPLED_THIN_TEXTURED;
         for (i, name) in params.iter().enumerate() {
-            (values[i], textures.principled[i]) = scalar(name, 0.0)?;
+            (values[i], textures.principled[i]) = self.scalar_param(props, name, 0.0)?;
         }
         let [
             anisotropic,

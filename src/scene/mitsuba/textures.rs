@@ -21,6 +21,20 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// A scalar parameter `name` given as a number, or as a texture (its mean, and its index in
     /// the scene's textures).
+    /// A scalar parameter that may be textured: a float (`default` when absent) or a texture,
+    /// as (value or the texture's mean, texture index).
+    pub(super) fn scalar_param(
+        &self,
+        props: &mut Props<'a, 'input>,
+        name: &str,
+        default: f32,
+    ) -> Result<(f32, Option<u32>), SceneError> {
+        match props.take(name) {
+            Some(node) => self.float_or_texture(node, name),
+            None => Ok((default, None)),
+        }
+    }
+
     pub(super) fn float_or_texture(
         &self,
         node: Node<'a, 'input>,
