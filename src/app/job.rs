@@ -151,7 +151,7 @@ fn plan(
             scene_path.display()
         ));
     }
-    let graph = registry.load_graph(graph_path)?;
+    let graph = registry.parse_graph(graph_path, &graph_text)?;
     for warning in &graph.warnings {
         watch.note(&format!("warning: {warning}"));
     }
