@@ -167,21 +167,14 @@ fn plan(
         .shard
         .or(saved.map(|h| (h.shard, h.shards)))
         .unwrap_or((0, 1));
-    let implicit_spp = job.seconds.is_none() && job.photons.is_none() && job.target_error.is_none();
     let budget = Budget {
-        spp: job
-            .spp
-            .or(if implicit_spp {
-                scene.spp_hint.map(u64::from)
-            } else {
-                None
-            })
-            .or(if implicit_spp { Some(64) } else { None }),
+        spp: job.spp,
         seconds: job.seconds,
         photons: job.photons,
         target_error: job.target_error,
         adaptive: job.adaptive,
-    };
+    }
+    .or_scene_spp(scene.spp_hint);
     budget.check_named(name)?;
     if job.shard.is_some() && job.target_error.is_some() {
         return Err(Error::Other(format!(

@@ -66,6 +66,19 @@ impl BudgetField {
 }
 
 impl Budget {
+    /// This budget, or when it sets no samples, seconds, photons or error, the scene's sample
+    /// count (else 64 samples per pixel), as `hppm render` renders a scene given no budget.
+    pub fn or_scene_spp(mut self, scene_spp: Option<u32>) -> Self {
+        let none_set = self.spp.is_none()
+            && self.seconds.is_none()
+            && self.photons.is_none()
+            && self.target_error.is_none();
+        if none_set {
+            self.spp = Some(scene_spp.map_or(64, u64::from));
+        }
+        self
+    }
+
     /// Refuses a budget that would render nothing or never end, before any work.
     pub fn check(&self) -> Result<(), Error> {
         self.check_named(BudgetField::field_name)
@@ -231,7 +244,7 @@ impl<'a> RendererBuilder<'a, '_> {
 
     /// Shares `item` with every pass ([`Shared::get`] in `prepare`), as the render shares the
     /// scene's GPU tables; each band of the image gets a clone.
-    pub fn share<T: std::any::Any + Clone>(mut self, item: T) -> Self {
+    pub fn share<T: std::any::Any + Clone + Send>(mut self, item: T) -> Self {
         self.shared.push(Box::new(move |shared: &mut Shared| {
             shared.insert(item.clone())
         }));

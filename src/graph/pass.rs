@@ -248,11 +248,11 @@ impl Resource {
 /// the graph carries it without naming it.
 #[derive(Default)]
 pub struct Shared {
-    items: HashMap<TypeId, Box<dyn Any>>,
+    items: HashMap<TypeId, Box<dyn Any + Send>>,
 }
 
 impl Shared {
-    pub fn insert<T: Any>(&mut self, item: T) {
+    pub fn insert<T: Any + Send>(&mut self, item: T) {
         self.items.insert(TypeId::of::<T>(), Box::new(item));
     }
 
@@ -448,7 +448,9 @@ impl Counters {
     }
 }
 
-pub trait Pass {
+/// `Send`: a renderer may be made on one thread and run on another (a host program's worker,
+/// a Python thread with the GIL released).
+pub trait Pass: Send {
     /// Elements of output `slot` when its size is [`Size::Computed`]; `ctx.outputs` is empty.
     fn output_len(&self, slot: &str, _ctx: &PrepareCtx<'_>) -> Result<u64, crate::Error> {
         Err(crate::Error::Other(format!(
