@@ -103,7 +103,8 @@ struct RenderArgs {
     #[arg(long)]
     aovs: bool,
     /// Show the render live in tev listening at [HOST:]PORT (host 127.0.0.1 by default; tev
-    /// listens on 14158): the image every 250 ms and when done. No viewer there changes nothing.
+    /// listens on 14158): the tiles that changed every 250 ms and when done, with `--aovs` the
+    /// output node's other images as layers. No viewer there changes nothing.
     #[arg(long, value_name = "[HOST:]PORT")]
     tev: Option<String>,
     /// Image size WxH (default: the scene's film).
@@ -195,6 +196,10 @@ struct CompareArgs {
     /// Adapter index (see `hppm info`) or part of its name.
     #[arg(long)]
     adapter: Option<String>,
+    /// Show each graph's image live in tev at [HOST:]PORT, an image per graph named by its
+    /// label, updated at every snapshot (off the clock), and the reference beside them.
+    #[arg(long, value_name = "[HOST:]PORT")]
+    tev: Option<String>,
 }
 
 #[derive(Args)]
@@ -361,7 +366,11 @@ fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
         }
         None => None,
     };
-    let mut terminal = Terminal { bar: None, tev };
+    let mut terminal = Terminal {
+        bar: None,
+        tev,
+        tev_aovs: job.aovs,
+    };
     crate::app::job::run(&job, registry, &mut terminal)
 }
 
@@ -370,6 +379,25 @@ fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
 struct Terminal {
     bar: Option<(indicatif::ProgressBar, Budget)>,
     tev: Option<TevView>,
+    /// The live view shows the output node's other images too (`--aovs`).
+    tev_aovs: bool,
+}
+
+impl Terminal {
+    /// Sends the image, and with `--aovs` the output node's other images as its layers.
+    fn show(&mut self, r: &Renderer, image: &crate::image::Image) {
+        let Some(tev) = &mut self.tev else {
+            return;
+        };
+        let aovs = match self.tev_aovs {
+            true => r.aovs().unwrap_or_default(),
+            false => Vec::new(),
+        };
+        let layers: Vec<(&str, &crate::image::Image)> = std::iter::once(("", image))
+            .chain(aovs.iter().map(|(slot, aov)| (*slot, aov)))
+            .collect();
+        tev.show_layers(&layers);
+    }
 }
 
 /// How often the live view is sent the image.
@@ -397,11 +425,10 @@ impl JobWatcher for Terminal {
     }
 
     fn progress(&mut self, r: &Renderer, seconds: f64) {
-        if let Some(tev) = &mut self.tev
-            && tev.due(TEV_INTERVAL)
+        if self.tev.as_ref().is_some_and(|t| t.due(TEV_INTERVAL))
             && let Ok(image) = r.image()
         {
-            tev.show(&image);
+            self.show(r, &image);
         }
         let Some((bar, budget)) = &self.bar else {
             return;
@@ -431,10 +458,8 @@ impl JobWatcher for Terminal {
         }
     }
 
-    fn image(&mut self, image: &crate::image::Image) {
-        if let Some(tev) = &mut self.tev {
-            tev.show(image);
-        }
+    fn image(&mut self, r: &Renderer, image: &crate::image::Image) {
+        self.show(r, image);
     }
 }
 
@@ -587,8 +612,36 @@ fn compare(args: CompareArgs, registry: &Registry) -> Result<(), Error> {
         profile: args.profile,
         size: args.size,
     };
+    let mut views: Vec<(String, TevView)> = Vec::new();
+    // The address is checked before any render; the reference goes to the viewer first.
+    if let Some(address) = &args.tev {
+        let mut view = TevView::new(address, "reference")?;
+        if let Some(reference) = &options.reference {
+            view.show(&crate::image::Image::read_exr(reference)?);
+        }
+    }
+    let mut show = |label: &str, image: &crate::image::Image| {
+        let Some(address) = &args.tev else {
+            return;
+        };
+        if !views.iter().any(|(l, _)| l == label) {
+            match TevView::new(address, label) {
+                Ok(view) => views.push((label.to_string(), view)),
+                Err(e) => eprintln!("warning: {e}"),
+            }
+        }
+        if let Some((_, view)) = views.iter_mut().find(|(l, _)| l == label) {
+            view.show(image);
+        }
+    };
     let cancel = cancel_flag();
-    let report = crate::app::compare::compare(&gpu, &options, &cancel, |line| eprintln!("{line}"))?;
+    let report = crate::app::compare::compare(
+        &gpu,
+        &options,
+        &cancel,
+        |line| eprintln!("{line}"),
+        &mut show,
+    )?;
     for run in &report.runs {
         let last = run.snapshots.last();
         println!(

@@ -200,12 +200,15 @@ fn labels(graphs: &[PathBuf]) -> Vec<String> {
 }
 
 /// Runs the comparison and writes `errors.csv`, each graph's final image, `errors.png` and,
-/// with profiling, `profile.csv` into `options.out`.
+/// with profiling, `profile.csv` into `options.out`. `progress` gets a line per step,
+/// `snapshot` each graph's label and image at each snapshot (read back off the clock, so a
+/// live view costs the measurement nothing).
 pub fn compare(
     gpu: &GpuContext,
     options: &CompareOptions,
     cancel: &AtomicBool,
     mut progress: impl FnMut(&str),
+    mut snapshot: impl FnMut(&str, &Image),
 ) -> Result<CompareReport, Error> {
     if !(options.seconds.is_finite() && options.seconds > 0.0) {
         return Err(Error::Other(format!(
@@ -328,6 +331,7 @@ pub fn compare(
                 metrics,
                 estimated,
             });
+            snapshot(&label, &image);
             last_image = Some(image);
             if summary.cancelled {
                 break;

@@ -77,8 +77,9 @@ pub trait JobWatcher {
     fn progress(&mut self, _renderer: &Renderer, _seconds: f64) {}
     /// The render loop ended.
     fn finish(&mut self) {}
-    /// The finished image, just before it is written (a shard writes accumulators instead).
-    fn image(&mut self, _image: &Image) {}
+    /// The finished image, just before it is written (a shard writes accumulators instead);
+    /// the renderer is there for what else the watcher shows (its AOVs).
+    fn image(&mut self, _renderer: &Renderer, _image: &Image) {}
 }
 
 /// Runs `job` with the pass kinds of `registry`: plan, prepare, render, write.
@@ -460,7 +461,7 @@ fn write(
         provenance = provenance.with("hppm_defines", defines.join(" "));
     }
     if let Some(image) = &image {
-        watch.image(image);
+        watch.image(renderer, image);
     }
     match image {
         Some(image) => image.write(&job.out, &provenance)?,

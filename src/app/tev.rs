@@ -1,11 +1,14 @@
 //! A live view of a render in tev (Thomas Müller's HDR image viewer) over its TCP protocol, as
-//! pbrt-v4's `--display-server` does: the image is created once, then its pixels are sent again
-//! as the render goes on. A packet is its length (u32, little-endian, the length field
-//! included), a type byte and the payload; `CreateImage` (type 4) carries focus, the image's
-//! name, width, height and its channels' names, `UpdateImageV3` (6) the same name and channels,
-//! the region (x, y, width, height), each channel's offset and stride into the floats that
-//! follow. A viewer that is not there, goes away or stalls never slows or fails the render: the
-//! connection is dropped and tried again a second later (the image is created anew then).
+//! pbrt-v4's `--display-server` does: the image is created once, then the tiles whose pixels
+//! changed since the viewer last got them are sent as the render goes on. A packet is its length
+//! (u32, little-endian, the length field included), a type byte and the payload; `CreateImage`
+//! (type 4) carries focus, the image's name, width, height and its channels' names,
+//! `UpdateImageV3` (6) the same name and channels, the region (x, y, width, height), each
+//! channel's offset and stride into the floats that follow. The image's own channels are `R`,
+//! `G`, `B`; each further layer (an AOV) adds `LAYER.R`, `LAYER.G`, `LAYER.B`, which tev lists
+//! as layers of the one image. A viewer that is not there, goes away or stalls never slows or
+//! fails the render: the connection is dropped and tried again a second later (the image is
+//! created anew then, and every tile sent).
 
 use std::io::Write;
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
@@ -15,7 +18,11 @@ use crate::image::Image;
 
 const CREATE_IMAGE: u8 = 4;
 const UPDATE_IMAGE_V3: u8 = 6;
-const CHANNELS: [&str; 3] = ["R", "G", "B"];
+const RGB: [&str; 3] = ["R", "G", "B"];
+/// Tiles this many pixels on a side are compared with what the viewer holds and sent when any
+/// of their values changed: a converged or unsampled region (adaptive sampling, a black sky)
+/// costs nothing after its first update.
+pub const TILE: u32 = 64;
 /// How long a connection attempt or a write may take before the viewer counts as gone.
 const PATIENCE: Duration = Duration::from_millis(200);
 /// How long after a failure the viewer is tried again.
@@ -26,12 +33,67 @@ pub struct TevView {
     addr: SocketAddr,
     name: String,
     stream: Option<TcpStream>,
-    /// The size the viewer's image was created with on this connection.
-    created: Option<(u32, u32)>,
+    /// What the viewer holds on this connection: size, channels, and their values, every
+    /// channel of a pixel together.
+    shown: Option<Shown>,
     last_sent: Option<Instant>,
     retry_at: Option<Instant>,
-    /// Updates sent so far (over every connection).
+    /// Updates with at least one tile sent, over every connection.
     pub updates: u64,
+    /// Tiles sent, over every connection.
+    pub tiles_sent: u64,
+}
+
+struct Shown {
+    width: u32,
+    height: u32,
+    channels: Vec<String>,
+    values: Vec<f32>,
+}
+
+/// The image's channels: `R`, `G`, `B` for the unnamed layer, `LAYER.R`, ... for the others.
+fn channel_names(layers: &[(&str, &Image)]) -> Vec<String> {
+    layers
+        .iter()
+        .flat_map(|(layer, _)| {
+            RGB.map(|c| match layer.is_empty() {
+                true => c.to_string(),
+                false => format!("{layer}.{c}"),
+            })
+        })
+        .collect()
+}
+
+/// Every channel of every layer, pixel by pixel: the layout `UpdateImageV3`'s offsets and
+/// strides describe.
+fn interleave(layers: &[(&str, &Image)], pixels: usize) -> Vec<f32> {
+    let mut values = Vec::with_capacity(pixels * 3 * layers.len());
+    for i in 0..pixels {
+        for (_, image) in layers {
+            values.extend(image.pixels.get(i).copied().unwrap_or([0.0; 3]));
+        }
+    }
+    values
+}
+
+/// The tiles of a `width` x `height` image, as (x, y, width, height).
+fn tiles(width: u32, height: u32) -> impl Iterator<Item = [u32; 4]> {
+    (0..height.div_ceil(TILE)).flat_map(move |ty| {
+        (0..width.div_ceil(TILE)).map(move |tx| {
+            let (x, y) = (tx * TILE, ty * TILE);
+            [x, y, TILE.min(width - x), TILE.min(height - y)]
+        })
+    })
+}
+
+/// The values of `tile` out of a whole image's, row by row.
+fn tile_values(values: &[f32], width: u32, channels: usize, tile: [u32; 4]) -> Vec<f32> {
+    let [x, y, w, h] = tile.map(|v| v as usize);
+    let row = width as usize * channels;
+    (y..y + h)
+        .flat_map(|r| &values[r * row + x * channels..r * row + (x + w) * channels])
+        .copied()
+        .collect()
 }
 
 impl TevView {
@@ -52,10 +114,11 @@ impl TevView {
             addr,
             name: name.to_string(),
             stream: None,
-            created: None,
+            shown: None,
             last_sent: None,
             retry_at: None,
             updates: 0,
+            tiles_sent: 0,
         })
     }
 
@@ -64,26 +127,63 @@ impl TevView {
         self.last_sent.is_none_or(|t| t.elapsed() >= interval)
     }
 
-    /// Sends `image` (creating it in the viewer first when needed); gives up quietly when the
-    /// viewer is not there.
+    /// Sends `image`.
     pub fn show(&mut self, image: &Image) {
+        self.show_layers(&[("", image)]);
+    }
+
+    /// Sends the tiles of `layers` (the image first, named "", then AOVs by name, all of its
+    /// size) that changed since the viewer got them, creating the image first when its size
+    /// or layers are new to the viewer; gives up quietly when the viewer is not there.
+    pub fn show_layers(&mut self, layers: &[(&str, &Image)]) {
         self.last_sent = Some(Instant::now());
+        let Some((_, first)) = layers.first() else {
+            return;
+        };
+        let (width, height) = (first.width, first.height);
+        let layers: Vec<(&str, &Image)> = layers
+            .iter()
+            .copied()
+            .filter(|(_, image)| (image.width, image.height) == (width, height))
+            .collect();
         if self.stream.is_none() && !self.connect() {
             return;
         }
-        let size = (image.width, image.height);
+        let channels = channel_names(&layers);
+        let values = interleave(&layers, (width as usize) * (height as usize));
         let mut packets = Vec::new();
-        if self.created != Some(size) {
-            packets.push(create_packet(&self.name, image.width, image.height));
+        let known = self
+            .shown
+            .as_ref()
+            .filter(|s| (s.width, s.height) == (width, height) && s.channels == channels);
+        if known.is_none() {
+            packets.push(create_packet(&self.name, width, height, &channels));
         }
-        packets.push(update_packet(&self.name, image));
+        for tile in tiles(width, height) {
+            let now = tile_values(&values, width, channels.len(), tile);
+            let changed =
+                known.is_none_or(|s| tile_values(&s.values, width, channels.len(), tile) != now);
+            if changed {
+                packets.push(update_packet(&self.name, &channels, tile, &now));
+            }
+        }
+        let sent_tiles = packets.len() - usize::from(known.is_none());
+        if packets.is_empty() {
+            return;
+        }
         let sent = self
             .stream
             .as_mut()
             .is_some_and(|s| packets.iter().all(|p| s.write_all(p).is_ok()));
         if sent {
-            self.created = Some(size);
-            self.updates += 1;
+            self.shown = Some(Shown {
+                width,
+                height,
+                channels,
+                values,
+            });
+            self.updates += u64::from(sent_tiles > 0);
+            self.tiles_sent += sent_tiles as u64;
         } else {
             self.drop_connection();
         }
@@ -98,7 +198,7 @@ impl TevView {
                 let _ = stream.set_write_timeout(Some(PATIENCE));
                 let _ = stream.set_nodelay(true);
                 self.stream = Some(stream);
-                self.created = None;
+                self.shown = None;
                 true
             }
             Err(_) => {
@@ -110,7 +210,7 @@ impl TevView {
 
     fn drop_connection(&mut self) {
         self.stream = None;
-        self.created = None;
+        self.shown = None;
         self.retry_at = Some(Instant::now() + RETRY);
     }
 }
@@ -148,42 +248,106 @@ impl Packet {
     }
 }
 
-/// `CreateImage`: an RGB image of `width` x `height` called `name`.
-pub fn create_packet(name: &str, width: u32, height: u32) -> Vec<u8> {
+/// `CreateImage`: an image of `width` x `height` with `channels`, called `name`.
+pub fn create_packet(name: &str, width: u32, height: u32, channels: &[String]) -> Vec<u8> {
     let mut p = Packet::new(CREATE_IMAGE);
     p.bool(false)
         .string(name)
         .i32(width as i32)
         .i32(height as i32)
-        .i32(CHANNELS.len() as i32);
-    for c in CHANNELS {
+        .i32(channels.len() as i32);
+    for c in channels {
         p.string(c);
     }
     p.finish()
 }
 
-/// `UpdateImageV3`: every pixel of `image`, its channels interleaved (offset c, stride 3).
-pub fn update_packet(name: &str, image: &Image) -> Vec<u8> {
+/// `UpdateImageV3`: the pixels of `tile` (x, y, width, height), `values` holding every channel
+/// of a pixel together, row by row (offset c, stride the channel count).
+pub fn update_packet(name: &str, channels: &[String], tile: [u32; 4], values: &[f32]) -> Vec<u8> {
     let mut p = Packet::new(UPDATE_IMAGE_V3);
-    p.bool(false).string(name).i32(CHANNELS.len() as i32);
-    for c in CHANNELS {
+    p.bool(false).string(name).i32(channels.len() as i32);
+    for c in channels {
         p.string(c);
     }
-    p.i32(0)
-        .i32(0)
-        .i32(image.width as i32)
-        .i32(image.height as i32);
-    for c in 0..CHANNELS.len() {
+    for v in tile {
+        p.i32(v as i32);
+    }
+    for c in 0..channels.len() {
         p.i64(c as i64);
     }
-    for _ in CHANNELS {
-        p.i64(CHANNELS.len() as i64);
+    for _ in channels {
+        p.i64(channels.len() as i64);
     }
-    p.0.reserve(image.pixels.len() * 12);
-    for pixel in &image.pixels {
-        for v in pixel {
-            p.0.extend(v.to_le_bytes());
-        }
+    p.0.reserve(values.len() * 4);
+    for v in values {
+        p.0.extend(v.to_le_bytes());
     }
     p.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Read;
+    use std::net::TcpListener;
+
+    /// The update packets' regions in a stream (after the 4-byte length and the type byte, a
+    /// focus byte, the name, the channel count and names come before the region).
+    fn regions(bytes: &[u8], channels: usize) -> Vec<[i32; 4]> {
+        let mut out = Vec::new();
+        let mut rest = bytes;
+        while rest.len() >= 5 {
+            let len = u32::from_le_bytes(rest[..4].try_into().expect("4")) as usize;
+            if rest[4] == UPDATE_IMAGE_V3 {
+                let mut at = 6 + rest[6..].iter().position(|&b| b == 0).expect("name") + 1 + 4;
+                for _ in 0..channels {
+                    at += rest[at..].iter().position(|&b| b == 0).expect("channel") + 1;
+                }
+                let field = |i: usize| {
+                    i32::from_le_bytes(rest[at + 4 * i..at + 4 * i + 4].try_into().expect("4"))
+                };
+                out.push([field(0), field(1), field(2), field(3)]);
+            }
+            rest = &rest[len..];
+        }
+        out
+    }
+
+    /// Only tiles whose values changed are sent again: the same image twice sends nothing the
+    /// second time, one pixel changed sends its tile alone, a new layer recreates the image and
+    /// sends every tile. Catches a view that resends everything or misses a change.
+    #[test]
+    fn only_changed_tiles_are_sent() {
+        let listener = TcpListener::bind("127.0.0.1:0").expect("listen");
+        let address = listener.local_addr().expect("addr").to_string();
+        let mut view = TevView::new(&address, "tiles").expect("address");
+        let mut image = Image {
+            width: 130,
+            height: 70,
+            pixels: vec![[0.5, 0.25, 0.125]; 130 * 70],
+        };
+        view.show(&image);
+        let (mut stream, _) = listener.accept().expect("connection");
+        assert_eq!((view.updates, view.tiles_sent), (1, 6)); // 3 x 2 tiles
+        view.show(&image);
+        assert_eq!((view.updates, view.tiles_sent), (1, 6));
+        image.pixels[69 * 130 + 129] = [1.0, 0.0, 0.0];
+        view.show(&image);
+        assert_eq!((view.updates, view.tiles_sent), (2, 7));
+        let aov = image.clone();
+        view.show_layers(&[("", &image), ("pt", &aov)]);
+        assert_eq!((view.updates, view.tiles_sent), (3, 13));
+        drop(view);
+        let mut bytes = Vec::new();
+        stream.read_to_end(&mut bytes).expect("read");
+        // (The last 6 packets have 6 channels: their regions are not read right here.)
+        let regions = regions(&bytes, 3);
+        assert_eq!(regions.len(), 13, "every tile sent is a packet");
+        assert_eq!(
+            regions[6],
+            [128, 64, 2, 6],
+            "the changed corner's tile alone"
+        );
+    }
 }
