@@ -43,9 +43,6 @@ fn image_of(array: &PyReadonlyArray3<'_, f32>) -> PyResult<Image> {
     })
 }
 
-/// read_exr(path)
-/// --
-///
 /// An OpenEXR image's RGB as a (height, width, 3) float32 array (a reference, a render).
 #[pyfunction]
 pub fn read_exr(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
@@ -53,9 +50,6 @@ pub fn read_exr(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyAny>> {
     array(py, &image)
 }
 
-/// write_image(path, image)
-/// --
-///
 /// Writes a (height, width, 3) float32 array as OpenEXR (linear, float) or PNG (sRGB, 8-bit),
 /// by the file's extension.
 #[pyfunction]
@@ -65,9 +59,6 @@ pub fn write_image(path: PathBuf, image: PyReadonlyArray3<'_, f32>) -> PyResult<
         .map_err(to_py)
 }
 
-/// relmse(image, reference)
-/// --
-///
 /// Relative mean squared error, as `hppm compare` measures it: the mean over pixels and RGB of
 /// (x - ref)^2 / (ref^2 + 0.01). Both are (height, width, 3) float32 arrays.
 #[pyfunction]

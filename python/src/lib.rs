@@ -45,9 +45,6 @@ fn gpu(adapter: Option<&str>) -> PyResult<&'static GpuContext> {
     Ok(opened)
 }
 
-/// device(adapter=None)
-/// --
-///
 /// Opens the device renders run on (an adapter index or part of its name, as
 /// `hppm info` lists them; default: the best) and returns its description. Without a call,
 /// the first render opens the best adapter.
@@ -106,9 +103,6 @@ impl PyScene {
     }
 }
 
-/// load_scene(path, **params)
-/// --
-///
 /// Loads a scene. Keyword arguments are Mitsuba's `-D name=value` parameters (`$name` in the
 /// XML): numbers, strings and booleans. Warnings (e.g. a property hppm ignores) are issued as
 /// Python warnings; errors raise `hppm.SceneError` with `file`, `line` and `column`.
@@ -229,9 +223,6 @@ impl PyGraph {
     }
 }
 
-/// load_graph(name_or_path)
-/// --
-///
 /// Loads a render graph: a RON file, or the name of a graph shipped with hppm (`"hybrid"`,
 /// `"pt"`, `"hybrid_pppm"`, ...; `hppm.bundled_graphs()` lists them). Errors raise
 /// `hppm.GraphError` with `file`, `line` and `column`.
@@ -246,9 +237,6 @@ fn bundled_graphs() -> Vec<&'static str> {
     BUNDLED_GRAPHS.iter().map(|g| g.0).collect()
 }
 
-/// cli(args)
-/// --
-///
 /// Runs the `hppm` command line on `args` (the first is the program's name) and returns its
 /// exit status; the `hppm` command the package installs calls it.
 #[pyfunction]

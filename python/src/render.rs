@@ -36,8 +36,14 @@ fn keyword(field: BudgetField) -> &'static str {
     }
 }
 
-/// hppm's renderer behind a Python object. `unsendable`: it stays on the thread that made it
-/// (pyo3 refuses it elsewhere); the GIL is released only around work on that same thread.
+/// Renderer(scene, graph="hybrid", *, size=None, seed=0): a progressive render.
+///
+/// Prepares `graph` (a `hppm.Graph`, a RON file or a bundled graph's name) for `scene` (a
+/// `hppm.Scene` or a file) at `size` = (width, height) (default: the scene's film), with random
+/// streams from `seed`. Nothing is rendered until `iterate` or `run`; `image`, `aovs` and
+/// `error_estimate` read the render so far.
+// `unsendable`: it stays on the thread that made it (pyo3 refuses it elsewhere); the GIL is
+// released only around work on that same thread.
 #[pyclass(unsendable, name = "Renderer", module = "hppm")]
 pub struct PyRenderer {
     renderer: hppm::app::render::Renderer<'static>,
@@ -160,12 +166,6 @@ fn summary_dict<'py>(py: Python<'py>, summary: &RunSummary) -> PyResult<Bound<'p
 
 #[pymethods]
 impl PyRenderer {
-    /// Renderer(scene, graph="hybrid", *, size=None, seed=0)
-    /// --
-    ///
-    /// Prepares `graph` (a `hppm.Graph`, a RON file or a bundled graph's name) for `scene` (a
-    /// `hppm.Scene` or a file) at `size` = (width, height) (default: the scene's film), with
-    /// random streams from `seed`. Nothing is rendered until `iterate` or `run`.
     #[new]
     #[pyo3(signature = (scene, graph = None, *, size = None, seed = 0))]
     fn new(
@@ -179,9 +179,6 @@ impl PyRenderer {
         build(py, scene, graph, size, seed)
     }
 
-    /// iterate(n=1)
-    /// --
-    ///
     /// Runs `n` iterations of the graph (each adds its samples per pixel and photons).
     #[pyo3(signature = (n = 1))]
     fn iterate(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
@@ -198,9 +195,6 @@ impl PyRenderer {
         Ok(())
     }
 
-    /// run(*, spp=None, time=None, photons=None, target_error=None, adaptive=False, progress=None)
-    /// --
-    ///
     /// Renders until a budget is met: `spp` and `photons` count from the renderer's start,
     /// `time` (seconds) from this call; `target_error` stops once the estimated relMSE falls
     /// below it (with another budget as a cap; `adaptive` also stops sampling pixels already
@@ -343,14 +337,12 @@ impl PyRenderer {
     }
 }
 
-/// render(scene, graph="hybrid", *, spp=None, time=None, photons=None, target_error=None, adaptive=False, seed=0, size=None, aovs=False, progress=None)
-/// --
-///
 /// Renders `scene` (a `hppm.Scene` or a file) through `graph` (a `hppm.Graph`, a RON file or a
-/// bundled graph's name) as `hppm render` does with the same budget, seed and size, and
-/// returns the image as a (height, width, 3) float32 array; with `aovs=True`, a pair (image,
-/// dict) whose dict holds the output node's other images and `error`, the per-pixel error
-/// estimate. Budgets, the default budget and `progress` are those of `Renderer.run`.
+/// bundled graph's name; default: the bundled hybrid) as `hppm render` does with the same
+/// budget, seed and size, and returns the image as a (height, width, 3) float32 array; with
+/// `aovs=True`, a pair (image, dict) whose dict holds the output node's other images and
+/// `error`, the per-pixel error estimate. Budgets, the default budget and `progress` are those
+/// of `Renderer.run`.
 #[pyfunction]
 #[pyo3(signature = (scene, graph = None, *, spp = None, time = None, photons = None, target_error = None, adaptive = false, seed = 0, size = None, aovs = false, progress = None))]
 #[allow(clippy::too_many_arguments)]

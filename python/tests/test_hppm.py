@@ -274,3 +274,20 @@ def test_the_example_plots_error_against_time(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     assert plot.stat().st_size > 1000
+
+
+def test_the_type_stubs_name_what_the_module_has():
+    """Catches `_hppm.pyi` going stale: a call added, renamed or removed on one side only, and
+    a Renderer method or property missing from the stubs."""
+    import ast
+    import inspect
+
+    stubs = ast.parse((REPO / "python/hppm/_hppm.pyi").read_text())
+    stubbed = {n.name for n in stubs.body if isinstance(n, (ast.ClassDef, ast.FunctionDef))}
+    module = {name for name in dir(hppm._hppm) if not name.startswith("_")}
+    assert stubbed == module
+    renderer = next(n for n in stubs.body if isinstance(n, ast.ClassDef) and n.name == "Renderer")
+    members = {n.name for n in renderer.body if isinstance(n, ast.FunctionDef)}
+    members |= {n.target.id for n in renderer.body if isinstance(n, ast.AnnAssign)}
+    public = {name for name, _ in inspect.getmembers(hppm.Renderer) if not name.startswith("_")}
+    assert public <= members, public - members
