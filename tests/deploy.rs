@@ -2,7 +2,8 @@
 //! YAML and say what a sharded render needs (an Indexed Job whose completions, parallelism and
 //! `--shard k/N` agree, the shard index from JOB_COMPLETION_INDEX, one shared volume for shards
 //! and merge); the Slurm scripts pass `bash -n` and their array agrees with `--shard`; the merge
-//! waits for the render; the container installs lavapipe. Would catch a manifest that stopped
+//! waits for the render; the container installs lavapipe. tests/slurm.rs runs the Slurm scripts
+//! on a one-node cluster. Would catch a manifest that stopped
 //! parsing, a shard count changed in one place only (a frame merged from the wrong shards, or a
 //! merge refused for a missing one), and shards written where the merge does not look.
 
@@ -145,8 +146,18 @@ fn slurm_array_shards_and_a_dependent_merge() {
     let merge = std::fs::read_to_string(repo_path(scripts[1])).expect("merge.sbatch");
     assert!(merge.contains("merge \"$OUT\"/shard-*.hppm"), "{merge}");
     assert!(render.contains("--out \"$OUT/shard-$k.hppm\""), "{render}");
+    // A requeued task appends to its log (truncated, it would lose the run it resumes), and
+    // the test cluster's overrides reach the render (tests/slurm.rs runs these on real daemons).
+    assert!(render.contains("#SBATCH --open-mode=append"), "{render}");
+    for knob in ["--spp \"$SPP\"", "--checkpoint-every \"$CHECKPOINT_EVERY\""] {
+        assert!(render.contains(knob), "{knob} in {render}");
+    }
     let submit = std::fs::read_to_string(repo_path(scripts[2])).expect("submit.sh");
     assert!(submit.contains("--dependency=afterok:"), "{submit}");
+    assert!(
+        submit.contains("sbatch --parsable \"$@\" \"$here/render.sbatch\""),
+        "{submit}"
+    );
 }
 
 #[test]
