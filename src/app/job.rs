@@ -382,10 +382,14 @@ fn render(
         }
     };
     let unsampled = renderer.unsampled_light_warning().is_some();
+    let no_estimate = match job.shard {
+        Some(_) => "no error estimate (a shard's accumulators are not an image)",
+        None => "no error estimate (fewer than 2 iterations)",
+    };
     watch.note(&stop_line(
         &summary,
         budget,
-        estimate.as_ref(),
+        estimate.as_ref().ok_or(no_estimate),
         unsampled,
         name,
     ));
@@ -529,11 +533,11 @@ fn write(
     Ok(())
 }
 
-/// Why the render stopped and its estimated error, in one line.
+/// Why the render stopped and its estimated error (or why there is none), in one line.
 fn stop_line(
     summary: &RunSummary,
     budget: Budget,
-    estimate: Option<&ErrorEstimate>,
+    estimate: Result<&ErrorEstimate, &str>,
     unsampled_light: bool,
     name: fn(BudgetField) -> &'static str,
 ) -> String {
@@ -551,7 +555,7 @@ fn stop_line(
         true => ", a lower bound: the caustics this graph cannot sample are missing from it",
         false => "",
     };
-    let estimate = estimate.map_or("no error estimate (fewer than 2 iterations)".into(), |e| {
+    let estimate = estimate.map_or_else(str::to_string, |e| {
         format!(
             "estimated relMSE {:.3e} (noise {:.3e}, kernel bias {:.3e}{lower_bound})",
             e.relmse, e.variance, e.bias

@@ -242,10 +242,12 @@ impl OutputFormat {
     }
 }
 
-/// A temporary name beside `path` with the same extension (writers that go by the extension
-/// still see it): `out.png` -> `out.1234.tmp.png`.
+/// The temporary file beside `path`, `out.png` -> `.out.1234.tmp.png`: hidden (the leading
+/// dot), so that a glob over finished files (`merge shards/shard-*.hppm`) never picks up one a
+/// killed process left behind, and with `path`'s extension, which writers go by.
 fn temp_path(path: &Path) -> PathBuf {
-    let mut name = path.file_stem().unwrap_or_default().to_os_string();
+    let mut name = std::ffi::OsString::from(".");
+    name.push(path.file_stem().unwrap_or_default());
     name.push(format!(".{}.tmp", std::process::id()));
     if let Some(ext) = path.extension() {
         name.push(".");
@@ -329,12 +331,19 @@ mod tests {
         assert_eq!(left.len(), 1, "a temporary file was left behind");
         write_file_atomically(&path, b"new").expect("write");
         assert_eq!(std::fs::read_to_string(&path).expect("read"), "new");
-        // Writers that pick the format by extension see the real one.
+        // Writers that pick the format by extension see the real one; a glob over the
+        // finished files (`shard-*.hppm`, as merge.sbatch's) never matches a left-over one.
+        let temp = temp_path(Path::new("a/shard-1.hppm"));
+        let name = temp
+            .file_name()
+            .expect("a name")
+            .to_string_lossy()
+            .to_string();
         assert!(
-            temp_path(Path::new("a/errors.png"))
-                .to_string_lossy()
-                .ends_with(".png")
+            name.ends_with(".hppm") && name.starts_with(".shard-1."),
+            "{name}"
         );
+        assert_eq!(temp.parent(), Some(Path::new("a")));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
