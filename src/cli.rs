@@ -370,6 +370,7 @@ fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
         bar: None,
         tev,
         tev_aovs: job.aovs,
+        tev_cost: std::time::Duration::ZERO,
     };
     crate::app::job::run(&job, registry, &mut terminal)
 }
@@ -381,6 +382,8 @@ struct Terminal {
     tev: Option<TevView>,
     /// The live view shows the output node's other images too (`--aovs`).
     tev_aovs: bool,
+    /// What the last live update took (readback and sending), which spaces the next.
+    tev_cost: std::time::Duration,
 }
 
 impl Terminal {
@@ -400,8 +403,11 @@ impl Terminal {
     }
 }
 
-/// How often the live view is sent the image.
+/// How often the live view is sent the image: every 250 ms, or where an update costs more than
+/// a tenth of that (a large image read back and sent), every ten updates' cost, so the view
+/// never takes more than about a tenth of the render's time.
 const TEV_INTERVAL: std::time::Duration = std::time::Duration::from_millis(250);
+const TEV_SHARE: u32 = 10;
 
 impl JobWatcher for Terminal {
     fn names(&self) -> fn(BudgetField) -> &'static str {
@@ -425,10 +431,13 @@ impl JobWatcher for Terminal {
     }
 
     fn progress(&mut self, r: &Renderer, seconds: f64) {
-        if self.tev.as_ref().is_some_and(|t| t.due(TEV_INTERVAL))
-            && let Ok(image) = r.image()
-        {
-            self.show(r, &image);
+        let interval = TEV_INTERVAL.max(self.tev_cost * TEV_SHARE);
+        if self.tev.as_ref().is_some_and(|t| t.due(interval)) {
+            let started = std::time::Instant::now();
+            if let Ok(image) = r.image() {
+                self.show(r, &image);
+            }
+            self.tev_cost = started.elapsed();
         }
         let Some((bar, budget)) = &self.bar else {
             return;
