@@ -103,8 +103,9 @@ struct RenderArgs {
     #[arg(long)]
     aovs: bool,
     /// Show the render live in tev listening at [HOST:]PORT (host 127.0.0.1 by default; tev
-    /// listens on 14158): the tiles that changed every 250 ms and when done, with `--aovs` the
-    /// output node's other images as layers. No viewer there changes nothing.
+    /// listens on 14158): the tiles that changed every 250 ms (less often for large images) and
+    /// when done, with `--aovs` the output node's other images as layers. No viewer there
+    /// changes nothing.
     #[arg(long, value_name = "[HOST:]PORT")]
     tev: Option<String>,
     /// Image size WxH (default: the scene's film).
