@@ -291,3 +291,25 @@ def test_the_type_stubs_name_what_the_module_has():
     members |= {n.target.id for n in renderer.body if isinstance(n, ast.AnnAssign)}
     public = {name for name, _ in inspect.getmembers(hppm.Renderer) if not name.startswith("_")}
     assert public <= members, public - members
+
+
+def test_ctrl_c_stops_a_render_within_an_iteration():
+    """Catches a render that ignores Ctrl-C until its budget ends (signals are checked after
+    every iteration), and a renderer left unusable by the interruption."""
+    import signal
+
+    if threading.current_thread() is not threading.main_thread():
+        pytest.skip("signals reach the main thread only")
+    renderer = hppm.Renderer(GLASS_SPHERE, "pt", size=(16, 16))
+    renderer.iterate()
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    started = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        renderer.run(spp=10_000_000)
+    timer.join()
+    assert time.perf_counter() - started < 10
+    done = renderer.iterations
+    assert 1 < done < 10_000_000
+    renderer.iterate()
+    assert renderer.iterations == done + 1 and renderer.image().shape == (16, 16, 3)
