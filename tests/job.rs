@@ -121,3 +121,25 @@ fn a_jobs_refusals_name_its_fields() {
         "{err}"
     );
 }
+
+/// An image side of 0 (or past the largest film) given to the library is an error, not a
+/// division by zero: the command line refuses it in its own parser, a program (or the Python
+/// module) reaches the renderer directly.
+#[test]
+fn a_renderer_of_an_empty_or_huge_image_is_refused() {
+    let gpu = common::gpu();
+    let scene = hppm::scene::load(&common::repo_path("scenes/cornell_box.ron")).expect("scene");
+    let registry = Registry::builtin();
+    for (w, h) in [(0, 8), (8, 0), (hppm::scene::MAX_FILM_SIDE + 1, 8)] {
+        let graph = registry.bundled_graph("pt").expect("pt");
+        let err = Renderer::builder(&gpu, &scene, graph)
+            .size(w, h)
+            .build()
+            .err()
+            .unwrap_or_else(|| panic!("{w}x{h} was accepted"))
+            .to_string();
+        assert!(err.starts_with(&format!("image size {w}x{h}")), "{err}");
+    }
+    let graph = registry.bundled_graph("pt").expect("pt");
+    assert!(Renderer::builder(&gpu, &scene, graph).size(1, 1).build().is_ok());
+}

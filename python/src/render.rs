@@ -4,8 +4,9 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, MutexGuard};
 
-use hppm::app::render::{Budget, BudgetField, RunSummary, Stop};
+use hppm::app::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
 use hppm::passes::Registry;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -42,11 +43,12 @@ fn keyword(field: BudgetField) -> &'static str {
 /// `hppm.Scene` or a file) at `size` = (width, height) (default: the scene's film), with random
 /// streams from `seed`. Nothing is rendered until `iterate` or `run`; `image`, `aovs` and
 /// `error_estimate` read the render so far.
-// `unsendable`: it stays on the thread that made it (pyo3 refuses it elsewhere); the GIL is
-// released only around work on that same thread.
-#[pyclass(unsendable, name = "Renderer", module = "hppm")]
+// Any Python thread may use it: pyo3's borrow flag lets one call at a time change it (another
+// gets "already borrowed", e.g. `image()` from a `progress` callback), and the mutex makes the
+// renderer, which is Send, Sync as pyo3 asks.
+#[pyclass(name = "Renderer", module = "hppm")]
 pub struct PyRenderer {
-    renderer: hppm::app::render::Renderer<'static>,
+    renderer: Mutex<Renderer<'static>>,
     gpu: &'static hppm::gpu::GpuContext,
     /// The scene's sample count, the default budget of `run`.
     scene_spp: Option<u32>,
@@ -81,13 +83,29 @@ fn build(
         })
         .map_err(to_py)?;
     Ok(PyRenderer {
-        renderer,
+        renderer: Mutex::new(renderer),
         gpu,
         scene_spp: scene.spp_hint,
     })
 }
 
+/// A panic inside a call (a bug) leaves the renderer unusable rather than half-updated.
+fn poisoned<T>(_: T) -> PyErr {
+    crate::errors::Error::new_err("the renderer is unusable after an internal error")
+}
+
 impl PyRenderer {
+    /// The renderer for a call that holds this object mutably.
+    fn inner_mut(&mut self) -> PyResult<&mut Renderer<'static>> {
+        self.renderer.get_mut().map_err(poisoned)
+    }
+
+    /// The renderer for a read (pyo3 refuses the read while a mutable call runs, so the lock
+    /// is never contended).
+    fn inner(&self) -> PyResult<MutexGuard<'_, Renderer<'static>>> {
+        self.renderer.lock().map_err(poisoned)
+    }
+
     /// Renders to `budget` (counted from the renderer's start for samples and photons, from
     /// now for time) with the GIL released, calling `progress` with the GIL after each
     /// iteration. Ctrl-C (a pending signal) and an exception from `progress` stop it and are
@@ -101,7 +119,7 @@ impl PyRenderer {
         budget.check_named(keyword).map_err(to_py)?;
         let cancel = AtomicBool::new(false);
         let mut raised: Option<PyErr> = None;
-        let renderer = &mut self.renderer;
+        let renderer = self.inner_mut()?;
         let summary = py.allow_threads(|| {
             renderer.run(budget, &cancel, |r, seconds| {
                 Python::with_gil(|py| {
@@ -183,7 +201,8 @@ impl PyRenderer {
     #[pyo3(signature = (n = 1))]
     fn iterate(&mut self, py: Python<'_>, n: u64) -> PyResult<()> {
         for _ in 0..n {
-            let (renderer, gpu) = (&mut self.renderer, self.gpu);
+            let gpu = self.gpu;
+            let renderer = self.inner_mut()?;
             py.allow_threads(|| {
                 renderer.iterate()?;
                 // Waiting keeps Ctrl-C within one iteration, as `run` does.
@@ -229,7 +248,7 @@ impl PyRenderer {
     /// The image so far: a (height, width, 3) float32 array.
     fn image<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         // `&mut`: a renderer is Send, not Sync, and the GIL is released around the readback.
-        let renderer = &mut self.renderer;
+        let renderer = self.inner_mut()?;
         let image = py.allow_threads(move || renderer.image()).map_err(to_py)?;
         array(py, &image)
     }
@@ -238,7 +257,7 @@ impl PyRenderer {
     /// `resolve`), by slot name.
     fn aovs<'py>(&mut self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         // `&mut`: a renderer is Send, not Sync, and the GIL is released around the readback.
-        let renderer = &mut self.renderer;
+        let renderer = self.inner_mut()?;
         let aovs = py.allow_threads(move || renderer.aovs()).map_err(to_py)?;
         let out = PyDict::new(py);
         for (slot, image) in aovs {
@@ -252,7 +271,7 @@ impl PyRenderer {
     /// `per_pixel` (its (height, width, 3) terms); None before two iterations.
     fn error_estimate<'py>(&mut self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         // `&mut`: a renderer is Send, not Sync, and the GIL is released around the readback.
-        let renderer = &mut self.renderer;
+        let renderer = self.inner_mut()?;
         let estimate = py
             .allow_threads(move || renderer.error_estimate())
             .map_err(to_py)?;
@@ -270,7 +289,7 @@ impl PyRenderer {
 
     /// The passes' counters (photons traced, stored, hit points, ...), summed over the nodes.
     fn counters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let counters = self.renderer.counters().map_err(to_py)?;
+        let counters = self.inner()?.counters().map_err(to_py)?;
         let out = PyDict::new(py);
         for (name, value) in &counters.0 {
             out.set_item(*name, *value)?;
@@ -279,61 +298,63 @@ impl PyRenderer {
     }
 
     #[getter]
-    fn iterations(&self) -> u64 {
-        self.renderer.iterations()
+    fn iterations(&self) -> PyResult<u64> {
+        Ok(self.inner()?.iterations())
     }
 
     /// Camera samples per pixel so far.
     #[getter]
-    fn spp(&self) -> u64 {
-        self.renderer.samples_per_pixel()
+    fn spp(&self) -> PyResult<u64> {
+        Ok(self.inner()?.samples_per_pixel())
     }
 
     /// Photons emitted so far.
     #[getter]
-    fn photons(&self) -> u64 {
-        self.renderer.photons()
+    fn photons(&self) -> PyResult<u64> {
+        Ok(self.inner()?.photons())
     }
 
     #[getter]
-    fn spp_per_iteration(&self) -> u64 {
-        self.renderer.spp_per_iteration()
+    fn spp_per_iteration(&self) -> PyResult<u64> {
+        Ok(self.inner()?.spp_per_iteration())
     }
 
     #[getter]
-    fn photons_per_iteration(&self) -> u64 {
-        self.renderer.photons_per_iteration()
+    fn photons_per_iteration(&self) -> PyResult<u64> {
+        Ok(self.inner()?.photons_per_iteration())
     }
 
     /// (width, height).
     #[getter]
-    fn size(&self) -> (u32, u32) {
-        self.renderer.size()
+    fn size(&self) -> PyResult<(u32, u32)> {
+        Ok(self.inner()?.size())
     }
 
     #[getter]
-    fn seed(&self) -> u64 {
-        self.renderer.seed()
+    fn seed(&self) -> PyResult<u64> {
+        Ok(self.inner()?.seed())
     }
 
     /// The nodes the scene had no use for, removed before preparing, and why.
     #[getter]
-    fn pruned(&self) -> Vec<String> {
-        self.renderer
+    fn pruned(&self) -> PyResult<Vec<String>> {
+        Ok(self
+            .inner()?
             .pruned()
             .iter()
             .map(ToString::to_string)
-            .collect()
+            .collect())
     }
 
-    fn __repr__(&self) -> String {
-        let (w, h) = self.renderer.size();
-        format!(
+    fn __repr__(&self) -> PyResult<String> {
+        let renderer = self.inner()?;
+        let (w, h) = renderer.size();
+        Ok(format!(
             "hppm.Renderer({w}x{h}, {} iterations, {} spp, {} photons)",
-            self.renderer.iterations(),
-            self.renderer.samples_per_pixel(),
-            self.renderer.photons()
-        )
+            renderer.iterations(),
+            renderer.samples_per_pixel(),
+            renderer.photons()
+        ))
     }
 }
 
@@ -371,9 +392,9 @@ pub fn render<'py>(
     }
     .or_scene_spp(renderer.scene_spp);
     // As `hppm render`: the estimate is made as it renders (a target error needs it).
-    renderer.renderer.watch_error();
+    renderer.inner_mut()?.watch_error();
     renderer.run_to(py, budget, progress)?;
-    let inner = &mut renderer.renderer;
+    let inner = renderer.inner_mut()?;
     let (image, estimate) = py
         .allow_threads(move || inner.image_and_error_estimate())
         .map_err(to_py)?;

@@ -313,3 +313,35 @@ def test_ctrl_c_stops_a_render_within_an_iteration():
     assert 1 < done < 10_000_000
     renderer.iterate()
     assert renderer.iterations == done + 1 and renderer.image().shape == (16, 16, 3)
+
+
+def test_a_renderer_serves_any_thread_one_call_at_a_time():
+    """Catches a renderer tied to the thread that made it (a worker could not render what the
+    main thread prepared, or the main thread not read the result), and a second call during a
+    render that deadlocks instead of being refused."""
+    renderer = hppm.Renderer(GLASS_SPHERE, "pt", size=(16, 16))
+    failures = []
+
+    def work():
+        try:
+            renderer.run(spp=8)
+        except Exception as e:  # reported below, in the main thread
+            failures.append(e)
+
+    worker = threading.Thread(target=work)
+    worker.start()
+    worker.join()
+    assert not failures, failures
+    assert renderer.spp == 8 and renderer.image().shape == (16, 16, 3)
+
+    refused = []
+
+    def peek(info):
+        try:
+            renderer.image()
+        except RuntimeError as e:
+            refused.append(str(e))
+        return False
+
+    renderer.run(spp=1000, progress=peek)
+    assert len(refused) == 1 and "borrow" in refused[0], refused

@@ -402,6 +402,13 @@ impl<'a> Renderer<'a> {
                 "a schedule's stride must be at least 1".into(),
             ));
         }
+        let side = 1..=crate::scene::MAX_FILM_SIDE;
+        if !(side.contains(&width) && side.contains(&height)) {
+            return Err(Error::Other(format!(
+                "image size {width}x{height}: each side must be a whole number from 1 to {}",
+                crate::scene::MAX_FILM_SIDE
+            )));
+        }
         // The loaders refuse these already; a scene made or scaled in code must not render black
         // without a word either.
         scene.check_extent()?;
