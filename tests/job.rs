@@ -141,5 +141,10 @@ fn a_renderer_of_an_empty_or_huge_image_is_refused() {
         assert!(err.starts_with(&format!("image size {w}x{h}")), "{err}");
     }
     let graph = registry.bundled_graph("pt").expect("pt");
-    assert!(Renderer::builder(&gpu, &scene, graph).size(1, 1).build().is_ok());
+    assert!(
+        Renderer::builder(&gpu, &scene, graph)
+            .size(1, 1)
+            .build()
+            .is_ok()
+    );
 }
