@@ -76,7 +76,8 @@ struct RenderArgs {
     /// `<default name="name">` and fills every `$name` (repeat for each).
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
     defines: Vec<(String, String)>,
-    /// Render graph (RON); default: graphs/hybrid.ron.
+    /// Render graph: a RON file, or a bundled graph's name (hybrid, pt, hybrid_pppm, ...; the
+    /// files of graphs/); default: graphs/hybrid.ron (the bundled one where that file is absent).
     #[arg(long)]
     graph: Option<PathBuf>,
     /// Samples per pixel to render.
@@ -168,7 +169,7 @@ struct CompareArgs {
     /// estimated (from the render itself).
     #[arg(long)]
     reference: Option<PathBuf>,
-    /// A graph to render (repeat for each).
+    /// A graph to render, a RON file or a bundled graph's name (repeat for each).
     #[arg(long = "graph", required = true)]
     graphs: Vec<PathBuf>,
     /// Seconds of rendering per graph (readback for the snapshots is not counted).

@@ -148,3 +148,34 @@ fn a_renderer_of_an_empty_or_huge_image_is_refused() {
             .is_ok()
     );
 }
+
+/// A graph given by a bundled graph's name, or by its repository path where no file is there
+/// (a program run away from the repository, an installed wheel), renders the compiled-in graph:
+/// the image is the one the file renders, bit for bit (`pt`). A name that is neither a file nor
+/// a bundled graph is refused with the bundled names.
+#[test]
+fn a_bundled_graph_is_found_by_name_or_by_its_repository_path() {
+    let dir = std::env::temp_dir().join(format!("hppm_job_bundled_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let render = |graph: std::path::PathBuf, name: &str| {
+        let out = dir.join(name);
+        let mut job = job(out.clone());
+        job.graph = graph;
+        job.aovs = false;
+        hppm::app::job::run(&job, &Registry::builtin(), &mut Recorder::default())
+            .map(|()| hppm::image::Image::read_exr(&out).expect("the image"))
+    };
+    let from_file = render(common::repo_path("graphs/pt.ron"), "file.exr").expect("file");
+    let by_name = render("pt".into(), "name.exr").expect("by name");
+    let elsewhere = render("/nowhere/hppm/graphs/pt.ron".into(), "moved.exr").expect("moved");
+    assert_eq!(from_file.pixels, by_name.pixels);
+    assert_eq!(from_file.pixels, elsewhere.pixels);
+    let err = render("no_such_graph".into(), "none.exr")
+        .expect_err("not a file, not bundled")
+        .to_string();
+    assert!(
+        err.starts_with("no_such_graph: ") && err.contains("hybrid_pppm"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -29,11 +29,27 @@ create_exception!(
 
 pub fn add_to(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
-    m.add("Error", py.get_type::<Error>())?;
+    // Class attributes: an error without a place reads None rather than raising AttributeError.
+    let base = py.get_type::<Error>();
+    for name in ["file", "line", "column"] {
+        base.setattr(name, py.None())?;
+    }
+    m.add("Error", base)?;
     m.add("SceneError", py.get_type::<SceneError>())?;
     m.add("GraphError", py.get_type::<GraphError>())?;
     m.add("GpuError", py.get_type::<GpuError>())?;
     Ok(())
+}
+
+/// A `GraphError` about `file` as a whole (one that cannot be read).
+pub fn graph_file_error(file: &std::path::Path, message: String) -> PyErr {
+    let exception = GraphError::new_err(message);
+    Python::with_gil(|py| {
+        let _ = exception
+            .value(py)
+            .setattr("file", file.display().to_string());
+    });
+    exception
 }
 
 /// The exception for `error`, its message hppm's and its place set as attributes.

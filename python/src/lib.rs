@@ -155,25 +155,8 @@ pub struct PyGraph {
 
 impl PyGraph {
     fn load(registry: &Registry, name_or_path: &Path) -> PyResult<PyGraph> {
-        let bundled = name_or_path
-            .to_str()
-            .and_then(|name| BUNDLED_GRAPHS.iter().find(|(n, _, _)| *n == name));
-        let (file, text) = match bundled {
-            Some((_, file, text)) if !name_or_path.exists() => {
-                (PathBuf::from(file), (*text).to_string())
-            }
-            _ => {
-                let text = std::fs::read_to_string(name_or_path).map_err(|e| {
-                    let names: Vec<&str> = BUNDLED_GRAPHS.iter().map(|g| g.0).collect();
-                    errors::GraphError::new_err(format!(
-                        "{}: {e} (nor is it a bundled graph: {})",
-                        name_or_path.display(),
-                        names.join(", ")
-                    ))
-                })?;
-                (name_or_path.to_path_buf(), text)
-            }
-        };
+        let (file, text) = hppm::passes::read_graph(name_or_path)
+            .map_err(|e| errors::graph_file_error(name_or_path, e.to_string()))?;
         let graph = registry
             .parse_graph(&file, &text)
             .map_err(|e| to_py(e.into()))?;

@@ -142,7 +142,8 @@ def test_a_graph_error_names_its_file_line_and_column(tmp_path):
 
     with pytest.raises(hppm.GraphError) as unknown:
         hppm.load_graph("hybird")
-    assert "hybrid" in str(unknown.value)
+    assert "hybrid" in str(unknown.value)  # the bundled names
+    assert unknown.value.file == "hybird" and unknown.value.line is None
 
 
 def test_bundled_graphs_are_the_files_of_graphs():

@@ -134,8 +134,9 @@ fn plan(
         Some(path) => Some((path.clone(), StateFile::read(path)?)),
         None => None,
     };
-    let graph_text = std::fs::read_to_string(graph_path)
-        .map_err(|e| Error::Other(format!("{}: {e}", graph_path.display())))?;
+    // A bundled graph's name, or its repository path where the repository is not at hand,
+    // stands for its compiled-in text.
+    let (graph_file, graph_text) = crate::passes::read_graph(graph_path)?;
     let loading = std::time::Instant::now();
     let scene = crate::scene::load_reporting(scene_path, &job.defines, |w| {
         watch.note(&format!("warning: {w}"))
@@ -152,7 +153,7 @@ fn plan(
             scene_path.display()
         ));
     }
-    let graph = registry.parse_graph(graph_path, &graph_text)?;
+    let graph = registry.parse_graph(&graph_file, &graph_text)?;
     for warning in &graph.warnings {
         watch.note(&format!("warning: {warning}"));
     }

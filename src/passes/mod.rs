@@ -19,6 +19,7 @@ pub mod scene_resources;
 pub mod sppm;
 
 use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
 use naga_oil::compose::ShaderDefValue;
 
@@ -195,6 +196,37 @@ pub fn bundled_graph(name: &str) -> Result<(&'static str, &'static str), crate::
                 names.join(", ")
             ))
         })
+}
+
+/// The text of the graph file at `name_or_path`, or, where there is no such file, of the
+/// bundled graph it names: by name (`hybrid`) or by its path in hppm's repository
+/// (`graphs/hybrid.ron`, which a program run away from the repository is still given). Returns
+/// the path errors name with the text.
+pub fn read_graph(name_or_path: &Path) -> Result<(PathBuf, String), crate::Error> {
+    let missing = match std::fs::read_to_string(name_or_path) {
+        Ok(text) => return Ok((name_or_path.to_path_buf(), text)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => e,
+        Err(e) => {
+            return Err(crate::Error::Other(format!(
+                "{}: {e}",
+                name_or_path.display()
+            )));
+        }
+    };
+    let bundled = BUNDLED_GRAPHS
+        .iter()
+        .find(|(name, file, _)| name_or_path == Path::new(name) || name_or_path.ends_with(file));
+    match bundled {
+        Some((_, file, text)) => Ok((PathBuf::from(file), text.to_string())),
+        None => {
+            let names: Vec<&str> = BUNDLED_GRAPHS.iter().map(|g| g.0).collect();
+            Err(crate::Error::Other(format!(
+                "{}: {missing} (nor is it a bundled graph: {})",
+                name_or_path.display(),
+                names.join(", ")
+            )))
+        }
+    }
 }
 
 /// Classes of light paths for the partition check (graph/transport.rs), relative to a camera
