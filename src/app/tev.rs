@@ -146,7 +146,7 @@ impl TevView {
             .copied()
             .filter(|(_, image)| (image.width, image.height) == (width, height))
             .collect();
-        if self.stream.is_none() && !self.connect() {
+        if !self.viewer_still_there() && !self.connect() {
             return;
         }
         let channels = channel_names(&layers);
@@ -187,6 +187,29 @@ impl TevView {
         } else {
             self.drop_connection();
         }
+    }
+
+    /// Whether the connection is open at the viewer's end too. tev never writes back, so a
+    /// read that finds the end of the stream means it closed (quit or restarted): without this
+    /// an image whose tiles stopped changing would send nothing, and a restarted viewer would
+    /// never be given it.
+    fn viewer_still_there(&mut self) -> bool {
+        let Some(stream) = &self.stream else {
+            return false;
+        };
+        let mut byte = [0u8; 1];
+        let open = stream.set_nonblocking(true).is_ok()
+            && match stream.peek(&mut byte) {
+                Ok(0) => false,
+                Ok(_) => true,
+                Err(e) => e.kind() == std::io::ErrorKind::WouldBlock,
+            }
+            && stream.set_nonblocking(false).is_ok();
+        if !open {
+            self.stream = None;
+            self.shown = None;
+        }
+        open
     }
 
     fn connect(&mut self) -> bool {
@@ -348,6 +371,45 @@ mod tests {
             regions[6],
             [128, 64, 2, 6],
             "the changed corner's tile alone"
+        );
+    }
+
+    /// A viewer that restarts: the first connection is closed by the viewer, the view notices
+    /// on a write, waits, connects again and creates the image anew with every tile, so the new
+    /// viewer shows the whole image and not only what changed since. Catches a view that gives
+    /// up after one failure or resumes sending tiles to an image the new viewer never created.
+    #[test]
+    fn a_restarted_viewer_gets_the_image_created_again() {
+        let listener = TcpListener::bind("127.0.0.1:0").expect("listen");
+        let address = listener.local_addr().expect("addr").to_string();
+        let mut view = TevView::new(&address, "restart").expect("address");
+        let image = Image {
+            width: 100,
+            height: 40,
+            pixels: vec![[0.25; 3]; 100 * 40],
+        };
+        view.show(&image);
+        let (first, _) = listener.accept().expect("first connection");
+        drop(first);
+        listener.set_nonblocking(true).expect("nonblocking");
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let mut second = loop {
+            view.show(&image);
+            if let Ok((stream, _)) = listener.accept() {
+                break stream;
+            }
+            assert!(Instant::now() < deadline, "the view never reconnected");
+            std::thread::sleep(Duration::from_millis(50));
+        };
+        drop(view);
+        second.set_nonblocking(false).expect("blocking");
+        let mut bytes = Vec::new();
+        second.read_to_end(&mut bytes).expect("read");
+        assert_eq!(bytes.get(4), Some(&CREATE_IMAGE), "the image created first");
+        assert_eq!(
+            regions(&bytes, 3).len(),
+            2,
+            "both tiles of 100x40 sent again"
         );
     }
 }
