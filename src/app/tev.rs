@@ -86,14 +86,16 @@ fn tiles(width: u32, height: u32) -> impl Iterator<Item = [u32; 4]> {
     })
 }
 
-/// The values of `tile` out of a whole image's, row by row.
-fn tile_values(values: &[f32], width: u32, channels: usize, tile: [u32; 4]) -> Vec<f32> {
+/// The rows of `tile` within a whole image's values.
+fn tile_rows(
+    values: &[f32],
+    width: u32,
+    channels: usize,
+    tile: [u32; 4],
+) -> impl Iterator<Item = &[f32]> {
     let [x, y, w, h] = tile.map(|v| v as usize);
     let row = width as usize * channels;
-    (y..y + h)
-        .flat_map(|r| &values[r * row + x * channels..r * row + (x + w) * channels])
-        .copied()
-        .collect()
+    (y..y + h).map(move |r| &values[r * row + x * channels..r * row + (x + w) * channels])
 }
 
 impl TevView {
@@ -159,11 +161,17 @@ impl TevView {
         if known.is_none() {
             packets.push(create_packet(&self.name, width, height, &channels));
         }
+        let n = channels.len();
         for tile in tiles(width, height) {
-            let now = tile_values(&values, width, channels.len(), tile);
-            let changed =
-                known.is_none_or(|s| tile_values(&s.values, width, channels.len(), tile) != now);
+            // Compared row by row in place: a tile is copied only when it goes out.
+            let changed = known.is_none_or(|s| {
+                tile_rows(&values, width, n, tile).ne(tile_rows(&s.values, width, n, tile))
+            });
             if changed {
+                let now: Vec<f32> = tile_rows(&values, width, n, tile)
+                    .flatten()
+                    .copied()
+                    .collect();
                 packets.push(update_packet(&self.name, &channels, tile, &now));
             }
         }
