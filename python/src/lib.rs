@@ -125,14 +125,19 @@ fn load_scene(
         (scene, warnings)
     });
     for warning in warnings {
-        let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
-        PyErr::warn(py, &category, &std::ffi::CString::new(warning)?, 1)?;
+        warn(py, &warning)?;
     }
     let scene = scene.map_err(|e| to_py(e.into()))?;
     Ok(PyScene {
         scene: Arc::new(scene),
         path,
     })
+}
+
+/// Issues `message` as a Python `UserWarning` (what `hppm render` prints as "warning: ...").
+pub fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let category = py.get_type::<pyo3::exceptions::PyUserWarning>();
+    PyErr::warn(py, &category, &std::ffi::CString::new(message)?, 1)
 }
 
 /// A parameter's value as Mitsuba's `-D` would spell it on the command line.

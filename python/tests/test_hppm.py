@@ -346,3 +346,17 @@ def test_a_renderer_serves_any_thread_one_call_at_a_time():
 
     renderer.run(spp=1000, progress=peek)
     assert len(refused) == 1 and "borrow" in refused[0], refused
+
+
+def test_what_the_cli_warns_of_python_warns_of():
+    """Catches a Python render that silently misses light the CLI warns about: `pt` cannot
+    path trace a point light's caustic through glass (the image lacks it, and so does its error
+    estimate); the hybrid traces photons and is not warned."""
+    scene = REPO / "tests/refs/scenes/point_light_caustic/scene.xml"
+    with pytest.warns(UserWarning, match="cannot be path traced"):
+        hppm.Renderer(scene, "pt", size=(16, 16))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hppm.Renderer(scene, "hybrid", size=(16, 16))
