@@ -170,6 +170,11 @@ fn a_bundled_graph_is_found_by_name_or_by_its_repository_path() {
     let elsewhere = render("/nowhere/hppm/graphs/pt.ron".into(), "moved.exr").expect("moved");
     assert_eq!(from_file.pixels, by_name.pixels);
     assert_eq!(from_file.pixels, elsewhere.pixels);
+    // The registry's loader (compare, `hppm graph`) finds it the same way.
+    let loaded = Registry::builtin()
+        .load_graph(std::path::Path::new("pt"))
+        .expect("pt by name");
+    assert_eq!(loaded.file, std::path::Path::new("graphs/pt.ron"));
     let err = render("no_such_graph".into(), "none.exr")
         .expect_err("not a file, not bundled")
         .to_string();

@@ -252,11 +252,8 @@ pub fn compare(
     let graphs = options
         .graphs
         .iter()
-        .map(|path| {
-            let (file, text) = crate::passes::read_graph(path)?;
-            Ok(options.registry.parse_graph(&file, &text)?)
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
+        .map(|path| options.registry.load_graph(path))
+        .collect::<Result<Vec<_>, _>>()?;
     std::fs::create_dir_all(&options.out).map_err(|source| Error::Io {
         path: options.out.clone(),
         source,

@@ -8,7 +8,7 @@
 //! # static MY_KIND: hppm::graph::pass::PassKind = hppm::passes::resolve::KIND;
 //! let registry = Registry::builtin().with(&MY_KIND);
 //! let graph = registry.load_graph(std::path::Path::new("graphs/mine.ron"))?;
-//! # Ok::<(), hppm::graph::GraphErrors>(())
+//! # Ok::<(), hppm::Error>(())
 //! ```
 
 use std::path::Path;
@@ -116,9 +116,12 @@ impl Registry {
             .is_some_and(|(_, test)| test(scene, features, need))
     }
 
-    /// Reads and validates a graph file against these kinds.
-    pub fn load_graph(&self, path: &Path) -> Result<ValidGraph, GraphErrors> {
-        crate::graph::load_graph(path, &self.kinds)
+    /// Reads and validates a graph file against these kinds; a bundled graph's name, or its
+    /// repository path where no file is there, stands for its compiled-in text
+    /// ([`super::read_graph`]).
+    pub fn load_graph(&self, path: &Path) -> Result<ValidGraph, crate::Error> {
+        let (file, text) = super::read_graph(path)?;
+        Ok(self.parse_graph(&file, &text)?)
     }
 
     /// Validates graph `text` (read from `path`, which errors name) against these kinds.
