@@ -623,25 +623,25 @@ fn compare(args: CompareArgs, registry: &Registry) -> Result<(), Error> {
         profile: args.profile,
         size: args.size,
     };
-    let mut views: Vec<(String, TevView)> = Vec::new();
-    // The address is checked before any render; the reference goes to the viewer first.
-    if let Some(address) = &args.tev {
-        let mut view = TevView::new(address, "reference")?;
-        if let Some(reference) = &options.reference {
-            view.show(&crate::image::Image::read_exr(reference)?);
-        }
+    // The address is checked before any render; the reference goes to the viewer first. The
+    // graphs render one after another, so one view at a time (tev keeps a closed view's image).
+    let mut view = match &args.tev {
+        Some(address) => Some(TevView::new(address, "reference")?),
+        None => None,
+    };
+    if let (Some(view), Some(reference)) = (&mut view, &options.reference) {
+        view.show(&crate::image::Image::read_exr(reference)?);
     }
     let mut show = |label: &str, image: &crate::image::Image| {
         let Some(address) = &args.tev else {
             return;
         };
-        if !views.iter().any(|(l, _)| l == label) {
-            match TevView::new(address, label) {
-                Ok(view) => views.push((label.to_string(), view)),
-                Err(e) => eprintln!("warning: {e}"),
-            }
+        if view.as_ref().is_none_or(|v| v.name() != label) {
+            view = TevView::new(address, label)
+                .inspect_err(|e| eprintln!("warning: {e}"))
+                .ok();
         }
-        if let Some((_, view)) = views.iter_mut().find(|(l, _)| l == label) {
+        if let Some(view) = &mut view {
             view.show(image);
         }
     };

@@ -124,6 +124,11 @@ impl TevView {
         })
     }
 
+    /// The image's name in the viewer.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
     /// Whether an update is due: none sent yet, or `interval` since the last.
     pub fn due(&self, interval: Duration) -> bool {
         self.last_sent.is_none_or(|t| t.elapsed() >= interval)
