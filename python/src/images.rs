@@ -27,14 +27,12 @@ fn image_of(array: &PyReadonlyArray3<'_, f32>) -> PyResult<Image> {
         )));
     }
     let too_large = |_| pyo3::exceptions::PyValueError::new_err("image larger than 2^32 pixels");
-    let view = array.as_array();
-    let pixels = view
-        .outer_iter()
-        .flat_map(|row| {
-            row.outer_iter()
-                .map(|p| [p[0], p[1], p[2]])
-                .collect::<Vec<_>>()
-        })
+    // Each pixel's RGB lane, rows from the top, whatever the array's strides.
+    let pixels = array
+        .as_array()
+        .lanes(numpy::ndarray::Axis(2))
+        .into_iter()
+        .map(|p| [p[0], p[1], p[2]])
         .collect();
     Ok(Image {
         width: u32::try_from(width).map_err(too_large)?,

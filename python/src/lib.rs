@@ -159,7 +159,11 @@ pub struct PyGraph {
 }
 
 impl PyGraph {
-    fn load(registry: &Registry, name_or_path: &Path) -> PyResult<PyGraph> {
+    /// The graph at `name_or_path` (a file or a bundled graph's name), and its first instance.
+    fn load(
+        registry: &Registry,
+        name_or_path: &Path,
+    ) -> PyResult<(PyGraph, hppm::graph::ValidGraph)> {
         let (file, text) = hppm::passes::read_graph(name_or_path)
             .map_err(|e| errors::graph_file_error(name_or_path, e.to_string()))?;
         let graph = registry
@@ -170,7 +174,7 @@ impl PyGraph {
             .iter()
             .map(|n| (n.name.clone(), n.kind.name.to_string()))
             .collect();
-        Ok(PyGraph { file, text, nodes })
+        Ok((PyGraph { file, text, nodes }, graph))
     }
 
     /// A fresh instance to prepare on the device.
@@ -216,7 +220,7 @@ impl PyGraph {
 /// `hppm.GraphError` with `file`, `line` and `column`.
 #[pyfunction]
 fn load_graph(name_or_path: PathBuf) -> PyResult<PyGraph> {
-    PyGraph::load(&Registry::builtin(), &name_or_path)
+    Ok(PyGraph::load(&Registry::builtin(), &name_or_path)?.0)
 }
 
 /// The names of the graphs shipped with hppm.

@@ -69,7 +69,7 @@ fn build(
     };
     let graph = match graph {
         GraphArg::Loaded(g) => g.instance(&registry)?,
-        GraphArg::NameOrFile(path) => PyGraph::load(&registry, &path)?.instance(&registry)?,
+        GraphArg::NameOrFile(path) => PyGraph::load(&registry, &path)?.1,
     };
     let (width, height) = size.unwrap_or((scene.camera.width, scene.camera.height));
     let gpu = crate::gpu(None)?;
