@@ -390,17 +390,9 @@ pub fn render<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let graph = graph.unwrap_or(GraphArg::NameOrFile(PathBuf::from("hybrid")));
     let mut renderer = build(py, scene, graph, size, seed)?;
-    let budget = Budget {
-        spp,
-        seconds: time,
-        photons,
-        target_error,
-        adaptive,
-    }
-    .or_scene_spp(renderer.scene_spp);
     // As `hppm render`: the estimate is made as it renders (a target error needs it).
     renderer.inner_mut()?.watch_error();
-    renderer.run_to(py, budget, progress)?;
+    renderer.run(py, spp, time, photons, target_error, adaptive, progress)?;
     let inner = renderer.inner_mut()?;
     let (image, estimate) = py
         .allow_threads(move || inner.image_and_error_estimate())
