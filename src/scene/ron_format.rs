@@ -156,9 +156,28 @@ struct PointLightFile {
     intensity: [f32; 3],
 }
 
+/// The CLI's default scene, built into the binary so that an installed `hppm` (a wheel, a binary
+/// copied off its clone) renders it without the repository: its repository path and its text.
+pub const DEFAULT_SCENE: (&str, &str) = (
+    "scenes/cornell_box.ron",
+    include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/cornell_box.ron"
+    )),
+);
+
+/// Loads a scene file; where none is at `path` and `path` ends with [`DEFAULT_SCENE`]'s repository
+/// path, the built-in copy (as bundled graphs are found by their paths).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    let text = super::read_text(path)?;
-    parse(path, &text)
+    match super::read_text(path) {
+        Ok(text) => parse(path, &text),
+        Err(SceneError::Io { source, .. })
+            if source.kind() == std::io::ErrorKind::NotFound && path.ends_with(DEFAULT_SCENE.0) =>
+        {
+            parse(Path::new(DEFAULT_SCENE.0), DEFAULT_SCENE.1)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// Parses scene `text`; `path` names the file in errors and anchors relative OBJ paths.
@@ -558,6 +577,27 @@ fn is_non_finite_number(word: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An installed `hppm` (a wheel built in a temporary folder that is gone) asks for the
+    /// default scene at a path that no longer exists: it must get the repository's file, and any
+    /// other missing file must still be an error naming it.
+    #[test]
+    fn the_default_scene_is_built_in() {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_SCENE.0);
+        let from_file = load(&file).expect("the repository's default scene loads");
+        let built_in = load(Path::new("/gone/build/scenes/cornell_box.ron"))
+            .expect("a missing default scene falls back to the built-in copy");
+        assert_eq!(built_in.source, Path::new(DEFAULT_SCENE.0));
+        assert_eq!(
+            Scene {
+                source: from_file.source.clone(),
+                ..built_in
+            },
+            from_file
+        );
+        let other = load(Path::new("/gone/build/scenes/other.ron"));
+        assert!(matches!(other, Err(SceneError::Io { .. })), "{other:?}");
+    }
 
     fn error(text: &str) -> String {
         match parse(Path::new("t.ron"), text) {
