@@ -290,13 +290,15 @@ fn parse_shard(text: &str) -> Result<(u64, u64), String> {
 }
 
 /// A file shipped with hppm, found relative to the working directory or, failing that, to the
-/// source tree the binary was built from.
+/// source tree the binary was built from; where neither has it (an installed binary), its
+/// repository path, which the scene and graph loaders resolve to their built-in copies.
 fn bundled(relative: &str) -> PathBuf {
     let local = PathBuf::from(relative);
-    if local.exists() {
+    let source_tree = Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
+    if local.exists() || !source_tree.exists() {
         return local;
     }
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+    source_tree
 }
 
 /// The `render` flag that sets a budget field, for messages.
