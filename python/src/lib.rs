@@ -59,7 +59,6 @@ fn device(py: Python<'_>, adapter: Option<String>) -> PyResult<String> {
 #[pyclass(frozen, name = "Scene", module = "hppm")]
 pub struct PyScene {
     scene: Arc<Scene>,
-    path: PathBuf,
 }
 
 #[pymethods]
@@ -67,7 +66,7 @@ impl PyScene {
     /// The file it was loaded from.
     #[getter]
     fn path(&self) -> String {
-        self.path.display().to_string()
+        self.scene.source.display().to_string()
     }
 
     /// The film's (width, height): a render's default size.
@@ -97,7 +96,7 @@ impl PyScene {
         let (w, h) = self.size();
         format!(
             "hppm.Scene('{}', {w}x{h}, {} triangles)",
-            self.path.display(),
+            self.scene.source.display(),
             self.scene.triangles.len()
         )
     }
@@ -130,7 +129,6 @@ fn load_scene(
     let scene = scene.map_err(|e| to_py(e.into()))?;
     Ok(PyScene {
         scene: Arc::new(scene),
-        path,
     })
 }
 
