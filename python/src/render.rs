@@ -83,8 +83,8 @@ fn build(
         })
         .map_err(to_py)?;
     // What `hppm render` warns of before it renders.
-    if !scene.features().has_lights() {
-        crate::warn(py, "the scene has no light: the image will be black")?;
+    if let Some(warning) = scene.no_light_warning() {
+        crate::warn(py, &warning)?;
     }
     if let Some(warning) = renderer.unsampled_light_warning() {
         crate::warn(py, warning.strip_prefix("warning: ").unwrap_or(&warning))?;

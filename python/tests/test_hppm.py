@@ -348,6 +348,34 @@ def test_a_renderer_serves_any_thread_one_call_at_a_time():
     assert len(refused) == 1 and "borrow" in refused[0], refused
 
 
+DARK_SCENE = """<scene version="3.0.0">
+    <sensor type="perspective"><float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 3" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <shape type="rectangle"><bsdf type="diffuse"/></shape>
+</scene>
+"""
+
+
+@pytest.mark.parametrize("command", cli_commands(), ids=lambda c: Path(c[-1]).name)
+def test_a_scene_without_light_is_warned_of_as_the_cli_does(command, tmp_path):
+    """Catches a black render with no word from Python, and a Python warning that drifts from
+    the command line's: both come from one place (`Scene::no_light_warning`), and the CLI's
+    "warning: ..." line must be the Python warning's text."""
+    scene = tmp_path / "dark.xml"
+    scene.write_text(DARK_SCENE)
+    with pytest.warns(UserWarning, match="has no light") as caught:
+        image = hppm.render(scene, "pt", spp=1)
+    assert not image.any(), "a scene without light renders black"
+    (warning,) = [str(w.message) for w in caught if "has no light" in str(w.message)]
+    assert warning.startswith(str(scene)), warning
+    args = [*command, "render", str(scene), "--graph", "pt", "--spp", "1", "--out", str(tmp_path / "dark.exr")]
+    done = subprocess.run(args, capture_output=True, text=True, cwd=REPO)
+    assert done.returncode == 0, done.stderr
+    assert f"warning: {warning}" in done.stderr.splitlines(), done.stderr
+
+
 def test_what_the_cli_warns_of_python_warns_of():
     """Catches a Python render that silently misses light the CLI warns about: `pt` cannot
     path trace a point light's caustic through glass (the image lacks it, and so does its error

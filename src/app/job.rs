@@ -147,11 +147,8 @@ fn plan(
         scene.triangles.len(),
         loading.elapsed().as_secs_f64()
     ));
-    if !features.has_lights() {
-        watch.note(&format!(
-            "warning: {} has no light (no emitting shape, no point light): the image will be black",
-            scene_path.display()
-        ));
+    if let Some(warning) = scene.no_light_warning() {
+        watch.note(&format!("warning: {warning}"));
     }
     let graph = registry.parse_graph(&graph_file, &graph_text)?;
     for warning in &graph.warnings {

@@ -906,6 +906,17 @@ impl Scene {
         self.features().has_lights()
     }
 
+    /// What a render of a scene without a light is warned of (by `hppm render` and Python
+    /// alike), or None when it has one.
+    pub fn no_light_warning(&self) -> Option<String> {
+        (!self.has_lights()).then(|| {
+            format!(
+                "{} has no light (no emitting shape, no point light): the image will be black",
+                self.source.display()
+            )
+        })
+    }
+
     /// Checks what every loader must guarantee: finite numbers, valid material indices, a
     /// camera that looks somewhere, an extent f32 can render.
     pub fn validate(&self) -> Result<(), SceneError> {
