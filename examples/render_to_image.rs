@@ -9,10 +9,10 @@
 
 use std::path::{Path, PathBuf};
 
-use hppm::app::render::Renderer;
 use hppm::gpu::GpuContext;
 use hppm::image::{Image, Provenance};
 use hppm::passes::Registry;
+use hppm::render::Renderer;
 
 /// `scene` through the bundled graph `graph` at `size`, until `spp` samples per pixel.
 fn render(

@@ -7,12 +7,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::app::bench;
 use crate::app::job::{JobWatcher, RenderJob};
-use crate::app::render::{Budget, BudgetField, Renderer};
-use crate::app::state::StateFile;
 use crate::app::tev::TevView;
 use crate::gpu::{GpuContext, GpuError};
 use crate::image::{OutputFormat, Provenance};
 use crate::passes::Registry;
+use crate::render::state::StateFile;
+use crate::render::{Budget, BudgetField, Renderer};
 use crate::{Error, scene};
 use clap::{Args, Parser, Subcommand};
 
@@ -484,7 +484,7 @@ fn merge(args: MergeArgs) -> Result<(), Error> {
         .iter()
         .map(|path| Ok((path.clone(), StateFile::read(path)?)))
         .collect::<Result<Vec<_>, Error>>()?;
-    let merged = crate::app::state::merge(&shards, args.partial)?;
+    let merged = crate::render::state::merge(&shards, args.partial)?;
     let h = &merged.header;
     let provenance = Provenance::default()
         .with("hppm_scene", &h.scene)

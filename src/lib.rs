@@ -9,7 +9,7 @@
 //! Render the bundled Cornell box through the bundled hybrid graph, into memory:
 //!
 //! ```
-//! use hppm::app::render::Renderer;
+//! use hppm::render::Renderer;
 //! use hppm::passes::Registry;
 //!
 //! # fn main() -> Result<(), hppm::Error> {
@@ -44,6 +44,7 @@ pub mod gpu;
 pub mod graph;
 pub mod image;
 pub mod passes;
+pub mod render;
 pub mod ron_span;
 pub mod scene;
 

@@ -1,4 +1,4 @@
-//! Adaptive sampling (src/app/adaptive.rs): path_trace alone samples exactly the pixels a
+//! Adaptive sampling (src/render/adaptive.rs): path_trace alone samples exactly the pixels a
 //! sample mask lists, splatting nothing stale from the pixels it skips; a whole render that
 //! stops converged pixels still converges to Mitsuba's reference, its estimate stays honest,
 //! and graphs whose estimators need every pixel every iteration are refused.
@@ -9,9 +9,9 @@ use std::sync::atomic::AtomicBool;
 
 use common::pass_harness::PassHarness;
 use common::{gpu, load_graph, load_scene, reference, relmse, renderer};
-use hppm::app::render::{Budget, Stop};
 use hppm::gpu::sample_mask::{SAMPLED, SampleMask, UPDATED};
 use hppm::passes::path_trace::{self, PathTrace, PathTraceParams};
+use hppm::render::{Budget, Stop};
 use hppm::scene::Scene;
 use hppm::scene::filter::PixelFilter;
 

@@ -20,9 +20,9 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use hppm::app::render::Renderer;
 use hppm::gpu::GpuContext;
 use hppm::image::Image;
+use hppm::render::Renderer;
 use hppm::scene::Scene;
 
 /// Standard errors allowed. With fixed seeds the tests repeat on one adapter (up to the order in

@@ -8,10 +8,10 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use common::{gpu, load_graph, load_scene, reference, relmse, render_to, renderer, repo_path};
-use hppm::app::render::{Budget, Stop};
 use hppm::gpu::odd_iterations::OddIterations;
 use hppm::gpu::sample_mask::{SAMPLED, SampleMask, UPDATED};
 use hppm::gpu::shaders::ShaderLibrary;
+use hppm::render::{Budget, Stop};
 
 /// The library the odd-iteration kernel is composed with.
 fn shader_library(gpu: &hppm::gpu::GpuContext) -> ShaderLibrary {
@@ -188,7 +188,7 @@ fn measured_and_estimated(
     graph: &str,
     reference_name: &str,
     spp: u64,
-) -> (f64, hppm::app::error_estimate::ErrorEstimate) {
+) -> (f64, hppm::render::error_estimate::ErrorEstimate) {
     let gpu = gpu();
     let scene = load_scene(scene);
     let mut r = renderer(&gpu, &scene, load_graph(graph), 1);

@@ -31,7 +31,7 @@
 mod common;
 
 use common::*;
-use hppm::app::render::Renderer;
+use hppm::render::Renderer;
 
 const GRAPHS: [&str; 6] = [
     "graphs/hybrid.ron",

@@ -10,7 +10,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::*;
-use hppm::app::render::Renderer;
+use hppm::render::Renderer;
 
 /// Mutants per kind of input; the issue asks for at least 200 in all.
 const MUTANTS_PER_FILE: usize = 40;

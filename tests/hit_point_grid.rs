@@ -584,7 +584,7 @@ fn render(
     let graph = hppm::graph::load_graph(&repo_path(graph), hppm::passes::builtin_kinds())
         .unwrap_or_else(|e| panic!("{graph}: {e}"));
     let mut renderer =
-        hppm::app::render::Renderer::new(gpu, scene, graph, 32, 32, seed).expect("renderer");
+        hppm::render::Renderer::new(gpu, scene, graph, 32, 32, seed).expect("renderer");
     for _ in 0..8 {
         renderer.iterate().expect("iteration");
     }

@@ -8,8 +8,8 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use hppm::app::job::{JobWatcher, RenderJob};
-use hppm::app::render::{Budget, Renderer};
 use hppm::passes::Registry;
+use hppm::render::{Budget, Renderer};
 
 #[derive(Default)]
 struct Recorder {

@@ -586,7 +586,7 @@ fn render_graph(
     }
     let graph = hppm::graph::parse_graph(Path::new(&path), &text, hppm::passes::builtin_kinds())
         .unwrap_or_else(|e| panic!("{graph_file}: {e}"));
-    let mut r = hppm::app::render::Renderer::new(&gpu, &scene, graph, size, size, 9)
+    let mut r = hppm::render::Renderer::new(&gpu, &scene, graph, size, size, 9)
         .unwrap_or_else(|e| panic!("renderer: {e}"));
     render_to(&mut r, spp)
 }

@@ -7,8 +7,8 @@ mod common;
 
 use common::*;
 use glam::{Affine3A, Vec3};
-use hppm::app::render::Renderer;
 use hppm::image::Image;
+use hppm::render::Renderer;
 use hppm::scene::Scene;
 
 const HUGE_PLANE: &str = "tests/data/scenes/sphere_on_huge_plane.ron";

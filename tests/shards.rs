@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use hppm::app::state::{StateFile, StateKind};
 use hppm::image::Image;
+use hppm::render::state::{StateFile, StateKind};
 
 const SCENE: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const SIZE: &str = "48x32";

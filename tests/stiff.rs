@@ -7,8 +7,8 @@
 mod common;
 
 use common::*;
-use hppm::app::render::Renderer;
 use hppm::image::Image;
+use hppm::render::Renderer;
 
 /// Renders `spp` iterations and returns the image with the samples discarded as NaN/Inf.
 fn render_counting(r: &mut Renderer<'_>, spp: u64) -> (Image, u64) {

@@ -12,9 +12,9 @@
 mod common;
 
 use common::*;
-use hppm::app::render::{Budget, Renderer};
 use hppm::graph::pass::Schedule;
 use hppm::image::Image;
+use hppm::render::{Budget, Renderer};
 use hppm::scene::Scene;
 use hppm::scene::filter::PixelFilter;
 use std::sync::atomic::AtomicBool;

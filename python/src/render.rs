@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
-use hppm::app::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
 use hppm::passes::Registry;
+use hppm::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -75,7 +75,7 @@ fn build(
     let gpu = crate::gpu(None)?;
     let renderer = py
         .allow_threads(|| {
-            hppm::app::render::Renderer::builder(gpu, &scene, graph)
+            hppm::render::Renderer::builder(gpu, &scene, graph)
                 .registry(registry)
                 .size(width, height)
                 .seed(seed)
@@ -158,7 +158,7 @@ impl PyRenderer {
 /// What `progress` receives after each iteration.
 fn progress_info<'py>(
     py: Python<'py>,
-    renderer: &hppm::app::render::Renderer<'_>,
+    renderer: &hppm::render::Renderer<'_>,
     seconds: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let info = PyDict::new(py);

@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use crate::app::render::{Budget, Renderer};
 use crate::gpu::GpuContext;
+use crate::render::{Budget, Renderer};
 use crate::{Error, graph, passes, scene};
 
 const SCENES: &[&str] = &["scenes/cornell_diffuse.ron", "scenes/cornell_box.ron"];

@@ -10,11 +10,11 @@ use std::time::Instant;
 use glam::Vec3;
 
 use crate::app::bench::{stolen_cell, while_counting_steal};
-use crate::app::render::{Budget, NodeTime, Renderer};
 use crate::gpu::GpuContext;
 use crate::graph::{ValidGraph, parse_graph};
 use crate::image::Image;
 use crate::passes::hit_points::{GpuHitPoint, build_tree};
+use crate::render::{Budget, NodeTime, Renderer};
 use crate::{Error, passes, scene};
 
 pub(crate) const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";

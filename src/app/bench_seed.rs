@@ -10,8 +10,8 @@ use std::path::PathBuf;
 use crate::Error;
 use crate::app::bench::{stolen_cell, while_counting_steal};
 use crate::app::bench_hybrid::{GLASS, graph_with, node_ms, run_iterations};
-use crate::app::render::Renderer;
 use crate::gpu::GpuContext;
+use crate::render::Renderer;
 use crate::scene;
 
 /// The report's image, samples per pixel, and photons per iteration (2M over 512 iterations).

@@ -10,9 +10,9 @@ use std::sync::atomic::AtomicBool;
 use crate::Error;
 #[cfg(feature = "cli")]
 use crate::app::plot::{self, Series, SeriesStyle};
-use crate::app::render::{Budget, NodeTime, Renderer};
 use crate::gpu::GpuContext;
 use crate::image::{ErrorMetrics, Image, Provenance};
+use crate::render::{Budget, NodeTime, Renderer};
 use crate::scene;
 
 /// What to compare (the command line's arguments).

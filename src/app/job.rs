@@ -9,14 +9,15 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use crate::Error;
-use crate::app::error_estimate::ErrorEstimate;
-use crate::app::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
-use crate::app::state::{Origin, StateFile, checkpoint_file, graph_fingerprint, shard_file};
 use crate::gpu::GpuContext;
 use crate::graph::ValidGraph;
 use crate::graph::pass::Schedule;
 use crate::image::{Image, OutputFormat, Provenance};
 use crate::passes::Registry;
+use crate::render::error_estimate::ErrorEstimate;
+use crate::render::fingerprint::graph_fingerprint;
+use crate::render::state::{Origin, StateFile, checkpoint_file, shard_file};
+use crate::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
 use crate::scene::Scene;
 
 /// What to render and where to write it.
@@ -292,7 +293,7 @@ fn prepare<'p>(
         total_iterations: renderer.total_iterations(budget),
     };
     if let Some((path, file)) = &resume {
-        crate::app::state::resume(&mut renderer, &origin, path, file)?;
+        crate::render::state::resume(&mut renderer, &origin, path, file)?;
         watch.note(&format!(
             "resumed {}: {} iterations done ({} spp)",
             path.display(),

@@ -1,16 +1,17 @@
-//! The application on top of the library: the render loop and its budgets, `hppm compare`,
-//! `hppm bench`, plots and profile tables. The CLI (src/cli.rs) calls these.
+//! The application on top of the library: render jobs from files to files, `hppm compare`, the
+//! live view in tev and, with the command line, `hppm bench`, plots and profile tables. The CLI
+//! (src/cli.rs) and Python call these; the render itself is [`crate::render`].
 
-pub mod adaptive;
+#[cfg(feature = "cli")]
 pub mod bench;
+#[cfg(feature = "cli")]
 pub mod bench_gather;
+#[cfg(feature = "cli")]
 pub mod bench_hybrid;
+#[cfg(feature = "cli")]
 pub mod bench_seed;
 pub mod compare;
-pub mod error_estimate;
 pub mod job;
 #[cfg(feature = "cli")]
 pub mod plot;
-pub mod render;
-pub mod state;
 pub mod tev;

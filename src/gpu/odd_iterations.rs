@@ -2,7 +2,7 @@
 //! per-iteration estimates (a weighted sum and its weight per pixel), the sum of the estimates
 //! of each pixel's odd updates and how many updates it had (shaders/gpu/odd_iterations.wgsl).
 //! The even half is the rest of the mean; how far the halves differ measures the mean's noise
-//! (src/app/error_estimate.rs). Every pixel is updated every iteration unless the band's
+//! (src/render/error_estimate.rs). Every pixel is updated every iteration unless the band's
 //! sample mask (adaptive sampling) leaves it alone.
 
 use std::sync::Arc;

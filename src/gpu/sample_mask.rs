@@ -1,6 +1,6 @@
 //! Adaptive sampling's per-pixel flags on the device (shaders/gpu/sample_mask.wgsl): which
 //! pixels the camera samples in the next iterations and which pixels' images may change. The
-//! renderer decides them (src/app/adaptive.rs); path_trace and the odd-iteration sums read them.
+//! renderer decides them (src/render/adaptive.rs); path_trace and the odd-iteration sums read them.
 //! Until the renderer enables the mask, every pixel is sampled and updated.
 
 use std::sync::Arc;

@@ -89,7 +89,7 @@ pub fn scaled(image: &Image, s: f32) -> Image {
 }
 
 /// The mean of the red channel of a renderer's `caustic` AOV (0 when its graph has none).
-pub fn caustic_mean(renderer: &hppm::app::render::Renderer<'_>) -> f64 {
+pub fn caustic_mean(renderer: &hppm::render::Renderer<'_>) -> f64 {
     renderer
         .aovs()
         .expect("aovs")

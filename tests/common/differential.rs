@@ -20,9 +20,9 @@
 
 use std::path::{Path, PathBuf};
 
-use hppm::app::render::Renderer;
 use hppm::gpu::GpuContext;
 use hppm::image::Image;
+use hppm::render::Renderer;
 use hppm::scene::Scene;
 
 use super::{load_graph, render_to, repo_path};

@@ -6,10 +6,10 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use hppm::app::render::{Budget, Renderer};
 use hppm::gpu::GpuContext;
 use hppm::graph::{self, ValidGraph};
 use hppm::image::Image;
+use hppm::render::{Budget, Renderer};
 use hppm::scene::Scene;
 
 pub fn repo_path(relative: &str) -> PathBuf {

@@ -5,9 +5,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use custom_pass::{Curve, TonemapParams, registry, tonemap};
-use hppm::app::render::Renderer;
 use hppm::gpu::GpuContext;
 use hppm::passes::Registry;
+use hppm::render::Renderer;
 
 fn here(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)

@@ -5,8 +5,8 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+use super::budget::Budget;
 use crate::Error;
-use crate::app::error_estimate::{self, ErrorEstimate, Halves};
 use crate::gpu::GpuContext;
 use crate::gpu::odd_iterations::OddIterations;
 use crate::gpu::sample_mask::{SAMPLED, SampleMask};
@@ -16,123 +16,14 @@ use crate::graph::pass::{Counters, IMAGE, Resource, Schedule, Shared};
 use crate::image::Image;
 use crate::passes::hit_points::KERNEL_BIAS;
 use crate::passes::{Registry, SceneResources, TablePlacement, paths};
+use crate::render::error_estimate::{self, ErrorEstimate, Halves};
 use crate::scene::Scene;
 use crate::scene::gpu_layout::GpuScene;
 
 pub use crate::graph::exec::NodeTime;
 
-/// When to stop rendering. With several set, whichever comes first.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Budget {
-    pub spp: Option<u64>,
-    pub seconds: Option<f64>,
-    /// Photons emitted in total.
-    pub photons: Option<u64>,
-    /// Stop once the estimated relMSE (docs/error-estimate.md) is below this; needs one of the
-    /// others as a cap.
-    pub target_error: Option<f64>,
-    /// Adaptive sampling: pixels whose estimated error is below `target_error` stop receiving
-    /// camera samples (src/app/adaptive.rs).
-    pub adaptive: bool,
-}
-
-/// A field of a [`Budget`] (or of a render job), for messages: the library names it as the field, the command line
-/// as its flag ([`Budget::check_named`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BudgetField {
-    Spp,
-    Photons,
-    Seconds,
-    TargetError,
-    Adaptive,
-    /// A render job's shard and checkpoint interval ([`crate::app::job::RenderJob`]).
-    Shard,
-    CheckpointEvery,
-}
-
-impl BudgetField {
-    /// The field's name in [`Budget`].
-    pub fn field_name(self) -> &'static str {
-        match self {
-            BudgetField::Spp => "spp",
-            BudgetField::Photons => "photons",
-            BudgetField::Seconds => "seconds",
-            BudgetField::TargetError => "target_error",
-            BudgetField::Adaptive => "adaptive",
-            BudgetField::Shard => "shard",
-            BudgetField::CheckpointEvery => "checkpoint_every",
-        }
-    }
-}
-
-impl Budget {
-    /// This budget, or when it sets no samples, seconds, photons or error, the scene's sample
-    /// count (else 64 samples per pixel), as `hppm render` renders a scene given no budget.
-    pub fn or_scene_spp(mut self, scene_spp: Option<u32>) -> Self {
-        let none_set = self.spp.is_none()
-            && self.seconds.is_none()
-            && self.photons.is_none()
-            && self.target_error.is_none();
-        if none_set {
-            self.spp = Some(scene_spp.map_or(64, u64::from));
-        }
-        self
-    }
-
-    /// Refuses a budget that would render nothing or never end, before any work.
-    pub fn check(&self) -> Result<(), Error> {
-        self.check_named(BudgetField::field_name)
-    }
-
-    /// As [`Budget::check`], each field called by `name` in the message.
-    pub fn check_named(&self, name: impl Fn(BudgetField) -> &'static str) -> Result<(), Error> {
-        use BudgetField::*;
-        let refuse = |m: String| Err(Error::Other(m));
-        if self.spp == Some(0) {
-            return refuse(format!("{} must be at least 1", name(Spp)));
-        }
-        if self.photons == Some(0) {
-            return refuse(format!("{} must be at least 1", name(Photons)));
-        }
-        if let Some(s) = self.seconds
-            && !(s.is_finite() && s > 0.0)
-        {
-            return refuse(format!(
-                "{} must be a positive, finite number of seconds, got {s}",
-                name(Seconds)
-            ));
-        }
-        if self.adaptive && self.target_error.is_none() {
-            return refuse(format!(
-                "{} needs {}: pixels whose estimated error is below the target stop receiving \
-                 samples",
-                name(Adaptive),
-                name(TargetError)
-            ));
-        }
-        if let Some(e) = self.target_error
-            && !(e.is_finite() && e > 0.0)
-        {
-            return refuse(format!(
-                "{} must be a positive, finite relMSE, got {e}",
-                name(TargetError)
-            ));
-        }
-        if self.spp.is_none() && self.seconds.is_none() && self.photons.is_none() {
-            let caps = format!("{}, {} or {}", name(Seconds), name(Spp), name(Photons));
-            return refuse(if self.target_error.is_some() {
-                format!(
-                    "{} needs a cap as well: give {caps} (an estimate may never reach the \
-                     target on a scene whose error falls slowly)",
-                    name(TargetError)
-                )
-            } else {
-                format!("no budget: give {caps}")
-            });
-        }
-        Ok(())
-    }
-}
+/// Per-pixel sums and counts (RGB sum, count) of one accumulator, by its `node.slot` name.
+pub type Term = (String, Vec<[f32; 4]>);
 
 /// One band of the image: a graph prepared for the film rows `grid_y..grid_y + grid_rows`, of
 /// which it contributes `keep_y..keep_y + keep_rows` (the rest is the halo that splatting pixel
@@ -357,7 +248,7 @@ impl<'a> Renderer<'a> {
     /// let scene = hppm::scene::load(std::path::Path::new("scene.xml"))?;
     /// let registry = hppm::passes::Registry::builtin();
     /// let graph = registry.bundled_graph("hybrid")?;
-    /// let mut renderer = hppm::app::render::Renderer::builder(&gpu, &scene, graph)
+    /// let mut renderer = hppm::render::Renderer::builder(&gpu, &scene, graph)
     ///     .registry(registry)
     ///     .size(256, 256)
     ///     .build()?;
@@ -550,8 +441,8 @@ impl<'a> Renderer<'a> {
 
     /// The accumulators whose means add up to the image, read back as per-pixel sums and
     /// counts, by `node.slot` (what a shard writes and `hppm merge` sums).
-    pub fn read_terms(&self) -> Result<Vec<crate::app::state::Term>, Error> {
-        let mut terms: Vec<crate::app::state::Term> = Vec::new();
+    pub fn read_terms(&self) -> Result<Vec<Term>, Error> {
+        let mut terms: Vec<Term> = Vec::new();
         for (t, tile) in self.tiles.iter().enumerate() {
             for (i, (name, r)) in tile.graph.output_terms()?.into_iter().enumerate() {
                 if t == 0 {
@@ -816,7 +707,7 @@ impl<'a> Renderer<'a> {
             self.sampled_share = 1.0;
             return;
         };
-        let flags = crate::app::adaptive::sample_flags(per_pixel, target, self.filter_reach);
+        let flags = crate::render::adaptive::sample_flags(per_pixel, target, self.filter_reach);
         let sampled = flags.iter().filter(|&&f| f & SAMPLED != 0).count();
         if sampled == 0 {
             // Every window below the target while the mean is not (the windows weigh edge
@@ -1138,7 +1029,7 @@ fn scene_fingerprint(scene: &GpuScene) -> u64 {
         cast_slice(&scene.light_cdf),
         cast_slice(&scene.bsdf_tables),
     ];
-    let mut hash = crate::app::state::Fnv::default();
+    let mut hash = crate::render::fingerprint::Fnv::default();
     // Textures only when there are some, so untextured scenes keep their fingerprints.
     let textures: &[u8] = cast_slice(&scene.textures);
     let textured = (!textures.is_empty()).then_some(textures);
