@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use hppm::gpu::GpuContext;
-use hppm::passes::{BUNDLED_GRAPHS, Registry};
+use hppm::graph::bundled::BUNDLED_GRAPHS;
+use hppm::passes::Registry;
 use hppm::scene::Scene;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
@@ -162,7 +163,7 @@ impl PyGraph {
         registry: &Registry,
         name_or_path: &Path,
     ) -> PyResult<(PyGraph, hppm::graph::ValidGraph)> {
-        let (file, text) = hppm::passes::read_graph(name_or_path)
+        let (file, text) = hppm::graph::bundled::read_graph(name_or_path)
             .map_err(|e| errors::graph_file_error(name_or_path, e.to_string()))?;
         let graph = registry
             .parse_graph(&file, &text)

@@ -137,7 +137,7 @@ fn plan(
     };
     // A bundled graph's name, or its repository path where the repository is not at hand,
     // stands for its compiled-in text.
-    let (graph_file, graph_text) = crate::passes::read_graph(graph_path)?;
+    let (graph_file, graph_text) = crate::graph::bundled::read_graph(graph_path)?;
     let loading = std::time::Instant::now();
     let scene = crate::scene::load_reporting(scene_path, &job.defines, |w| {
         watch.note(&format!("warning: {w}"))

@@ -2,6 +2,7 @@
 //! validated as a whole (every problem reported at once, each with `file:line:col`) and
 //! scheduled in topological order with petgraph.
 
+pub mod bundled;
 pub mod exec;
 pub mod pass;
 mod prune;

@@ -118,9 +118,9 @@ impl Registry {
 
     /// Reads and validates a graph file against these kinds; a bundled graph's name, or its
     /// repository path where no file is there, stands for its compiled-in text
-    /// ([`super::read_graph`]).
+    /// ([`crate::graph::bundled::read_graph`]).
     pub fn load_graph(&self, path: &Path) -> Result<ValidGraph, crate::Error> {
-        let (file, text) = super::read_graph(path)?;
+        let (file, text) = crate::graph::bundled::read_graph(path)?;
         Ok(self.parse_graph(&file, &text)?)
     }
 
@@ -130,9 +130,9 @@ impl Registry {
     }
 
     /// One of the graphs shipped in hppm's `graphs/` folder, by name (`"hybrid"`, `"pt"`, ...;
-    /// see [`super::BUNDLED_GRAPHS`]), validated against these kinds.
+    /// see [`crate::graph::bundled::BUNDLED_GRAPHS`]), validated against these kinds.
     pub fn bundled_graph(&self, name: &str) -> Result<ValidGraph, crate::Error> {
-        let (file, text) = super::bundled_graph(name)?;
+        let (file, text) = crate::graph::bundled::bundled_graph(name)?;
         Ok(self.parse_graph(Path::new(file), text)?)
     }
 
