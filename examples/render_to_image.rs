@@ -22,7 +22,7 @@ fn render(
     size: (u32, u32),
     spp: u64,
 ) -> Result<Image, hppm::Error> {
-    let scene = hppm::scene::load(scene)?;
+    let scene = hppm::loaders::load(scene)?;
     let registry = Registry::builtin();
     let graph = registry.bundled_graph(graph)?;
     let mut renderer = Renderer::builder(gpu, &scene, graph)

@@ -542,7 +542,7 @@ fn info(registry: &Registry) -> Result<(), Error> {
 }
 
 fn check_scene(path: &Path, defines: &[(String, String)]) -> Result<(), Error> {
-    let report = scene::check_with(path, defines);
+    let report = crate::loaders::check_with(path, defines);
     for warning in &report.warnings {
         println!("warning: {warning}");
     }
@@ -575,7 +575,7 @@ fn check_scene(path: &Path, defines: &[(String, String)]) -> Result<(), Error> {
 
 /// The scene at `path`, its warnings printed.
 fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<scene::Scene, Error> {
-    let scene = scene::load_reporting(path, defines, |w| eprintln!("warning: {w}"))?;
+    let scene = crate::loaders::load_reporting(path, defines, |w| eprintln!("warning: {w}"))?;
     Ok(scene)
 }
 
@@ -781,7 +781,7 @@ pub fn run_from(
         Command::Info { markdown: false } => info(&registry),
         Command::Check { scene, defines } => check_scene(&scene, &defines),
         Command::Plugins => {
-            print!("{}", scene::plugins::markdown());
+            print!("{}", crate::loaders::plugins::markdown());
             Ok(())
         }
         Command::Graph {

@@ -15,7 +15,7 @@
 //! # fn main() -> Result<(), hppm::Error> {
 //! let gpu = hppm::gpu::GpuContext::new(None)?;
 //! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell_box.ron");
-//! let scene = hppm::scene::load(std::path::Path::new(path))?;
+//! let scene = hppm::loaders::load(std::path::Path::new(path))?;
 //! let registry = Registry::builtin();
 //! let graph = registry.bundled_graph("hybrid")?;
 //! let mut renderer = Renderer::builder(&gpu, &scene, graph)
@@ -43,6 +43,7 @@ pub mod error;
 pub mod gpu;
 pub mod graph;
 pub mod image;
+pub mod loaders;
 pub mod passes;
 pub mod render;
 pub mod ron_span;

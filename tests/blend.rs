@@ -30,7 +30,7 @@ fn wall_behind_panel(max_depth: i32, panel: bool) -> String {
 }
 
 fn wall_mean(max_depth: i32, panel: bool) -> f64 {
-    let scene = hppm::scene::mitsuba::parse(
+    let scene = hppm::loaders::mitsuba::parse(
         &repo_path("tests/data/scenes/null_panel.xml"),
         &wall_behind_panel(max_depth, panel),
     )

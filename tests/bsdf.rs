@@ -131,7 +131,8 @@ fn scene_with(bsdfs: &[&str]) -> Scene {
     let xml = format!(
         r#"<scene version="3.0.0"><sensor type="perspective"><transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>{shapes}</scene>"#
     );
-    hppm::scene::mitsuba::parse(Path::new("bsdf_test.xml"), &xml).unwrap_or_else(|e| panic!("{e}"))
+    hppm::loaders::mitsuba::parse(Path::new("bsdf_test.xml"), &xml)
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn loaded(name: &str) -> Bsdf {
@@ -557,7 +558,7 @@ fn named_conductors_are_mitsubas() {
     assert!(bsdf::NAMED_CONDUCTORS.len() >= 70);
     let xml = r#"<scene version="3.0.0"><sensor type="perspective"/>
 <shape type="sphere"><bsdf type="conductor"><string name="material" value="Gold"/></bsdf></shape></scene>"#;
-    let err = hppm::scene::mitsuba::parse(Path::new("named.xml"), xml)
+    let err = hppm::loaders::mitsuba::parse(Path::new("named.xml"), xml)
         .expect_err("Gold is not a Mitsuba name")
         .to_string();
     assert!(err.starts_with("named.xml:2:"), "{err}");
@@ -634,7 +635,7 @@ fn bad_bsdf_parameters_are_errors_at_their_line() {
         let xml = format!(
             "<scene version=\"3.0.0\"><sensor type=\"perspective\"/>\n<shape type=\"sphere\">{bsdf}</shape></scene>"
         );
-        let err = hppm::scene::mitsuba::parse(Path::new("bad.xml"), &xml)
+        let err = hppm::loaders::mitsuba::parse(Path::new("bad.xml"), &xml)
             .expect_err(bsdf)
             .to_string();
         assert!(err.starts_with("bad.xml:2:"), "{bsdf}: {err}");

@@ -9,7 +9,7 @@ mod common;
 use std::path::Path;
 
 use common::*;
-use hppm::scene::mitsuba;
+use hppm::loaders::mitsuba;
 
 /// A 32x32 thinlens image (fov 40, aperture 1, focus 6 ahead) of a light of radius 0.05 on the
 /// focus plane and one of radius 0.1 at 3 units from the lens.

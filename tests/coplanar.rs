@@ -111,7 +111,7 @@ fn write_scene(name: &str, obj: &str, with_floor: bool) -> Scene {
     );
     let path = dir.join("scene.xml");
     std::fs::write(&path, xml).expect("xml");
-    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scene = hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let _ = std::fs::remove_dir_all(&dir);
     scene
 }

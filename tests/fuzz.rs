@@ -241,7 +241,7 @@ fn mutated_scene_files_load_or_name_their_file_and_line() {
     }
     let (mut loaded, mut failed, mut rendered) = (0, 0, 0);
     for (path, how) in mutants(SCENES, &dir.0, 11) {
-        match hppm::scene::load(&path) {
+        match hppm::loaders::load(&path) {
             Err(error) => {
                 failed += 1;
                 let message = error.to_string();
@@ -301,7 +301,7 @@ fn mutated_obj_files_load_or_name_their_file_and_line() {
         std::fs::write(&scene_xml, xml.replace("short_box.obj", name)).expect("write scene");
         for (file, what) in [(&path, "bare OBJ"), (&scene_xml, "in scene.xml")] {
             let how = format!("{how} ({what})");
-            match hppm::scene::load(file) {
+            match hppm::loaders::load(file) {
                 Err(error) => {
                     failed += 1;
                     let message = error.to_string();
@@ -384,7 +384,7 @@ fn mutated_ply_files_load_or_name_their_file() {
     let dir = Dir::new("ply");
     let (mut loaded, mut failed, mut rendered) = (0, 0, 0);
     for (path, how) in mutants(&["tests/data/mitsuba/smooth_sphere.ply"], &dir.0, 17) {
-        match hppm::scene::load(&path) {
+        match hppm::loaders::load(&path) {
             Err(error) => {
                 failed += 1;
                 let message = error.to_string();

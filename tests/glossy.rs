@@ -402,7 +402,7 @@ fn an_anisotropic_lobe_is_as_specular_as_its_larger_alpha() {
     let gpu = gpu();
     let defines = [("alpha_u", "0.05"), ("alpha_v", "0.3")].map(|(k, v)| (k.into(), v.into()));
     let path = repo_path("tests/data/scenes/rough_mirror_over_floor.xml");
-    let scene = hppm::scene::load_with(&path, &defines).unwrap_or_else(|e| panic!("{e}"));
+    let scene = hppm::loaders::load_with(&path, &defines).unwrap_or_else(|e| panic!("{e}"));
     let params = |glossy_threshold: f32| PhotonTraceParams {
         mode: PhotonMode::Caustic,
         photons_per_iteration: Some(1 << 16),

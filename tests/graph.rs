@@ -508,7 +508,7 @@ fn a_registry_takes_kinds_needs_and_modules_from_outside() {
         .to_string();
     assert!(err.contains("unknown pass kind \"glow\""), "{err}");
 
-    let scene = hppm::scene::load(
+    let scene = hppm::loaders::load(
         &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_box.ron"),
     )
     .expect("scene");

@@ -128,7 +128,7 @@ fn a_jobs_refusals_name_its_fields() {
 #[test]
 fn a_renderer_of_an_empty_or_huge_image_is_refused() {
     let gpu = common::gpu();
-    let scene = hppm::scene::load(&common::repo_path("scenes/cornell_box.ron")).expect("scene");
+    let scene = hppm::loaders::load(&common::repo_path("scenes/cornell_box.ron")).expect("scene");
     let registry = Registry::builtin();
     for (w, h) in [(0, 8), (8, 0), (hppm::scene::MAX_FILM_SIDE + 1, 8)] {
         let graph = registry.bundled_graph("pt").expect("pt");

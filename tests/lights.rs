@@ -13,10 +13,10 @@ use common::pass_harness::PassHarness;
 use common::*;
 use glam::{Mat3, Vec2, Vec3};
 use hppm::image::Image;
+use hppm::loaders::mitsuba;
 use hppm::passes::photon_trace::{self, PhotonMode, PhotonTrace, PhotonTraceParams};
 use hppm::scene::Scene;
 use hppm::scene::emitter::{EnvMap, Environment, SpotLight};
-use hppm::scene::mitsuba;
 
 /// A Mitsuba scene from `body` with a 24x24 box-filtered camera at (0, 4, 4) looking at the
 /// origin, and `max_depth`.

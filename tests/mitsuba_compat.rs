@@ -5,8 +5,9 @@
 use std::path::Path;
 
 use glam::Vec3;
+use hppm::loaders::{Report, mitsuba};
 use hppm::scene::filter::PixelFilter;
-use hppm::scene::{Bsdf, Report, Scene, mitsuba};
+use hppm::scene::{Bsdf, Scene};
 
 fn check(body: &str) -> Report {
     check_version("3.0.0", body)
@@ -554,7 +555,7 @@ fn a_sensors_problems_are_all_reported() {
 }
 
 /// `<shape type="serialized">` picks the file's shape by `shape_index` (the reader itself is
-/// checked against Mitsuba's in src/scene/serialized.rs): the v4 file's cube (12 triangles,
+/// checked against Mitsuba's in src/loaders/serialized.rs): the v4 file's cube (12 triangles,
 /// its normals kept, so it shades smoothly unless `face_normals`) and tetrahedron (4); an index
 /// past the file's shapes is an error at the shape's line that says how many there are.
 #[test]
@@ -832,14 +833,14 @@ fn host(object: &str, kind: &str, property: &str) -> String {
     }
 }
 
-/// The plugin table (src/scene/plugins.rs, which docs/scenes.md's table and the loader's messages
+/// The plugin table (src/loaders/plugins.rs, which docs/scenes.md's table and the loader's messages
 /// come from) and the loader agree both ways: each listed plugin loads with what it needs; a
 /// listed property is read (given a value of the wrong type, the loader says so rather than
 /// calling it unknown); and every property the loader looks for is listed. A property added to
 /// the loader but not to the table, or listed but never read, fails here.
 #[test]
 fn the_plugin_table_is_what_the_loader_reads() {
-    use hppm::scene::plugins::PLUGINS;
+    use hppm::loaders::plugins::PLUGINS;
     let mut failures = Vec::new();
     for plugin in PLUGINS {
         for kind in plugin.kinds {
@@ -889,7 +890,7 @@ fn the_plugin_table_is_what_the_loader_reads() {
 }
 
 /// The plugin table of docs/scenes.md is the code's (`hppm plugins`): edit
-/// src/scene/plugins.rs, then paste `hppm plugins` between docs/scenes.md's `plugins:begin` and
+/// src/loaders/plugins.rs, then paste `hppm plugins` between docs/scenes.md's `plugins:begin` and
 /// `plugins:end` markers.
 #[test]
 fn the_plugin_table_of_docs_is_generated_from_the_code() {
@@ -905,7 +906,7 @@ fn the_plugin_table_of_docs_is_generated_from_the_code() {
         .find("<!-- plugins:end -->")
         .expect("plugins:end marker");
     assert!(
-        doc[start..end] == hppm::scene::plugins::markdown(),
+        doc[start..end] == hppm::loaders::plugins::markdown(),
         "docs/scenes.md's plugin table differs from `hppm plugins`: regenerate it"
     );
 }

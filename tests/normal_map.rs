@@ -7,8 +7,9 @@
 mod common;
 
 use glam::{Vec2, Vec3};
+use hppm::loaders::mitsuba;
 use hppm::scene::normal_map::{self, PerturbedFrame, SurfaceGeometry};
-use hppm::scene::{FramePerturbation, PerturbationKind, Scene, mitsuba};
+use hppm::scene::{FramePerturbation, PerturbationKind, Scene};
 
 use common::pass_harness::PassHarness;
 

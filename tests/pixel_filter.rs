@@ -141,7 +141,7 @@ fn render_edge(
     spp: u64,
     seed: u64,
 ) -> (hppm::scene::Scene, hppm::image::Image) {
-    let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), xml).expect("edge scene");
+    let scene = hppm::loaders::mitsuba::parse(Path::new("edge.xml"), xml).expect("edge scene");
     let graph = hppm::graph::parse_graph(
         Path::new("edge_pt.ron"),
         &format!(
@@ -457,7 +457,7 @@ fn the_hybrids_drawn_samples_splat_to_the_filtered_step() {
     ];
     for (rfilter, edge) in cases {
         let xml = hybrid_edge_scene(width, height, edge, rfilter);
-        let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
+        let scene = hppm::loaders::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
         let gpu = gpu();
         let mut r = renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), 3);
         let image = render_to(&mut r, spp);
@@ -481,7 +481,7 @@ fn one_hybrid_iteration_splats_its_drawn_samples_as_the_cpu_does() {
     let (width, height, edge) = (16u32, 8u32, 7.37f64);
     let xml = hybrid_edge_scene(width, height, edge, r#"<rfilter type="lanczos"/>"#);
     let seed = 5;
-    let scene = hppm::scene::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
+    let scene = hppm::loaders::mitsuba::parse(Path::new("edge.xml"), &xml).expect("edge scene");
     let gpu = gpu();
     let mut r = renderer(&gpu, &scene, load_graph("graphs/hybrid.ron"), seed);
     let image = render_to(&mut r, 1);

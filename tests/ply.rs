@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use common::*;
 use glam::Vec3;
-use hppm::scene::{self, SceneError, ply};
+use hppm::loaders::ply;
+use hppm::scene::SceneError;
 
 /// The vertices and faces of a plain OBJ (`v` and `f` records only, 1-based indices).
 fn read_obj(path: &Path) -> (Vec<[f32; 3]>, Vec<Vec<u32>>) {
@@ -121,7 +122,7 @@ fn ply_meshes_load_the_same_triangles_as_their_obj() {
     let obj_scene = load_scene("tests/refs/scenes/cornell_diffuse_obj/scene.xml");
     for encoding in [Encoding::Ascii, Encoding::LittleEndian, Encoding::BigEndian] {
         let dir = temp_dir(&format!("{encoding:?}"));
-        let ply_scene = scene::load(&cornell_as_ply(&dir, encoding))
+        let ply_scene = hppm::loaders::load(&cornell_as_ply(&dir, encoding))
             .unwrap_or_else(|e| panic!("{encoding:?}: {e}"));
         assert_eq!(ply_scene.triangles, obj_scene.triangles, "{encoding:?}");
         assert_eq!(ply_scene.materials, obj_scene.materials, "{encoding:?}");
@@ -140,7 +141,7 @@ fn ply_scene_renders_what_the_obj_scene_renders() {
         repo_path("tests/refs/scenes/cornell_diffuse_obj/scene.xml"),
         cornell_as_ply(&dir, Encoding::LittleEndian),
     ] {
-        let mut scene = scene::load(&path).expect("scene");
+        let mut scene = hppm::loaders::load(&path).expect("scene");
         scene.camera.width = 32;
         scene.camera.height = 32;
         let mut r = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 5);
@@ -279,7 +280,9 @@ fn malformed_ply_files_name_the_file_and_the_problem() {
     ] {
         let path = dir.join("scene.xml");
         std::fs::write(&path, scene_xml(file)).expect("write scene");
-        let err = scene::load(&path).map(drop).expect_err("broken PLY");
+        let err = hppm::loaders::load(&path)
+            .map(drop)
+            .expect_err("broken PLY");
         let text = err.to_string();
         for word in words {
             assert!(text.contains(word), "expected {word:?} in: {text}");
@@ -293,13 +296,13 @@ fn malformed_ply_files_name_the_file_and_the_problem() {
 }
 
 /// A `serialized` mesh file that is not there is an error at the shape's line naming the file
-/// (the format itself: src/scene/serialized.rs and tests/mitsuba_compat.rs).
+/// (the format itself: src/loaders/serialized.rs and tests/mitsuba_compat.rs).
 #[test]
 fn a_missing_serialized_file_is_named_at_its_shape() {
     let xml = "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"/>\n\
                <shape type=\"serialized\">\n<string name=\"filename\" value=\"m.serialized\"/>\n\
                </shape>\n</scene>\n";
-    let err = scene::mitsuba::parse(Path::new("s.xml"), xml)
+    let err = hppm::loaders::mitsuba::parse(Path::new("s.xml"), xml)
         .map(drop)
         .expect_err("serialized");
     let text = err.to_string();
@@ -317,8 +320,8 @@ fn a_bare_ply_frames_like_a_bare_obj() {
     let (v, f) = read_obj(&obj);
     let ply_path = dir.join("short_box.ply");
     std::fs::write(&ply_path, write_ply(&v, &f, Encoding::Ascii)).expect("write");
-    let from_obj = scene::load(&obj).expect("obj");
-    let from_ply = scene::load(&ply_path).expect("ply");
+    let from_obj = hppm::loaders::load(&obj).expect("obj");
+    let from_ply = hppm::loaders::load(&ply_path).expect("ply");
     assert_eq!(from_ply.triangles, from_obj.triangles);
     assert_eq!(from_ply.camera, from_obj.camera);
     assert_eq!(from_ply.point_lights, from_obj.point_lights);

@@ -8,7 +8,7 @@ use hppm::scene::bvh::{
     intersect_sphere, intersect_triangle, scene_boxes,
 };
 use hppm::scene::split_boxes::split_references;
-use hppm::scene::{self, Bsdf, Camera, Integrator, Material, Scene, Sphere, Triangle};
+use hppm::scene::{Bsdf, Camera, Integrator, Material, Scene, Sphere, Triangle};
 
 /// A deterministic pseudo-random stream (no extra dependency).
 struct Rng(u64);
@@ -417,13 +417,13 @@ fn closest_hit_equals_brute_force_in_the_reference_scenes() {
         "tests/refs/scenes/point_light_caustic/scene.xml",
     ] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
-        let scene = scene::load(&path).unwrap();
+        let scene = hppm::loaders::load(&path).unwrap();
         assert_same_hits(&scene, &mut rng, 400, 0.95);
     }
     // Looking straight down the Cornell box above the boxes hits the back wall at z = -1.
     let path =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/refs/scenes/cornell_diffuse/scene.xml");
-    let scene = scene::load(&path).unwrap();
+    let scene = hppm::loaders::load(&path).unwrap();
     let bvh = build_sah(&scene_boxes(&scene), 4);
     let (t, prim) = closest_hit(&scene, &bvh, Vec3::new(0.0, 0.5, 3.9), Vec3::NEG_Z).unwrap();
     assert!((t - 4.9).abs() < 1e-5);
@@ -434,7 +434,7 @@ fn closest_hit_equals_brute_force_in_the_reference_scenes() {
     // The glass sphere is primitive triangles.len() + 0.
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/refs/scenes/cornell_glass_sphere/scene.xml");
-    let scene = scene::load(&path).unwrap();
+    let scene = hppm::loaders::load(&path).unwrap();
     let bvh = build_sah(&scene_boxes(&scene), 4);
     let (_, prim) = closest_hit(&scene, &bvh, Vec3::new(0.42, 0.5, 0.42), Vec3::NEG_Y).unwrap();
     assert_eq!(prim as usize, scene.triangles.len());
@@ -594,7 +594,7 @@ fn split_references_keep_every_hit() {
     let mut rng = Rng(21);
     let path =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/refs/scenes/water_glass/scene.xml");
-    let glass = scene::load(&path).unwrap();
+    let glass = hppm::loaders::load(&path).unwrap();
     let random = random_scene(&mut rng, 300, 20);
     for (scene, spread) in [(&glass, 0.6), (&random, 6.0)] {
         let refs = split_references(scene, 1.0);

@@ -3,7 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use hppm::scene::{self, SceneError, mitsuba, obj, ron_format};
+use hppm::loaders::{mitsuba, obj, ron_format};
+use hppm::scene::SceneError;
 
 fn repo(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
@@ -11,7 +12,7 @@ fn repo(relative: &str) -> PathBuf {
 
 fn error_of(file: &str) -> String {
     let path = repo(&format!("tests/data/scene_errors/{file}"));
-    match scene::load(&path) {
+    match hppm::loaders::load(&path) {
         Ok(_) => panic!("{file} loaded, but it is broken"),
         Err(e) => e.to_string(),
     }

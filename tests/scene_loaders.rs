@@ -4,14 +4,15 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use hppm::scene::{self, Bsdf, Scene, Tint, mitsuba, obj, ron_format};
+use hppm::loaders::{mitsuba, obj, ron_format};
+use hppm::scene::{self, Bsdf, Scene, Tint};
 
 fn repo(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
 }
 
 fn load(relative: &str) -> Scene {
-    scene::load(&repo(relative)).unwrap_or_else(|e| panic!("{relative}: {e}"))
+    hppm::loaders::load(&repo(relative)).unwrap_or_else(|e| panic!("{relative}: {e}"))
 }
 
 fn xml(body: &str) -> Scene {

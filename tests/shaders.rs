@@ -265,7 +265,7 @@ fn function_names(module: &naga::Module) -> Vec<String> {
 #[test]
 fn scene_features_compile_code_in_and_out() {
     let load = |p: &str| {
-        hppm::scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(p))
+        hppm::loaders::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(p))
             .unwrap_or_else(|e| panic!("{p}: {e}"))
     };
     let has = |lib: &ShaderLibrary, path: &str, name: &str| {
@@ -436,7 +436,7 @@ fn a_layout_that_differs_is_reported() {
 #[test]
 fn every_pass_shader_composes_with_uniform_scene_tables() {
     use hppm::passes::{PlacementRule, TablePlacement};
-    let scene = hppm::scene::load(std::path::Path::new(concat!(
+    let scene = hppm::loaders::load(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
     )))
@@ -468,7 +468,7 @@ fn every_pass_shader_composes_with_uniform_scene_tables() {
 fn every_pass_shader_composes_testing_every_primitive() {
     use hppm::passes::{PlacementRule, TablePlacement};
     use naga_oil::compose::ShaderDefValue;
-    let scene = hppm::scene::load(std::path::Path::new(concat!(
+    let scene = hppm::loaders::load(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
     )))

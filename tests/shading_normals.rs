@@ -238,7 +238,7 @@ fn shading_normals_create_no_energy_in_a_furnace() {
 /// `flip_normals` or mirroring `to_world` keeps them on the front side.
 #[test]
 fn vertex_normals_follow_mitsuba() {
-    let cube = hppm::scene::obj::load_mesh_data(&repo_path(
+    let cube = hppm::loaders::obj::load_mesh_data(&repo_path(
         "tests/refs/scenes/cornell_diffuse_obj/unit_cube.obj",
     ))
     .expect("cube");
@@ -256,7 +256,7 @@ fn vertex_normals_follow_mitsuba() {
     }
     let with_vn = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0.6 0.8\nvn 0 0 1\nvn 0.6 0 0.8\n\
                    f 1//1 2//2 3//3\n";
-    let mesh = hppm::scene::obj::parse_mesh(std::path::Path::new("vn.obj"), with_vn).expect("vn");
+    let mesh = hppm::loaders::obj::parse_mesh(std::path::Path::new("vn.obj"), with_vn).expect("vn");
     assert_eq!(
         mesh.normals.as_deref(),
         Some(&[[Vec3::new(0.0, 0.6, 0.8), Vec3::Z, Vec3::new(0.6, 0.0, 0.8)]][..])
@@ -292,7 +292,7 @@ fn vertex_normals_follow_mitsuba() {
         );
         let path = dir.join("scene.xml");
         std::fs::write(&path, xml).expect("write");
-        let scene = hppm::scene::load(&path).expect("scene");
+        let scene = hppm::loaders::load(&path).expect("scene");
         assert_eq!(
             scene.triangles[0].normals.is_some(),
             smooth,
@@ -317,7 +317,7 @@ fn smooth_ply_sphere_matches_mitsuba() {
     let mut errors = Vec::new();
     for face_normals in ["false", "true"] {
         let defines = [("face_normals".to_string(), face_normals.to_string())];
-        let scene = hppm::scene::load_with(&path, &defines).expect("scene");
+        let scene = hppm::loaders::load_with(&path, &defines).expect("scene");
         let error = relmse(&render(&scene, 256), &reference);
         eprintln!("face_normals={face_normals}: relMSE against Mitsuba {error:.2e}");
         errors.push(error);
@@ -336,7 +336,7 @@ fn smooth_ply_sphere_matches_mitsuba() {
     // The same mesh without normals in the file: Mitsuba computes them, and so must we (a
     // loader that shaded it flat would be off by the 1.4e-3 above).
     let defines = [("mesh".to_string(), "computed_normals.ply".to_string())];
-    let scene = hppm::scene::load_with(&path, &defines).expect("scene");
+    let scene = hppm::loaders::load_with(&path, &defines).expect("scene");
     let reference = Image::read_exr(&repo_path("tests/data/mitsuba/computed_normals.exr"))
         .expect("Mitsuba's image");
     let error = relmse(&render(&scene, 256), &reference);
@@ -422,7 +422,7 @@ fn computed_vertex_normals_follow_the_placed_faces() {
         );
         let path = dir.join("scene.xml");
         std::fs::write(&path, xml).expect("xml");
-        let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let scene = hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"));
         let mut corners = 0;
         for t in &scene.triangles {
             let normals = t.normals.expect("computed vertex normals");

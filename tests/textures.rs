@@ -179,7 +179,7 @@ fn scene_with_texture(name: &str, texture: &str) -> hppm::scene::Scene {
     let xml = plane_scene(&format!("<bsdf type=\"diffuse\">{texture}</bsdf>"));
     let path = dir.join("scene.xml");
     std::fs::write(&path, xml).expect("scene");
-    hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+    hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// A unit-square... the rectangle [-1, 1]^2 at z = 0 seen from z = 2, under a point light.
@@ -305,7 +305,7 @@ fn load_error(name: &str, bsdf: &str) -> String {
     write_test_images(&dir);
     let path = dir.join("scene.xml");
     std::fs::write(&path, plane_scene(bsdf)).expect("scene");
-    match hppm::scene::load(&path) {
+    match hppm::loaders::load(&path) {
         Ok(_) => panic!("{name}: the scene loaded"),
         Err(e) => e.to_string(),
     }
@@ -427,7 +427,7 @@ fn gpu_lookup_equals_cpu_reference() {
     );
     let path = dir.join("scene.xml");
     std::fs::write(&path, xml).expect("scene");
-    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scene = hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(scene.textures.len(), textures.len() + 1);
     assert!(scene.features().textures);
     let mut rng = common::rng::Rng(0x9e37_79b9_7f4a_7c15);
@@ -523,7 +523,7 @@ fn check_plane(name: &str, bsdf: &str, constant_only: bool) -> (f32, f64) {
     write_test_images(&dir);
     let path = dir.join("scene.xml");
     std::fs::write(&path, plane_scene(bsdf)).expect("scene");
-    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scene = hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let texture = scene.textures[0].clone();
     let expected = analytic_image(&scene, |uv| texture.eval(uv), constant_only);
     let gpu = gpu();
@@ -616,7 +616,7 @@ fn hybrid_weighs_caustics_with_the_textured_albedo() {
                 r#"name="max_depth" value="4""#,
             );
         std::fs::write(&path, xml).expect("scene");
-        hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+        hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"))
     };
     let gpu = gpu();
     let render = |scene: &hppm::scene::Scene| {
@@ -683,7 +683,7 @@ fn textured_roughness_renders_each_cells_constant_roughness() {
         let dir = temp_dir(name);
         let path = dir.join("scene.xml");
         std::fs::write(&path, plane_scene(bsdf)).expect("scene");
-        hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+        hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"))
     };
     let gpu = gpu();
     let render = |scene: &hppm::scene::Scene| {
@@ -829,7 +829,7 @@ fn field_textures_land(
         </scene>"#
     );
     std::fs::write(&path, xml).expect("scene");
-    let scene = hppm::scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let scene = hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{e}"));
     // The loader kept each parameter's texture in its own slot: the checkerboard made for
     // index i sits at component i.
     for material in &scene.materials {

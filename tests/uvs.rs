@@ -84,7 +84,7 @@ fn surface_uvs_follow_mitsubas_parameterisations() {
 </scene>"#;
     let path = dir.join("scene.xml");
     std::fs::write(&path, xml).expect("scene");
-    let scene = hppm::scene::load(&path).expect("scene loads");
+    let scene = hppm::loaders::load(&path).expect("scene loads");
     let cases: Vec<((Vec3, Vec3), Vec2)> = vec![
         // Rectangle: local (x, y) in [-1, 1]^2 -> ((x + 1) / 2, (y + 1) / 2); world x = 2 lx - 5.
         (down(-5.0, 0.0), Vec2::new(0.5, 0.5)),

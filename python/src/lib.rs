@@ -121,7 +121,8 @@ fn load_scene(
     }
     let (scene, warnings) = py.allow_threads(|| {
         let mut warnings = Vec::new();
-        let scene = hppm::scene::load_reporting(&path, &defines, |w| warnings.push(w.to_string()));
+        let scene =
+            hppm::loaders::load_reporting(&path, &defines, |w| warnings.push(w.to_string()));
         (scene, warnings)
     });
     for warning in warnings {

@@ -6,7 +6,7 @@ use std::sync::atomic::AtomicBool;
 
 use crate::gpu::GpuContext;
 use crate::render::{Budget, Renderer};
-use crate::{Error, graph, passes, scene};
+use crate::{Error, graph, passes};
 
 const SCENES: &[&str] = &["scenes/cornell_diffuse.ron", "scenes/cornell_box.ron"];
 const SIZE: u32 = 256;
@@ -35,7 +35,7 @@ fn measure(
     graph_path: &Path,
     spp: u64,
 ) -> Result<BenchRow, Error> {
-    let scene = scene::load(scene_path)?;
+    let scene = crate::loaders::load(scene_path)?;
     let graph = graph::load_graph(graph_path, passes::builtin_kinds())?;
     let mut renderer = Renderer::new(gpu, &scene, graph, SIZE, SIZE, 1)?;
     let never = AtomicBool::new(false);

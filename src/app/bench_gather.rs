@@ -8,6 +8,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::radix_sort::RadixSort;
 use crate::gpu::shaders::ShaderLibrary;
@@ -18,7 +19,6 @@ use crate::passes::photon_trace::{PhotonMode, PhotonTrace, PhotonTraceParams};
 use crate::passes::{self, SceneResources};
 use crate::scene::Scene;
 use crate::scene::gpu_layout::GpuScene;
-use crate::{Error, scene};
 
 const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 /// 128^2, 512^2 and 1024^2 pixels' worth of hit points.
@@ -217,7 +217,7 @@ fn sort_ms(bench: &Bench<'_>, count: u32) -> Result<f64, Error> {
 /// Runs the hit-point structure benchmark and returns it as Markdown.
 pub fn run(adapter: Option<&str>, locate: fn(&str) -> PathBuf) -> Result<String, Error> {
     let gpu = GpuContext::new(adapter)?;
-    let scene = scene::load(&locate(GLASS))?;
+    let scene = crate::loaders::load(&locate(GLASS))?;
     let mut shared = Shared::default();
     let resources = SceneResources::for_adapter(&gpu, &GpuScene::new(&scene, 128, 128))?;
     let shaders = passes::shader_library(gpu.has_float_atomics(), &scene, &resources.placement)?;

@@ -15,7 +15,7 @@ use crate::graph::{ValidGraph, parse_graph};
 use crate::image::Image;
 use crate::passes::hit_points::{GpuHitPoint, build_tree};
 use crate::render::{Budget, NodeTime, Renderer};
-use crate::{Error, passes, scene};
+use crate::{Error, passes};
 
 pub(crate) const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const POINT_LIGHT: &str = "tests/refs/scenes/point_light_caustic/scene.xml";
@@ -58,7 +58,7 @@ fn node_table(gpu: &GpuContext, locate: fn(&str) -> PathBuf) -> Result<String, E
         "| scene | graph | photons/iteration | node times per iteration (ms) | photon Msegments/s |\n|---|---|---|---|---|\n",
     );
     for scene_path in [GLASS, POINT_LIGHT] {
-        let scene = scene::load(&locate(scene_path))?;
+        let scene = crate::loaders::load(&locate(scene_path))?;
         for graph_path in ["graphs/hybrid.ron", "graphs/ppm_only.ron"] {
             let graph = graph_with(&locate(graph_path), None)?;
             let (w, h) = (scene.camera.width, scene.camera.height);
@@ -176,7 +176,7 @@ fn equal_time_table(
         ),
     ];
     for (scene_path, reference_path, masked) in cases {
-        let scene = scene::load(&locate(scene_path))?;
+        let scene = crate::loaders::load(&locate(scene_path))?;
         let reference = Image::read_exr(&locate(reference_path))?;
         if masked {
             // Mitsuba's converged path tracer misses the caustic: no budget gets it below this.

@@ -12,7 +12,6 @@ use crate::app::bench::{stolen_cell, while_counting_steal};
 use crate::app::bench_hybrid::{GLASS, graph_with, node_ms, run_iterations};
 use crate::gpu::GpuContext;
 use crate::render::Renderer;
-use crate::scene;
 
 /// The report's image, samples per pixel, and photons per iteration (2M over 512 iterations).
 const SIZE: u32 = 512;
@@ -60,7 +59,7 @@ pub fn table(
     locate: fn(&str) -> PathBuf,
     iterations: u64,
 ) -> Result<String, Error> {
-    let scene = scene::load(&locate(GLASS))?;
+    let scene = crate::loaders::load(&locate(GLASS))?;
     let mut out = format!(
         "Glass Cornell box (`{GLASS}`), {SIZE}x{SIZE}, {iterations} spp and {} photons \
          ({PHOTONS_PER_ITERATION} per iteration; the report's whole workload is {SPP} spp). Whole \

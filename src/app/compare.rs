@@ -13,7 +13,6 @@ use crate::app::plot::{self, Series, SeriesStyle};
 use crate::gpu::GpuContext;
 use crate::image::{ErrorMetrics, Image, Provenance};
 use crate::render::{Budget, NodeTime, Renderer};
-use crate::scene;
 
 /// What to compare (the command line's arguments).
 pub struct CompareOptions {
@@ -219,7 +218,7 @@ pub fn compare(
     if options.graphs.is_empty() {
         return Err(Error::Other("give at least one graph".into()));
     }
-    let scene = scene::load_reporting(&options.scene, &options.defines, |w| {
+    let scene = crate::loaders::load_reporting(&options.scene, &options.defines, |w| {
         eprintln!("warning: {w}")
     })?;
     let (width, height) = options

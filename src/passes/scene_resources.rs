@@ -775,7 +775,7 @@ fn uniform_buffer(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{self, gpu_layout::GpuScene};
+    use crate::scene::gpu_layout::GpuScene;
 
     fn glass_sphere() -> GpuScene {
         scene_at("tests/refs/scenes/cornell_glass_sphere/scene.xml")
@@ -783,7 +783,7 @@ mod tests {
 
     fn scene_at(relative: &str) -> GpuScene {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
-        GpuScene::new(&scene::load(&path).expect("scene"), 16, 16)
+        GpuScene::new(&crate::loaders::load(&path).expect("scene"), 16, 16)
     }
 
     /// water_glass's BVH has 3,249 nodes (2,081 before its references were split): more than a

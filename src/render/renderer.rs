@@ -245,7 +245,7 @@ impl<'a> Renderer<'a> {
     /// ```no_run
     /// # fn main() -> Result<(), hppm::Error> {
     /// let gpu = hppm::gpu::GpuContext::new(None)?;
-    /// let scene = hppm::scene::load(std::path::Path::new("scene.xml"))?;
+    /// let scene = hppm::loaders::load(std::path::Path::new("scene.xml"))?;
     /// let registry = hppm::passes::Registry::builtin();
     /// let graph = registry.bundled_graph("hybrid")?;
     /// let mut renderer = hppm::render::Renderer::builder(&gpu, &scene, graph)

@@ -47,7 +47,7 @@ pub struct Case {
 impl Case {
     pub fn scene(&self) -> Scene {
         let path = self.dir.join("scene.xml");
-        hppm::scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        hppm::loaders::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
     }
 
     pub fn reference(&self) -> (Image, Image) {

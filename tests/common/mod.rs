@@ -31,12 +31,12 @@ pub fn load_graph(relative: &str) -> ValidGraph {
 }
 
 pub fn load_scene(relative: &str) -> Scene {
-    hppm::scene::load(&repo_path(relative)).unwrap_or_else(|e| panic!("{relative}: {e}"))
+    hppm::loaders::load(&repo_path(relative)).unwrap_or_else(|e| panic!("{relative}: {e}"))
 }
 
 /// A scene written inline in our RON format (`name` stands for its file in errors).
 pub fn ron_scene(name: &str, text: &str) -> Scene {
-    hppm::scene::ron_format::parse(Path::new(name), text).unwrap_or_else(|e| panic!("{e}"))
+    hppm::loaders::ron_format::parse(Path::new(name), text).unwrap_or_else(|e| panic!("{e}"))
 }
 
 pub fn reference(name: &str) -> Image {

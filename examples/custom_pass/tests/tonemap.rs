@@ -36,7 +36,7 @@ fn graph_text(params: &str) -> String {
 #[test]
 fn tonemap_maps_the_hybrids_image_as_the_cpu_does() {
     let gpu = gpu();
-    let scene = hppm::scene::load(&hppm_file("scenes/cornell_box.ron")).expect("scene");
+    let scene = hppm::loaders::load(&hppm_file("scenes/cornell_box.ron")).expect("scene");
     let builtin = Registry::builtin();
     let render = |registry: &Registry, graph| {
         let mut renderer = Renderer::builder(&gpu, &scene, graph)
@@ -114,7 +114,7 @@ fn a_custom_node_is_validated_like_a_builtin() {
 #[test]
 fn a_custom_node_is_pruned_profiled_and_layout_checked_like_a_builtin() {
     let gpu = gpu();
-    let scene = hppm::scene::load(&hppm_file("scenes/cornell_diffuse.ron")).expect("scene");
+    let scene = hppm::loaders::load(&hppm_file("scenes/cornell_diffuse.ron")).expect("scene");
     let registry = registry();
     let graph = registry
         .load_graph(&here("graphs/hybrid_tonemapped.ron"))

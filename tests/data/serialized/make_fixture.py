@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes the small Mitsuba `serialized` files next to this script and what Mitsuba 3 reads
-from them (mitsuba_3.9.1.txt), which src/scene/serialized.rs's tests compare its reader with.
+from them (mitsuba_3.9.1.txt), which src/loaders/serialized.rs's tests compare its reader with.
 
     python3 make_fixture.py     # needs `pip install mitsuba` (made with 3.9.1, scalar_rgb)
 

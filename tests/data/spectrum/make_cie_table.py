@@ -1,4 +1,4 @@
-"""Writes src/scene/spectrum/cie.rs: the CIE 1931 2-degree colour-matching functions and the CIE
+"""Writes src/loaders/spectrum/cie.rs: the CIE 1931 2-degree colour-matching functions and the CIE
 standard illuminant D65 as Mitsuba 3 (3.9.1) tabulates them (include/mitsuba/core/spectrum.h:
 95 samples, every 5 nm from 360 to 830 nm, stored as 32-bit floats).
 
@@ -91,6 +91,6 @@ out = [
     table("D65", d65, "CIE D65, relative to 100 at 560 nm (not yet normalised)."),
     "",
 ]
-with open("src/scene/spectrum/cie.rs", "w") as f:
+with open("src/loaders/spectrum/cie.rs", "w") as f:
     f.write("\n".join(out))
-print("wrote src/scene/spectrum/cie.rs")
+print("wrote src/loaders/spectrum/cie.rs")

@@ -1,5 +1,5 @@
-"""Writes src/scene/spectrum/fixtures.rs: what Mitsuba 3.9.1 makes of spectra in its RGB
-variants, the table src/scene/spectrum.rs's unit tests check against.
+"""Writes src/loaders/spectrum/fixtures.rs: what Mitsuba 3.9.1 makes of spectra in its RGB
+variants, the table src/loaders/spectrum.rs's unit tests check against.
 
     pip install mitsuba==3.9.1 && python3 tests/data/spectrum/make_fixtures.py [--llvm] [--render]
 
@@ -331,7 +331,7 @@ def main():
         o.append("    },")
     o.append("];")
     o.append("")
-    path = "src/scene/spectrum/fixtures.rs"
+    path = "src/loaders/spectrum/fixtures.rs"
     with open(path, "w") as f:
         f.write("\n".join(o))
     print("wrote", path, file=sys.stderr)

@@ -353,12 +353,12 @@ impl<'a, 'input> Reader<'a, 'input> {
             Some(mesh) => mesh,
             None => {
                 let loaded = match format {
-                    MeshFormat::Obj => crate::scene::obj::load_mesh_data(&mesh_path),
-                    MeshFormat::Ply => crate::scene::ply::load(&mesh_path),
+                    MeshFormat::Obj => crate::loaders::obj::load_mesh_data(&mesh_path),
+                    MeshFormat::Ply => crate::loaders::ply::load(&mesh_path),
                     // The file's own face-normals flag is not read: Mitsuba 3 shades a
                     // serialized mesh flat only when the face_normals property says so.
                     MeshFormat::Serialized => {
-                        crate::scene::serialized::load(&mesh_path, index).map(|s| s.mesh)
+                        crate::loaders::serialized::load(&mesh_path, index).map(|s| s.mesh)
                     }
                 };
                 let mesh = loaded.map_err(|e| e.referenced_from(name, &self.location(node)))?;

@@ -42,12 +42,12 @@ use std::path::Path;
 use glam::{Mat4, Vec3, Vec4};
 use serde::Deserialize;
 
-use super::filter::PixelFilter;
-use super::{
-    Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, Tint, mesh,
-};
 use crate::error::Location;
 use crate::ron_span::{self, Item, Key, Kind, Outline, Token};
+use crate::scene::filter::PixelFilter;
+use crate::scene::{
+    Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, Tint, mesh,
+};
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -169,7 +169,7 @@ pub const DEFAULT_SCENE: (&str, &str) = (
 /// Loads a scene file; where none is at `path` and `path` ends with [`DEFAULT_SCENE`]'s repository
 /// path, the built-in copy (as bundled graphs are found by their paths).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
-    match super::read_text(path) {
+    match crate::loaders::read_text(path) {
         Ok(text) => parse(path, &text),
         Err(SceneError::Io { source, .. })
             if source.kind() == std::io::ErrorKind::NotFound && path.ends_with(DEFAULT_SCENE.0) =>
@@ -306,16 +306,17 @@ impl<'a> Builder<'a> {
             emitters: Default::default(),
             textures: Vec::new(),
         };
-        if let Some(message) =
-            super::beyond_extent("the camera", scene.camera.origin.abs().max_element() as f64)
-        {
+        if let Some(message) = crate::scene::beyond_extent(
+            "the camera",
+            scene.camera.origin.abs().max_element() as f64,
+        ) {
             return Err(self.at(self.field("camera"), message));
         }
         for (i, shape) in file.shapes.iter().enumerate() {
             let (triangles, spheres) = (scene.triangles.len(), scene.spheres.len());
             self.add_shape(&mut scene, &file.materials, i, shape)?;
             let reach = scene.reach_since(triangles, spheres);
-            if let Some(message) = super::beyond_extent("this shape", reach) {
+            if let Some(message) = crate::scene::beyond_extent("this shape", reach) {
                 return Err(self.at(self.element("shapes", i), message));
             }
         }
@@ -329,7 +330,7 @@ impl<'a> Builder<'a> {
             }
             let position = Vec3::from(light.position);
             let reach = position.abs().max_element() as f64;
-            if let Some(message) = super::beyond_extent("this point light", reach) {
+            if let Some(message) = crate::scene::beyond_extent("this point light", reach) {
                 return Err(self.at(self.element("point_lights", i), message));
             }
             scene.point_lights.push(PointLight {
@@ -372,12 +373,12 @@ impl<'a> Builder<'a> {
             ));
         }
         for (name, side) in [("width", c.width), ("height", c.height)] {
-            if !(1..=super::MAX_FILM_SIDE).contains(&side) {
+            if !(1..=crate::scene::MAX_FILM_SIDE).contains(&side) {
                 return Err(self.at(
                     here,
                     format!(
                         "camera: {name} {side}: expected 1 to {} pixels",
-                        super::MAX_FILM_SIDE
+                        crate::scene::MAX_FILM_SIDE
                     ),
                 ));
             }
@@ -498,7 +499,7 @@ impl<'a> Builder<'a> {
                 format!("sphere radius {radius}: must be positive"),
             ));
         }
-        let Some(scale) = super::similarity_scale(to_world) else {
+        let Some(scale) = crate::scene::similarity_scale(to_world) else {
             return Err(self.at(
                 self.word_in_element("shapes", index, "to_world"),
                 "a sphere's to_world may only scale uniformly, rotate and translate",
@@ -516,7 +517,8 @@ impl<'a> Builder<'a> {
         let here = self.word_in_element("shapes", index, "path");
         let obj_path = self.path.parent().unwrap_or(Path::new(".")).join(obj);
         let used_at = Location::from_offset(self.path, self.text, here);
-        super::obj::load_triangles(&obj_path).map_err(|e| e.referenced_from("OBJ", &used_at))
+        crate::loaders::obj::load_triangles(&obj_path)
+            .map_err(|e| e.referenced_from("OBJ", &used_at))
     }
 }
 

@@ -19,19 +19,19 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
-use super::emitter::{DirectionalLight, EnvMap, Environment, Projector, SpotLight};
-use super::filter::{
+use crate::error::{Location, edit_distance};
+use crate::loaders::{Report, plugins, spectrum};
+use crate::scene::emitter::{DirectionalLight, EnvMap, Environment, Projector, SpotLight};
+use crate::scene::filter::{
     DEFAULT_GAUSSIAN_STDDEV, DEFAULT_LANCZOS_LOBES, DEFAULT_MITCHELL_B_C, DEFAULT_TENT_RADIUS,
     PixelFilter,
 };
-use super::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
-use super::{
+use crate::scene::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
+use crate::scene::{
     Bsdf, Camera, Crop, Distribution, FramePerturbation, Integrator, Lens, Material,
     MaterialTextures, Microfacet, PRINCIPLED_TEXTURED, PRINCIPLED_THIN_TEXTURED, PerturbationKind,
-    PointLight, Report, Scene, SceneError, SideTextures, Sphere, Tint, bsdf, mesh, plugins,
-    spectrum,
+    PointLight, Scene, SceneError, SideTextures, Sphere, Tint, bsdf, mesh,
 };
-use crate::error::{Location, edit_distance};
 
 mod bsdfs;
 mod emitters;
@@ -79,7 +79,7 @@ pub fn parse_with(
 /// or declaration that cannot be read is reported and skipped, and reading goes on with the
 /// next.
 pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
-    match super::read_text(path) {
+    match crate::loaders::read_text(path) {
         Ok(text) => check_text(path, &text, defines),
         Err(e) => Report::failed(e),
     }

@@ -7,12 +7,12 @@ use std::path::Path;
 
 use glam::{Mat4, Vec3};
 
-use super::filter::PixelFilter;
-use super::mesh::{MeshData, angle_weighted_normals};
-use super::{
+use crate::error::Location;
+use crate::scene::filter::PixelFilter;
+use crate::scene::mesh::{MeshData, angle_weighted_normals};
+use crate::scene::{
     Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Triangle, place_triangles,
 };
-use crate::error::Location;
 
 /// The triangles of `path` placed by `transform` (a mirroring transform keeps the front side,
 /// `flip` reverses it), all with material index `material`.
@@ -28,7 +28,7 @@ pub fn load_mesh(
 
 /// The triangles of `path` in the file's coordinates.
 pub fn load_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, SceneError> {
-    let text = super::read_text(path)?;
+    let text = crate::loaders::read_text(path)?;
     parse_triangles(path, &text)
 }
 
@@ -41,7 +41,7 @@ pub fn parse_triangles(path: &Path, text: &str) -> Result<Vec<[Vec3; 3]>, SceneE
 /// corner names one, otherwise computed as Mitsuba computes them, per vertex as Mitsuba's OBJ
 /// loader tells vertices apart (by position and texture coordinate index).
 pub fn load_mesh_data(path: &Path) -> Result<MeshData, SceneError> {
-    let text = super::read_text(path)?;
+    let text = crate::loaders::read_text(path)?;
     parse_mesh(path, &text)
 }
 

@@ -22,8 +22,8 @@ use std::path::Path;
 use flate2::{Decompress, FlushDecompress, Status};
 use glam::Vec3;
 
-use super::SceneError;
-use super::mesh::MeshData;
+use crate::scene::SceneError;
+use crate::scene::mesh::MeshData;
 
 const MAGIC: u16 = 0x041C;
 const VERSION_3: u16 = 3;
@@ -44,7 +44,7 @@ const DOUBLE_PRECISION: u32 = 0x2000;
 pub struct Serialized {
     /// The shape in the file's coordinates. `normals` is always set: the file's vertex normals,
     /// or, when it has none, Mitsuba's computed ones (with `computed_normal_vertices` set), as
-    /// [`super::ply::load`] gives them.
+    /// [`crate::loaders::ply::load`] gives them.
     pub mesh: MeshData,
     /// The shape's `FaceNormals` flag (0x0010): it was written to be shaded flat. Mitsuba 0.5/0.6
     /// honoured it; Mitsuba 3 ignores it in version 3/4 files and shades flat only for the

@@ -12,9 +12,9 @@ use glam::Vec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 
-use super::SceneError;
-use super::mesh::MeshData;
 use crate::error::Location;
+use crate::scene::SceneError;
+use crate::scene::mesh::MeshData;
 
 /// The mesh of PLY file `path`, in the file's coordinates.
 pub fn load(path: &Path) -> Result<MeshData, SceneError> {
