@@ -9,7 +9,7 @@ use super::bsdf::Prepared;
 use super::bvh::{self, BvhNode};
 use super::emitter::Environment;
 use super::filter::FILTER_TABLE_NODES;
-use super::split_boxes::split_references;
+use super::bvh::split_boxes::split_references;
 use super::texture::{self, NO_TEXTURE};
 use super::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures, Tint};
 
@@ -784,7 +784,7 @@ impl GpuScene {
 
     /// Lays out `scene` for rendering at `width` x `height`.
     pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
-        // The BVH is built over split references (src/scene/split_boxes.rs); its leaves then
+        // The BVH is built over split references (src/scene/bvh/split_boxes.rs); its leaves then
         // name primitives, each possibly in several leaves.
         let refs = split_references(scene, SPLIT_EXTRA);
         let mut bvh = bvh::build_sah(&refs.boxes, 4);

@@ -15,7 +15,6 @@ pub mod normal_map;
 pub mod principled;
 pub mod principled_thin;
 
-pub mod split_boxes;
 pub mod texture;
 
 use std::path::PathBuf;

@@ -12,12 +12,14 @@
 //! tests and by passes that need ground truth: primitive `i < triangles.len()` is triangle `i`,
 //! the rest are spheres `i - triangles.len()` (the GPU uses the same numbering).
 
+pub mod split_boxes;
+
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use glam::Vec3;
 
-use super::Scene;
+use crate::scene::Scene;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable, PartialEq)]
