@@ -41,6 +41,7 @@ pub mod app;
 pub mod cli;
 pub mod error;
 pub mod gpu;
+pub mod gpu_scene;
 pub mod graph;
 pub mod image;
 pub mod loaders;

@@ -665,8 +665,8 @@ mod gpu_table {
     use super::*;
     use bytemuck::{Pod, Zeroable};
     use hppm::gpu::binding::{Access, bind_buffers};
-    use hppm::passes::SceneResources;
-    use hppm::scene::gpu_layout::GpuScene;
+    use hppm::gpu_scene::SceneResources;
+    use hppm::gpu_scene::layout::GpuScene;
 
     #[repr(C)]
     #[derive(Clone, Copy, Pod, Zeroable)]

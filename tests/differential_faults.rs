@@ -141,7 +141,7 @@ fn a_traversal_fault_in_one_direction_is_caught() {
         // Scenes past the every-primitive limit walk the BVH.
         shows_in: |scene| {
             scene.triangles.len() + scene.spheres.len()
-                > hppm::passes::scene_resources::EVERY_PRIM_LIMIT
+                > hppm::gpu_scene::resources::EVERY_PRIM_LIMIT
         },
     });
 }

@@ -14,12 +14,12 @@ use common::*;
 
 use glam::Vec3;
 use hppm::gpu::GpuContext;
+use hppm::gpu_scene::layout::UNBOUNDED;
 use hppm::passes::hit_point_grid::{
     CELLS_PER_HIT_POINT, GRID_INFO_BYTES, GridInfo, KIND, bucket_count,
 };
 use hppm::passes::hit_points::{GpuHitPoint, GpuPhotonHit, NO_PIXEL};
 use hppm::scene::Scene;
-use hppm::scene::gpu_layout::UNBOUNDED;
 
 const SCENE: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const SIZE: (u32, u32) = (32, 32);

@@ -205,7 +205,7 @@ fn a_crop_window_sets_the_image_size_and_keeps_the_films_view() {
 /// offset left unscaled under `--size` fails.
 #[test]
 fn a_crop_window_sees_what_the_film_sees_there() {
-    use hppm::scene::gpu_layout::GpuScene;
+    use hppm::gpu_scene::layout::GpuScene;
     let window = [
         r#"<integer name="crop_offset_x" value="40"/>"#,
         r#"<integer name="crop_offset_y" value="18"/>"#,
@@ -217,7 +217,7 @@ fn a_crop_window_sees_what_the_film_sees_there() {
     for scale in [1, 2] {
         let c = GpuScene::new(&crop, 32 * scale, 24 * scale).uniform;
         let f = GpuScene::new(&film, 96 * scale, 64 * scale).uniform;
-        let plane = |u: &hppm::scene::gpu_layout::GpuSceneUniform, x: f32, y: f32| {
+        let plane = |u: &hppm::gpu_scene::layout::GpuSceneUniform, x: f32, y: f32| {
             (
                 u.plane_origin[0] + x * u.plane_step_x,
                 u.plane_origin[1] + y * u.plane_step_y,

@@ -11,6 +11,7 @@ use common::pass_harness::{
 use common::*;
 use glam::Vec3;
 use hppm::gpu::GpuContext;
+use hppm::gpu_scene::layout::GpuScene;
 use hppm::graph::exec::Wiring;
 use hppm::graph::pass::{ExecCtx, Pass, Recorder, Resource};
 use hppm::passes::hit_point_bvh_sah::{self, HitPointBvhSah};
@@ -23,7 +24,6 @@ use hppm::passes::rng::Stream;
 use hppm::passes::sppm::{self, Merge, MergeParams};
 use hppm::scene::Scene;
 use hppm::scene::bvh::{build_sah, closest_hit, scene_boxes};
-use hppm::scene::gpu_layout::GpuScene;
 use std::collections::HashMap;
 
 /// (count, RGB flux) per hit point from a deposits buffer; the bytes are the same for both

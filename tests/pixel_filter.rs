@@ -10,7 +10,7 @@ use common::*;
 use hppm::gpu::GpuContext;
 use hppm::gpu::binding::{Access, bind_buffers};
 use hppm::gpu::shaders::ShaderFile;
-use hppm::passes::TablePlacement;
+use hppm::gpu_scene::TablePlacement;
 use hppm::passes::rng::Stream;
 use hppm::scene::filter::PixelFilter;
 

@@ -3,11 +3,11 @@
 use std::path::Path;
 
 use glam::Vec3;
+use hppm::scene::bvh::split_boxes::split_references;
 use hppm::scene::bvh::{
     Aabb, Bvh, BvhNode, MAX_SAH_DEPTH, build_sah, closest_hit, intersect_primitive,
     intersect_sphere, intersect_triangle, scene_boxes,
 };
-use hppm::scene::bvh::split_boxes::split_references;
 use hppm::scene::{Bsdf, Camera, Integrator, Material, Scene, Sphere, Triangle};
 
 /// A deterministic pseudo-random stream (no extra dependency).

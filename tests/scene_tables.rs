@@ -1,5 +1,5 @@
 //! The scene's tables bound as uniform buffers (what a CPU adapter gets, see
-//! `src/passes/scene_resources.rs`'s `TablePlacement`) must render exactly what storage buffers
+//! `src/gpu_scene/resources.rs`'s `TablePlacement`) must render exactly what storage buffers
 //! render: same kernels, same arithmetic, only the address space of the loads differs. And a
 //! small scene whose rays test every primitive instead of walking the BVH must render what the
 //! BVH renders. Each render runs in its own `hppm` process with `HPPM_SCENE_TABLES` set, as a

@@ -1,15 +1,15 @@
 //! Every shipped pass shader composes and validates, and the GPU structs in
-//! `src/scene/gpu_layout.rs` have the sizes naga computes for their WGSL twins.
+//! `src/gpu_scene/layout.rs` have the sizes naga computes for their WGSL twins.
 
 use std::collections::HashMap;
 
 use hppm::gpu::shaders::{ShaderFile, ShaderLibrary};
-use hppm::passes::{COMMON_MODULES, builtin_kinds};
-use hppm::scene::bvh::BvhNode;
-use hppm::scene::gpu_layout::{
+use hppm::gpu_scene::layout::{
     GpuLight, GpuMaterial, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
     GpuTriangleUvs,
 };
+use hppm::passes::{COMMON_MODULES, builtin_kinds};
+use hppm::scene::bvh::BvhNode;
 use wgpu::naga;
 
 fn library_with(
@@ -435,13 +435,13 @@ fn a_layout_that_differs_is_reported() {
 /// storage arrays allow, or a kernel that reads a table without going through its accessor.
 #[test]
 fn every_pass_shader_composes_with_uniform_scene_tables() {
-    use hppm::passes::{PlacementRule, TablePlacement};
+    use hppm::gpu_scene::{PlacementRule, TablePlacement};
     let scene = hppm::loaders::load(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
     )))
     .expect("scene");
-    let gpu_scene = hppm::scene::gpu_layout::GpuScene::new(&scene, 8, 8);
+    let gpu_scene = hppm::gpu_scene::layout::GpuScene::new(&scene, 8, 8);
     let limits = wgpu::Limits::default();
     let uniform = TablePlacement::choose(PlacementRule::UniformWithBvh, &gpu_scene, &limits);
     let all = uniform.defs();
@@ -466,14 +466,14 @@ fn every_pass_shader_composes_with_uniform_scene_tables() {
 /// function is missing or misnamed, or a def substituted where WGSL wants another type.
 #[test]
 fn every_pass_shader_composes_testing_every_primitive() {
-    use hppm::passes::{PlacementRule, TablePlacement};
+    use hppm::gpu_scene::{PlacementRule, TablePlacement};
     use naga_oil::compose::ShaderDefValue;
     let scene = hppm::loaders::load(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
     )))
     .expect("scene");
-    let gpu_scene = hppm::scene::gpu_layout::GpuScene::new(&scene, 8, 8);
+    let gpu_scene = hppm::gpu_scene::layout::GpuScene::new(&scene, 8, 8);
     let uniform = TablePlacement::choose(
         PlacementRule::UniformWithBvh,
         &gpu_scene,

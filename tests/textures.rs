@@ -466,7 +466,7 @@ fn analytic_image(
     constant_only: bool,
 ) -> Vec<Option<Vec3>> {
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let u = hppm::scene::gpu_layout::GpuScene::new(scene, w, h).uniform;
+    let u = hppm::gpu_scene::layout::GpuScene::new(scene, w, h).uniform;
     let origin = Vec3::from_array(u.camera_origin);
     let light = scene.point_lights[0];
     let n = 8;

@@ -2,7 +2,7 @@
 
 // Mitsuba 3's principled BSDF, lobe for lobe as src/scene/principled.rs (the CPU reference,
 // which says where each formula comes from). The parameters live in the fields of the other
-// kinds (src/scene/gpu_layout.rs): base colour in albedo, roughness and metallic in alpha_u
+// kinds (src/gpu_scene/layout.rs): base colour in albedo, roughness and metallic in alpha_u
 // and alpha_v (textures replace those three), (anisotropic, spec_trans, spec_tint) in
 // specular, (sheen, sheen_tint, flatness) in eta, (clearcoat, clearcoat_gloss, eta) in k, the
 // sampling rates in int_ior, ext_ior and specular_weight, Mitsuba's m_has_* bits in nonlinear.

@@ -2,7 +2,7 @@
 
 // Mitsuba 3's principledthin BSDF, lobe for lobe as src/scene/principled_thin.rs (the CPU
 // reference, which says where each formula comes from). The parameters live where
-// principled keeps its own (src/scene/gpu_layout.rs): base colour in albedo, roughness in
+// principled keeps its own (src/gpu_scene/layout.rs): base colour in albedo, roughness in
 // alpha_u, (anisotropic, spec_trans, spec_tint) in specular, (sheen, sheen_tint, flatness) in
 // eta, (diff_trans, eta) in k, the four sampling rates in int_ior, ext_ior, specular_weight and
 // internal_reflectance.

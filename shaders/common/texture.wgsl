@@ -176,7 +176,7 @@ fn texture_eval_1_grad(index: u32, uv: vec2<f32>) -> vec2<f32> {
 // evaluation and sampling, hit-point weights, photon bounces) sees the surface's own values.
 fn textured_material(m: Material, uv: vec2<f32>) -> Material {
     var out = m;
-    // The floor the untextured roughness gets too (src/scene/gpu_layout.rs); principled keeps
+    // The floor the untextured roughness gets too (src/gpu_scene/layout.rs); principled keeps
     // roughness and metallic there as given (it floors its alphas itself), as principledthin.
     let floor = select(1e-4, 0.0, m.kind == MATERIAL_PRINCIPLED || m.kind == MATERIAL_PRINCIPLED_THIN);
     let slots = array<u32, 4>(m.diffuse_texture, m.specular_texture, m.alpha_u_texture, m.alpha_v_texture);

@@ -85,7 +85,7 @@ fn traverse_bvh(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any_hit: bool, fr
 
 #ifdef EVERY_PRIM
 // Small scenes on a CPU adapter test every primitive instead of walking the BVH
-// (src/passes/scene_resources.rs decides). Mesa 25.0's lavapipe loads a table entry once for
+// (src/gpu_scene/resources.rs decides). Mesa 25.0's lavapipe loads a table entry once for
 // all SIMD lanes only when its index is a compile-time constant; any other index, a loop
 // counter included, costs a bounds-checked scalar load per lane (BENCHMARKS.md). So the tests
 // are unrolled: each `first` below is a constant at its call site once the functions are
@@ -103,7 +103,7 @@ fn test_triangles_2(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir:
 }
 
 fn test_triangles_4(hit: ptr<function, Hit>, first: u32, origin: vec3<f32>, dir: vec3<f32>, front_wins_ties: bool) {
-    // Binding 1 holds a box per block of four (src/passes/scene_resources.rs, block_boxes),
+    // Binding 1 holds a box per block of four (src/gpu_scene/resources.rs, block_boxes),
     // with `count` 1 where it is worth testing. A box no lane enters skips the four tests: lavapipe
     // jumps over code no lane runs.
     let block = bvh_nodes[first / 4u];

@@ -12,13 +12,14 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::radix_sort::RadixSort;
 use crate::gpu::shaders::ShaderLibrary;
+use crate::gpu_scene::SceneResources;
+use crate::gpu_scene::layout::GpuScene;
 use crate::graph::exec::{Standalone, Wiring};
 use crate::graph::pass::{Pass, PassKind, Resource, Shared};
+use crate::passes;
 use crate::passes::hit_points::{GpuHitPoint, HIT_POINTS, HitPointsHeader, PHOTON_HITS};
 use crate::passes::photon_trace::{PhotonMode, PhotonTrace, PhotonTraceParams};
-use crate::passes::{self, SceneResources};
 use crate::scene::Scene;
-use crate::scene::gpu_layout::GpuScene;
 
 const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 /// 128^2, 512^2 and 1024^2 pixels' worth of hit points.

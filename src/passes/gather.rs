@@ -7,8 +7,8 @@ use crate::Error;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::dispatch::workgroup_grid;
 use crate::gpu::shaders::ShaderFile;
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{PrepareCtx, Recorder};
-use crate::passes::SceneResources;
 use crate::passes::lanes::items_per_invocation;
 use crate::shader_file;
 

@@ -15,10 +15,10 @@ use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::dispatch::workgroup_grid;
 use crate::gpu::radix_sort::RadixSort;
 use crate::gpu::shaders::ShaderFile;
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{
     ExecCtx, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, parse_params,
 };
-use crate::passes::SceneResources;
 use crate::passes::gather::{BVH_GATHER, Gather};
 use crate::passes::hit_points::{DEPOSITS, HIT_POINT_TREE, HIT_POINTS, PHOTON_HITS, tree_nodes};
 use crate::shader_file;

@@ -23,10 +23,10 @@ use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::dispatch::workgroup_grid;
 use crate::gpu::layout::StructLayout;
 use crate::gpu::shaders::ShaderFile;
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{
     ExecCtx, Pass, PassKind, PrepareCtx, Recorder, ResourceKind, Size, SlotDecl, parse_params,
 };
-use crate::passes::SceneResources;
 use crate::passes::gather::Gather;
 use crate::passes::hit_points::{DEPOSITS, HIT_POINTS, PHOTON_HITS};
 use crate::{shader_file, struct_layout};

@@ -18,7 +18,7 @@ pub mod pppm;
 mod registry;
 pub mod resolve;
 pub mod rng;
-pub mod scene_resources;
+
 mod shader_library;
 pub mod sppm;
 
@@ -27,7 +27,7 @@ use crate::graph::pass::PassKind;
 pub use partition::{SPECULAR_OR_GLOSSY_SURFACE, SPECULAR_SURFACE, paths};
 pub(crate) use partition::{check_glossy_threshold, depth_rule, glossy_defs, resolve_depths};
 pub use registry::{NeedTest, Registry};
-pub use scene_resources::{PlacementRule, SceneResources, TablePlacement};
+
 pub use shader_library::{
     COMMON_MODULES, PASS_DEFS, SCENE_DEFS, all_scene_defs, scene_defs, shader_library,
 };

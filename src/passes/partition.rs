@@ -2,8 +2,9 @@
 //! classes the transport check counts, the scene needs of photon passes, the glossy threshold's
 //! rules and the path-length rules a node's overrides resolve to.
 
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::SceneNeed;
-use crate::passes::{PASS_DEFS, SceneResources};
+use crate::passes::PASS_DEFS;
 
 /// Classes of light paths for the partition check (graph/transport.rs), relative to a camera
 /// path's photon-mapped vertices (its first `merge_depth` diffuse vertices, docs/design.md section
@@ -93,9 +94,9 @@ const DEFAULT_RR_DEPTH: u32 = 5;
 pub(crate) fn resolve_depths(
     max_depth: Option<u32>,
     rr_depth: Option<u32>,
-    scene: &crate::scene::gpu_layout::GpuSceneUniform,
+    scene: &crate::gpu_scene::layout::GpuSceneUniform,
 ) -> (u32, u32) {
-    use crate::scene::gpu_layout::UNBOUNDED;
+    use crate::gpu_scene::layout::UNBOUNDED;
     let max_depth = max_depth.unwrap_or(scene.max_depth);
     let mut rr_depth = rr_depth.unwrap_or(scene.rr_depth);
     if max_depth == UNBOUNDED && rr_depth == UNBOUNDED {

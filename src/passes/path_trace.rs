@@ -16,12 +16,13 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::sample_mask::SampleMask;
+use crate::gpu_scene::SceneResources;
+use crate::gpu_scene::layout::GpuSceneUniform;
 use crate::graph::pass::{
     Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, params_error,
     parse_params,
 };
 use crate::graph::transport::{Transport, TransportCtx};
-use crate::passes::SceneResources;
 use crate::passes::hit_points::{
     DEFAULT_RADIUS_PIXELS, HIT_POINT_RADII, HIT_POINTS, HitPointsHeader, PHOTON_HITS, RadiusRule,
 };
@@ -29,7 +30,6 @@ use crate::passes::lanes::items_per_invocation;
 use crate::passes::photon_grid::PHOTON_GRID;
 use crate::passes::{check_glossy_threshold, depth_rule, glossy_defs, resolve_depths};
 use crate::scene::filter::{FILTER_BOX, PixelFilter};
-use crate::scene::gpu_layout::GpuSceneUniform;
 use crate::shader_file;
 
 const SHADER: crate::gpu::shaders::ShaderFile = shader_file!("shaders/passes/path_trace.wgsl");

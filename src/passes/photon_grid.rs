@@ -28,12 +28,12 @@ use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::dispatch::workgroup_grid;
 use crate::gpu::layout::StructLayout;
 use crate::gpu::shaders::ShaderFile;
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{
     ExecCtx, Pass, PassKind, PrepareCtx, Recorder, ResourceKind, Size, SlotDecl, params_error,
     parse_params,
 };
 use crate::graph::transport::{Transport, TransportCtx};
-use crate::passes::SceneResources;
 use crate::passes::hit_points::PHOTON_HITS;
 use crate::passes::pppm::RadiusSchedule;
 use crate::{shader_file, struct_layout};

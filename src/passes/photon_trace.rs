@@ -8,6 +8,7 @@ use serde::Deserialize;
 use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{
     Counters, ExecCtx, Pass, PassKind, PrepareCtx, Recorder, SceneNeed, Size, SlotDecl,
     params_error, parse_params,
@@ -16,8 +17,8 @@ use crate::graph::transport::{Transport, TransportCtx};
 use crate::passes::hit_points::PHOTON_HITS;
 use crate::passes::lanes::items_per_invocation;
 use crate::passes::{
-    SPECULAR_OR_GLOSSY_SURFACE, SPECULAR_SURFACE, SceneResources, check_glossy_threshold,
-    depth_rule, glossy_defs, resolve_depths,
+    SPECULAR_OR_GLOSSY_SURFACE, SPECULAR_SURFACE, check_glossy_threshold, depth_rule, glossy_defs,
+    resolve_depths,
 };
 use crate::shader_file;
 

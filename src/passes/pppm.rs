@@ -14,10 +14,10 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::shaders::ShaderFile;
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{
     Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl,
 };
-use crate::passes::SceneResources;
 use crate::passes::hit_points::{DEPOSITS, HIT_POINT_RADII, HIT_POINTS, KERNEL_BIAS, RadiusRule};
 use crate::passes::sppm::MergeParams;
 use crate::shader_file;

@@ -13,8 +13,8 @@
 
 use std::path::Path;
 
-use super::scene_resources::TablePlacement;
 use crate::gpu::shaders::{ShaderFile, ShaderLibrary, defs_of};
+use crate::gpu_scene::TablePlacement;
 use crate::graph::pass::{PassKind, SceneNeed};
 use crate::graph::{GraphErrors, ValidGraph};
 use crate::scene::{Scene, SceneFeatures};
@@ -184,7 +184,7 @@ impl Registry {
             ShaderLibrary::new(true, defs, &self.modules).map_err(|e| vec![e.to_string()])?;
         let shared = super::hit_points::LAYOUTS
             .iter()
-            .chain(super::scene_resources::LAYOUTS)
+            .chain(crate::gpu_scene::resources::LAYOUTS)
             .chain(crate::gpu::radix_sort::LAYOUTS)
             .chain(crate::gpu::odd_iterations::LAYOUTS);
         let mut problems = Vec::new();

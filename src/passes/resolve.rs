@@ -8,10 +8,10 @@ use serde::Deserialize;
 use crate::Error;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::shaders::ShaderFile;
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{
     ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Size, SlotDecl, parse_params,
 };
-use crate::passes::SceneResources;
 use crate::passes::hit_points::HIT_POINTS;
 use crate::shader_file;
 

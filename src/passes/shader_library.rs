@@ -5,8 +5,9 @@ use std::collections::HashMap;
 
 use naga_oil::compose::ShaderDefValue;
 
-use super::{Registry, TablePlacement};
+use super::Registry;
 use crate::gpu::shaders::{ShaderFile, ShaderLibrary, defs_of};
+use crate::gpu_scene::TablePlacement;
 use crate::scene::{Scene, SceneFeatures};
 use crate::shader_file;
 
@@ -15,7 +16,7 @@ use crate::shader_file;
 pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/rng.wgsl"),
     shader_file!("shaders/common/sampling.wgsl"),
-    shader_file!("shaders/common/scene.wgsl"),
+    shader_file!("src/gpu_scene/scene.wgsl"),
     shader_file!("shaders/common/intersection.wgsl"),
     shader_file!("shaders/common/traversal.wgsl"),
     shader_file!("shaders/common/surface.wgsl"),

@@ -13,11 +13,11 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers};
 use crate::gpu::shaders::ShaderFile;
+use crate::gpu_scene::SceneResources;
 use crate::graph::pass::{
     Counters, ExecCtx, IMAGE, Pass, PassKind, PrepareCtx, Recorder, Resource, Size, SlotDecl,
     params_error, parse_params,
 };
-use crate::passes::SceneResources;
 use crate::passes::hit_points::{
     DEFAULT_RADIUS_PIXELS, DEPOSITS, HIT_POINT_RADII, HIT_POINTS, KERNEL_BIAS, RadiusRule,
 };

@@ -10,15 +10,16 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::odd_iterations::OddIterations;
 use crate::gpu::sample_mask::{SAMPLED, SampleMask};
+use crate::gpu_scene::layout::GpuScene;
+use crate::gpu_scene::{SceneResources, TablePlacement};
 use crate::graph::ValidGraph;
 use crate::graph::exec::PreparedGraph;
 use crate::graph::pass::{Counters, IMAGE, Resource, Schedule, Shared};
 use crate::image::Image;
 use crate::passes::hit_points::KERNEL_BIAS;
-use crate::passes::{Registry, SceneResources, TablePlacement, paths};
+use crate::passes::{Registry, paths};
 use crate::render::error_estimate::{self, ErrorEstimate, Halves};
 use crate::scene::Scene;
-use crate::scene::gpu_layout::GpuScene;
 
 pub use crate::graph::exec::NodeTime;
 

@@ -7,7 +7,7 @@ pub mod bsdf;
 pub mod bvh;
 pub mod emitter;
 pub mod filter;
-pub mod gpu_layout;
+
 pub mod mesh;
 
 pub mod normal_map;

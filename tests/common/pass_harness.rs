@@ -7,16 +7,16 @@ use std::collections::HashMap;
 use glam::Vec3;
 use hppm::gpu::GpuContext;
 use hppm::gpu::shaders::ShaderLibrary;
+use hppm::gpu_scene::SceneResources;
+use hppm::gpu_scene::layout::GpuScene;
 use hppm::graph::exec::{Standalone, Wiring};
 use hppm::graph::pass::{Pass, PassKind, Resource, Shared};
-use hppm::passes::SceneResources;
 use hppm::passes::hit_points::{
     GpuHitPoint, GpuPhotonHit, HEADER_BYTES, HIT_POINTS, HitPointsHeader, PHOTON_HITS,
     PhotonHitsHeader, tree_range_query,
 };
 use hppm::scene::Scene;
 use hppm::scene::bvh::BvhNode;
-use hppm::scene::gpu_layout::GpuScene;
 
 pub struct PassHarness<'a> {
     pub gpu: &'a GpuContext,

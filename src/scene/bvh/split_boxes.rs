@@ -11,8 +11,8 @@ use std::collections::BinaryHeap;
 
 use glam::Vec3;
 
-use crate::scene::Scene;
 use super::{Aabb, CostKey, scene_boxes, widest_axis};
+use crate::scene::Scene;
 
 /// Boxes to build the BVH over, and the primitive each stands for (`prims[i]` for `boxes[i]`).
 pub struct References {

@@ -9,7 +9,7 @@
 // lacks is left out of every kernel.
 
 // The scene every pass shares (bind group 0): its records, constants, bindings and the readers of
-// tables split into chunks. Layouts mirror src/scene/gpu_layout.rs. Intersecting it is
+// tables split into chunks. Layouts mirror src/gpu_scene/layout.rs. Intersecting it is
 // common::intersection and common::traversal's; the surface hit, common::surface's.
 
 struct SceneUniform {
@@ -224,7 +224,7 @@ const BVH_STACK_SIZE: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> scene_info: SceneUniform;
 // A table that fits a uniform binding may be bound as one on a CPU adapter (the def, set by
-// src/passes/scene_resources.rs's TablePlacement, holds its length): lavapipe loads a divergent
+// src/gpu_scene/resources.rs's TablePlacement, holds its length): lavapipe loads a divergent
 // index from a uniform buffer with a plain gather, and from a storage buffer with a masked,
 // bounds-checked load per lane, several times the instructions (BENCHMARKS.md).
 #ifdef BVH_NODES_UNIFORM
@@ -297,7 +297,7 @@ const BVH_STACK_SIZE: u32 = 64u;
 
 // Tables larger than one storage binding (a mesh of millions of triangles on an adapter that
 // binds 128 MiB) are split into chunks of 2^<NAME>_CHUNK_SHIFT entries: chunk 0 at the table's
-// own binding, chunk k at the table's chunk base + k - 1 (src/passes/scene_resources.rs,
+// own binding, chunk k at the table's chunk base + k - 1 (src/gpu_scene/resources.rs,
 // TablePlacement). <NAME>_CHUNKED is set from two chunks on, <NAME>_CHUNK_<k> for each k >= 2.
 // Every read of such a table goes through its accessor below, which picks the chunk.
 #ifdef BVH_NODES_CHUNKED

@@ -1,17 +1,17 @@
-//! The scene as the GPU reads it. Each struct mirrors one in `shaders/common/scene.wgsl`
+//! The scene as the GPU reads it. Each struct mirrors one in `src/gpu_scene/scene.wgsl`
 //! (std430 layout: a `vec3<f32>` takes 12 bytes but aligns to 16, so each is followed by a
 //! 4-byte scalar). Keep the two in step; `tests/shaders.rs` checks the sizes against naga's.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::bsdf::Prepared;
-use super::bvh::{self, BvhNode};
-use super::emitter::Environment;
-use super::filter::FILTER_TABLE_NODES;
-use super::bvh::split_boxes::split_references;
-use super::texture::{self, NO_TEXTURE};
-use super::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures, Tint};
+use crate::scene::bsdf::Prepared;
+use crate::scene::bvh::split_boxes::split_references;
+use crate::scene::bvh::{self, BvhNode};
+use crate::scene::emitter::Environment;
+use crate::scene::filter::FILTER_TABLE_NODES;
+use crate::scene::texture::{self, NO_TEXTURE};
+use crate::scene::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures, Tint};
 
 pub const MATERIAL_DIFFUSE: u32 = 0;
 pub const MATERIAL_DIELECTRIC: u32 = 1;
@@ -257,7 +257,7 @@ pub struct GpuSceneUniform {
     /// The pixel filter's second parameter (Mitchell's C) beside `filter_param`.
     pub filter_param_b: f32,
     pub _pad_filter: u32,
-    /// A signed filter's sampling table ([`super::filter::PixelFilter::gpu_table`]); zeros otherwise.
+    /// A signed filter's sampling table ([`crate::scene::filter::PixelFilter::gpu_table`]); zeros otherwise.
     pub filter_table: [[f32; 4]; FILTER_TABLE_NODES / 2],
 }
 

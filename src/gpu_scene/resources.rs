@@ -9,18 +9,18 @@ use crate::Error;
 use crate::gpu::GpuContext;
 use crate::gpu::binding::{Access, bind_buffers_at};
 use crate::gpu::layout::StructLayout;
-use crate::scene::bvh::{Bvh, BvhNode};
-use crate::scene::gpu_layout::{
+use crate::gpu_scene::layout::{
     GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
     GpuTriangleUvs,
 };
+use crate::scene::bvh::{Bvh, BvhNode};
 use crate::struct_layout;
 
 /// Any kernel that traces rays has every scene struct.
 const TRACER: crate::gpu::shaders::ShaderFile =
     crate::shader_file!("shaders/passes/path_trace.wgsl");
 
-/// The scene's GPU structs against their WGSL twins in shaders/common/scene.wgsl (checked by
+/// The scene's GPU structs against their WGSL twins in src/gpu_scene/scene.wgsl (checked by
 /// tests/shaders.rs).
 pub const LAYOUTS: &[StructLayout] = &[
     struct_layout!(GpuSceneUniform => "SceneUniform" in TRACER, {
@@ -87,7 +87,7 @@ pub struct Chunked {
 }
 
 /// A table that grows with the triangles and may be chunked: its binding, the defs' prefix in
-/// shaders/common/scene.wgsl, its entry size and where its chunks past the first are bound.
+/// src/gpu_scene/scene.wgsl, its entry size and where its chunks past the first are bound.
 #[derive(Debug, PartialEq, Eq)]
 struct ChunkableTable {
     binding: u32,
@@ -96,7 +96,7 @@ struct ChunkableTable {
     base: u32,
 }
 
-/// Chunks a table may have (the bindings shaders/common/scene.wgsl declares for each).
+/// Chunks a table may have (the bindings src/gpu_scene/scene.wgsl declares for each).
 pub const MAX_CHUNKS: u32 = 8;
 
 const CHUNKABLE: [ChunkableTable; 6] = [
@@ -127,7 +127,7 @@ const CHUNKABLE: [ChunkableTable; 6] = [
     ChunkableTable {
         binding: 10,
         prefix: "TRIANGLE_UVS",
-        stride: size_of::<crate::scene::gpu_layout::GpuTriangleUvs>() as u64,
+        stride: size_of::<crate::gpu_scene::layout::GpuTriangleUvs>() as u64,
         base: 48,
     },
     // A scene's textures add up quickly: ten 2048x2048 bitmaps are 480 MiB of texels.
@@ -169,7 +169,7 @@ const TRIANGLE_BLOCKS: [u32; 7] = [64, 32, 16, 8, 4, 2, 1];
 const SPHERE_BLOCKS: [u32; 4] = [8, 4, 2, 1];
 
 /// A table that may be bound as a uniform buffer: its binding in group 0, the shader def that
-/// declares it so (shaders/common/scene.wgsl, set to the array length), and its element size
+/// declares it so (src/gpu_scene/scene.wgsl, set to the array length), and its element size
 /// there (the Rust twin's size: tests/shaders.rs checks the WGSL layouts match, and all are
 /// multiples of 16 as a uniform array's stride must be). `prim_indices` is declared as vec4s.
 /// A table is uniform whole or not at all: splitting the nodes and triangles over two bindings
@@ -684,7 +684,7 @@ impl SceneResources {
     pub fn with_uniform(
         &self,
         gpu: &GpuContext,
-        uniform: &crate::scene::gpu_layout::GpuSceneUniform,
+        uniform: &crate::gpu_scene::layout::GpuSceneUniform,
     ) -> Result<Self, Error> {
         let own = gpu.create_buffer_init(
             "scene uniform",
@@ -775,7 +775,7 @@ fn uniform_buffer(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::gpu_layout::GpuScene;
+    use crate::gpu_scene::layout::GpuScene;
 
     fn glass_sphere() -> GpuScene {
         scene_at("tests/refs/scenes/cornell_glass_sphere/scene.xml")
