@@ -36,7 +36,7 @@ struct Fault {
     shows_in: fn(&Scene) -> bool,
 }
 
-/// A copy of the repository's shaders with `fault` applied (the text must occur exactly once).
+/// A copy of the repository's WGSL files with `fault` applied (the text must occur exactly once).
 fn faulty_shaders(fault: &Fault) -> PathBuf {
     let root = std::env::temp_dir().join(format!(
         "hppm-fault-{}-{}",
@@ -44,7 +44,9 @@ fn faulty_shaders(fault: &Fault) -> PathBuf {
         std::process::id()
     ));
     let _ = std::fs::remove_dir_all(&root);
+    // Every WGSL file of the repository: shaders/, and those kept beside their Rust under src/.
     copy_tree(&common::repo_path("shaders"), &root.join("shaders"));
+    copy_tree(&common::repo_path("src"), &root.join("src"));
     let path = root.join(fault.file);
     let text = std::fs::read_to_string(&path).expect("shader");
     assert_eq!(
@@ -65,7 +67,7 @@ fn copy_tree(from: &Path, to: &Path) {
         let target = to.join(entry.file_name());
         if entry.file_type().expect("type").is_dir() {
             copy_tree(&entry.path(), &target);
-        } else {
+        } else if entry.path().extension().is_some_and(|e| e == "wgsl") {
             std::fs::copy(entry.path(), target).expect("copy");
         }
     }

@@ -6,7 +6,7 @@ mod common;
 
 use hppm::gpu::binding::{Access, bind_buffers};
 use hppm::gpu::shaders::{ShaderFile, ShaderLibrary};
-use hppm::passes::COMMON_MODULES;
+use hppm::passes::common_modules;
 use hppm::passes::rng::Stream;
 
 const DRAWS: u32 = 6;
@@ -45,7 +45,8 @@ fn gpu_streams_equal_the_cpu_mirror() {
         [12345, 678, hppm::passes::rng::camera_seed(u64::MAX), 0],
     ];
     let n = keys.len();
-    let library = ShaderLibrary::new(false, Default::default(), COMMON_MODULES).expect("library");
+    let library =
+        ShaderLibrary::new(false, Default::default(), &common_modules()).expect("library");
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let key_buffer = gpu
         .create_buffer_init("keys", bytemuck::cast_slice(&keys), storage)

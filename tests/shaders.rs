@@ -8,7 +8,7 @@ use hppm::gpu_scene::layout::{
     GpuLight, GpuMaterial, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
     GpuTriangleUvs,
 };
-use hppm::passes::{COMMON_MODULES, builtin_kinds};
+use hppm::passes::{builtin_kinds, common_modules};
 use hppm::scene::bvh::BvhNode;
 use wgpu::naga;
 
@@ -16,7 +16,7 @@ fn library_with(
     float_atomics: bool,
     defs: HashMap<String, naga_oil::compose::ShaderDefValue>,
 ) -> ShaderLibrary {
-    ShaderLibrary::new(float_atomics, defs, COMMON_MODULES).expect("modules compose")
+    ShaderLibrary::new(float_atomics, defs, &common_modules()).expect("modules compose")
 }
 
 fn library(float_atomics: bool) -> ShaderLibrary {

@@ -58,6 +58,48 @@ impl ShaderFile {
     }
 }
 
+/// A module a library composes: a WGSL file, a file with generated text after it, or text
+/// generated whole. Generated text comes from a table in Rust (the scene's chunked bindings, the
+/// BSDFs' kind numbers and dispatch), so that nothing is written by hand in two places.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum WgslModule {
+    File(ShaderFile),
+    /// The file's text (which declares the module's import path), then `generated`.
+    FileThen(ShaderFile, String),
+    /// Text generated whole; `path` names it in errors (it has no file).
+    Generated {
+        path: String,
+        text: String,
+    },
+}
+
+impl From<ShaderFile> for WgslModule {
+    fn from(file: ShaderFile) -> Self {
+        WgslModule::File(file)
+    }
+}
+
+impl WgslModule {
+    /// How errors name it: its file's path, or the generated module's.
+    pub fn path(&self) -> &str {
+        match self {
+            WgslModule::File(file) | WgslModule::FileThen(file, _) => file.path,
+            WgslModule::Generated { path, .. } => path,
+        }
+    }
+
+    /// The text to compose (a file's from `$HPPM_SHADER_DIR` when that is set).
+    pub fn text(&self) -> Result<Cow<'_, str>, GpuError> {
+        match self {
+            WgslModule::File(file) => file.text(),
+            WgslModule::FileThen(file, generated) => {
+                Ok(Cow::Owned(format!("{}\n{generated}", file.text()?)))
+            }
+            WgslModule::Generated { text, .. } => Ok(Cow::Borrowed(text)),
+        }
+    }
+}
+
 /// Shader defs as naga_oil takes them, from the names of the defs that are set.
 pub fn defs_of<'a>(names: impl IntoIterator<Item = &'a str>) -> HashMap<String, ShaderDefValue> {
     names
@@ -84,7 +126,7 @@ impl ShaderLibrary {
     pub fn new(
         float_atomics: bool,
         mut defs: HashMap<String, ShaderDefValue>,
-        modules: &[ShaderFile],
+        modules: &[WgslModule],
     ) -> Result<Self, GpuError> {
         let mut capabilities = naga::valid::Capabilities::default();
         if float_atomics {
@@ -96,12 +138,13 @@ impl ShaderLibrary {
         let mut sorted: Vec<String> = defs.iter().map(|(k, v)| format!("{k}={v:?}")).collect();
         sorted.sort_unstable();
         (float_atomics, sorted).hash(&mut hasher);
-        for module in GPU_MODULES.iter().chain(modules) {
+        let own = GPU_MODULES.iter().map(|&file| WgslModule::File(file));
+        for module in own.chain(modules.iter().cloned()) {
             let source = module.text()?;
-            (module.path, &source).hash(&mut hasher);
+            (module.path(), &source).hash(&mut hasher);
             let added = composer.add_composable_module(ComposableModuleDescriptor {
                 source: &source,
-                file_path: module.path,
+                file_path: module.path(),
                 shader_defs: defs.clone(),
                 ..Default::default()
             });

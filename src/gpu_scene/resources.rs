@@ -13,6 +13,9 @@ use crate::gpu_scene::layout::{
     GpuLight, GpuMaterial, GpuScene, GpuSceneUniform, GpuSphere, GpuTriangle, GpuTriangleNormals,
     GpuTriangleUvs,
 };
+use crate::gpu_scene::tables::{
+    Chunked, TEXTURES_BINDING, chunk_bytes, chunk_entries_override, chunked_tables, tables,
+};
 use crate::scene::bvh::{Bvh, BvhNode};
 use crate::struct_layout;
 
@@ -74,80 +77,6 @@ pub struct TablePlacement {
     collapsed_nodes: Option<Vec<BvhNode>>,
     /// Storage tables larger than one binding, split into chunks ([`Chunked`]).
     chunked: Vec<Chunked>,
-}
-
-/// A storage table split over several bindings because it is larger than the adapter binds at
-/// once (a mesh of millions of triangles on lavapipe's 128 MiB): chunks of 2^`shift` entries,
-/// chunk 0 at the table's binding and chunk k at its `ChunkableTable::base` + k - 1.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Chunked {
-    table: &'static ChunkableTable,
-    shift: u32,
-    chunks: u32,
-}
-
-/// A table that grows with the triangles and may be chunked: its binding, the defs' prefix in
-/// src/gpu_scene/scene.wgsl, its entry size and where its chunks past the first are bound.
-#[derive(Debug, PartialEq, Eq)]
-struct ChunkableTable {
-    binding: u32,
-    prefix: &'static str,
-    stride: u64,
-    base: u32,
-}
-
-/// Chunks a table may have (the bindings src/gpu_scene/scene.wgsl declares for each).
-pub const MAX_CHUNKS: u32 = 8;
-
-const CHUNKABLE: [ChunkableTable; 6] = [
-    ChunkableTable {
-        binding: 1,
-        prefix: "BVH_NODES",
-        stride: size_of::<BvhNode>() as u64,
-        base: 16,
-    },
-    ChunkableTable {
-        binding: 2,
-        prefix: "PRIM_INDICES",
-        stride: 4,
-        base: 24,
-    },
-    ChunkableTable {
-        binding: 3,
-        prefix: "TRIANGLES",
-        stride: size_of::<GpuTriangle>() as u64,
-        base: 32,
-    },
-    ChunkableTable {
-        binding: 9,
-        prefix: "TRIANGLE_NORMALS",
-        stride: size_of::<GpuTriangleNormals>() as u64,
-        base: 40,
-    },
-    ChunkableTable {
-        binding: 10,
-        prefix: "TRIANGLE_UVS",
-        stride: size_of::<crate::gpu_scene::layout::GpuTriangleUvs>() as u64,
-        base: 48,
-    },
-    // A scene's textures add up quickly: ten 2048x2048 bitmaps are 480 MiB of texels.
-    ChunkableTable {
-        binding: TEXTURES_BINDING,
-        prefix: "TEXTURES",
-        stride: 4,
-        base: 56,
-    },
-];
-
-/// The binding of the texture table, which only textured scenes have.
-const TEXTURES_BINDING: u32 = 11;
-
-/// The bytes of the table at `binding` (1 to 11).
-fn table_bytes(scene: &GpuScene, binding: u32) -> &[u8] {
-    match binding {
-        TEXTURES_BINDING => bytemuck::cast_slice(&scene.textures),
-        b => tables(scene)[b as usize - 1].1,
-    }
 }
 
 /// How many more primitive tests per ray (by the surface area heuristic) than the tree as built
@@ -518,68 +447,6 @@ fn collapsed_to_fit(scene: &GpuScene, max_bytes: u64) -> Option<(usize, Vec<BvhN
         .then_some((budget, collapsed.nodes))
 }
 
-/// The chunkable tables larger than one binding of `binding_limit` bytes (or than
-/// `chunk_entries` entries), with their chunk size: the largest power of two of entries a
-/// binding holds.
-fn chunked_tables(
-    scene: &GpuScene,
-    binding_limit: u64,
-    chunk_entries: Option<u64>,
-) -> Vec<Chunked> {
-    CHUNKABLE
-        .iter()
-        .filter_map(|t| {
-            let entries = (table_bytes(scene, t.binding).len() as u64).div_ceil(t.stride);
-            let fits = (binding_limit / t.stride).max(1);
-            let per_chunk = chunk_entries.map_or(fits, |n| n.clamp(1, fits));
-            if entries <= per_chunk {
-                return None;
-            }
-            let shift = per_chunk.ilog2();
-            let chunks = entries.div_ceil(1 << shift);
-            Some(Chunked {
-                table: t,
-                shift,
-                chunks: u32::try_from(chunks).unwrap_or(u32::MAX),
-            })
-        })
-        .collect()
-}
-
-/// `HPPM_TABLE_CHUNK_ENTRIES`: chunk every storage table of more entries than this (rounded
-/// down to a power of two), so that chunked tables can be tested and measured on small scenes.
-pub fn chunk_entries_override() -> Result<Option<u64>, Error> {
-    match std::env::var("HPPM_TABLE_CHUNK_ENTRIES") {
-        Err(_) => Ok(None),
-        Ok(text) => match text.parse::<u64>() {
-            Ok(n) if n >= 1 => Ok(Some(1 << n.ilog2())),
-            _ => Err(Error::Other(format!(
-                "HPPM_TABLE_CHUNK_ENTRIES={text}: expected a positive number of table entries"
-            ))),
-        },
-    }
-}
-
-/// Bindings 1-10 of group 0 in binding order: each table's label and bytes.
-fn tables(scene: &GpuScene) -> [(&'static str, &[u8]); 10] {
-    use bytemuck::cast_slice;
-    [
-        ("scene bvh nodes", cast_slice(&scene.bvh_nodes)),
-        ("scene prim indices", cast_slice(&scene.prim_indices)),
-        ("scene triangles", cast_slice(&scene.triangles)),
-        ("scene spheres", cast_slice(&scene.spheres)),
-        ("scene materials", cast_slice(&scene.materials)),
-        ("scene lights", cast_slice(&scene.lights)),
-        ("scene light cdf", cast_slice(&scene.light_cdf)),
-        ("scene bsdf tables", cast_slice(&scene.bsdf_tables)),
-        (
-            "scene triangle normals",
-            cast_slice(&scene.triangle_normals),
-        ),
-        ("scene triangle uvs", cast_slice(&scene.triangle_uvs)),
-    ]
-}
-
 pub struct SceneResources {
     pub layout: wgpu::BindGroupLayout,
     pub bind_group: wgpu::BindGroup,
@@ -740,24 +607,6 @@ fn storage_table(
         ));
     }
     Ok((first, rest))
-}
-
-/// `bytes` of a chunked table cut into its chunks; refused when it needs more chunks than the
-/// shaders declare, naming the table, its size and what would fit.
-fn chunk_bytes<'b>(c: &Chunked, bytes: &'b [u8], label: &str) -> Result<Vec<&'b [u8]>, Error> {
-    let chunk = (c.table.stride as usize) << c.shift;
-    if c.chunks > MAX_CHUNKS {
-        return Err(Error::Other(format!(
-            "{label} takes {} bytes ({:.0} MiB): {} bindings of {:.0} MiB on this adapter, and a \
-             table may take at most {MAX_CHUNKS} ({:.0} MiB); load fewer triangles",
-            bytes.len(),
-            bytes.len() as f64 / 1048576.0,
-            c.chunks,
-            chunk as f64 / 1048576.0,
-            (chunk as u64 * MAX_CHUNKS as u64) as f64 / 1048576.0,
-        )));
-    }
-    Ok(bytes.chunks(chunk).collect())
 }
 
 /// A uniform buffer holding `bytes` zero-padded to `size`.

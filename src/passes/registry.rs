@@ -13,7 +13,7 @@
 
 use std::path::Path;
 
-use crate::gpu::shaders::{ShaderFile, ShaderLibrary, defs_of};
+use crate::gpu::shaders::{ShaderFile, ShaderLibrary, WgslModule, defs_of};
 use crate::gpu_scene::TablePlacement;
 use crate::graph::pass::{PassKind, SceneNeed};
 use crate::graph::{GraphErrors, ValidGraph};
@@ -27,14 +27,14 @@ pub type NeedTest = fn(&Scene, &SceneFeatures, &SceneNeed) -> bool;
 #[derive(Clone)]
 pub struct Registry {
     kinds: Vec<&'static PassKind>,
-    modules: Vec<ShaderFile>,
+    modules: Vec<WgslModule>,
     needs: Vec<(&'static str, NeedTest)>,
 }
 
 impl std::fmt::Debug for Registry {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let kinds: Vec<&str> = self.kinds.iter().map(|k| k.name).collect();
-        let modules: Vec<&str> = self.modules.iter().map(|m| m.path).collect();
+        let modules: Vec<&str> = self.modules.iter().map(|m| m.path()).collect();
         let needs: Vec<&str> = self.needs.iter().map(|n| n.0).collect();
         f.debug_struct("Registry")
             .field("kinds", &kinds)
@@ -55,7 +55,7 @@ impl Registry {
     pub fn builtin() -> Self {
         Self {
             kinds: super::builtin_kinds().to_vec(),
-            modules: super::COMMON_MODULES.to_vec(),
+            modules: super::common_modules(),
             needs: vec![
                 (super::SPECULAR_SURFACE.name, |_, features, _| {
                     features.has_specular_surface()
@@ -81,7 +81,7 @@ impl Registry {
     /// Adds an importable WGSL module (its file's `#define_import_path` names it), after the
     /// ones already registered: it may import those, and later ones may import it.
     pub fn with_module(mut self, module: ShaderFile) -> Self {
-        self.modules.push(module);
+        self.modules.push(WgslModule::File(module));
         self
     }
 
@@ -104,7 +104,7 @@ impl Registry {
     }
 
     /// The importable modules, in dependency order.
-    pub fn modules(&self) -> &[ShaderFile] {
+    pub fn modules(&self) -> &[WgslModule] {
         &self.modules
     }
 

@@ -6,17 +6,16 @@ use std::collections::HashMap;
 use naga_oil::compose::ShaderDefValue;
 
 use super::Registry;
-use crate::gpu::shaders::{ShaderFile, ShaderLibrary, defs_of};
+use crate::gpu::shaders::{ShaderFile, ShaderLibrary, WgslModule, defs_of};
 use crate::gpu_scene::TablePlacement;
 use crate::scene::{Scene, SceneFeatures};
 use crate::shader_file;
 
 /// Importable modules under `shaders/common/`, in dependency order (a module may import only
-/// those above it).
+/// those above it); [`common_modules`] puts the scene's own (`common::scene`) before them.
 pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/rng.wgsl"),
     shader_file!("shaders/common/sampling.wgsl"),
-    shader_file!("src/gpu_scene/scene.wgsl"),
     shader_file!("shaders/common/intersection.wgsl"),
     shader_file!("shaders/common/traversal.wgsl"),
     shader_file!("shaders/common/surface.wgsl"),
@@ -45,6 +44,14 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/spatial_hash.wgsl"),
     shader_file!("shaders/common/photon_grid.wgsl"),
 ];
+
+/// Every module the built-in passes import, in dependency order: the scene's bindings and
+/// readers (`common::scene`, [`crate::gpu_scene::wgsl_module`]), then [`COMMON_MODULES`].
+pub fn common_modules() -> Vec<WgslModule> {
+    std::iter::once(crate::gpu_scene::wgsl_module())
+        .chain(COMMON_MODULES.iter().map(|&file| WgslModule::File(file)))
+        .collect()
+}
 
 /// Shader defs that compile in code for scene features; without them that code is left out.
 pub const SCENE_DEFS: &[&str] = &[
