@@ -5,9 +5,12 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use crate::gpu::GpuContext;
-use crate::render::{Budget, Renderer};
+use crate::graph::{ValidGraph, parse_graph};
+use crate::render::{Budget, NodeTime, Renderer};
 use crate::{Error, graph, passes};
 
+/// The glass-sphere Cornell box, the hybrid benches' caustic scene.
+pub(crate) const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const SCENES: &[&str] = &["scenes/cornell_diffuse.ron", "scenes/cornell_box.ron"];
 const SIZE: u32 = 256;
 
@@ -157,6 +160,39 @@ pub fn append_markdown(path: &Path, text: &str) -> Result<(), Error> {
         }
     };
     crate::image::write_file_atomically(path, (old + text).as_bytes())
+}
+
+/// A graph file with `replace` applied to its text (to set a param for one measurement).
+pub(crate) fn graph_with(path: &Path, replace: Option<(&str, &str)>) -> Result<ValidGraph, Error> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = match replace {
+        Some((from, to)) => text.replace(from, to),
+        None => text,
+    };
+    Ok(parse_graph(path, &text, passes::builtin_kinds())?)
+}
+
+pub(crate) fn run_iterations(renderer: &mut Renderer<'_>, iterations: u64) -> Result<f64, Error> {
+    let never = AtomicBool::new(false);
+    let target = renderer.samples_per_pixel() + iterations * renderer.spp_per_iteration().max(1);
+    let budget = Budget {
+        spp: Some(target),
+        ..Default::default()
+    };
+    Ok(renderer.run(budget, &never, |_, _| {})?.seconds)
+}
+
+/// Milliseconds per iteration of each node, as a table cell.
+pub(crate) fn node_ms(times: &[NodeTime], iterations: u64, decimals: usize) -> String {
+    let per_iteration = |t: &NodeTime| t.wall_seconds / iterations.max(1) as f64 * 1e3;
+    times
+        .iter()
+        .map(|t| format!("{} {:.decimals$}", t.name, per_iteration(t)))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 #[cfg(test)]

@@ -3,21 +3,21 @@
 //! (`bench_seed`) for pt / ppm_only / hybrid, and relMSE after equal wall-clock budgets
 //! against the Mitsuba references in tests/refs.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use glam::Vec3;
 
-use crate::app::bench::{stolen_cell, while_counting_steal};
+use crate::Error;
+use crate::app::bench::{
+    GLASS, graph_with, node_ms, run_iterations, stolen_cell, while_counting_steal,
+};
 use crate::gpu::GpuContext;
-use crate::graph::{ValidGraph, parse_graph};
 use crate::image::Image;
 use crate::passes::hit_points::{GpuHitPoint, build_tree};
-use crate::render::{Budget, NodeTime, Renderer};
-use crate::{Error, passes};
+use crate::render::{Budget, Renderer};
 
-pub(crate) const GLASS: &str = "tests/refs/scenes/cornell_glass_sphere/scene.xml";
 const POINT_LIGHT: &str = "tests/refs/scenes/point_light_caustic/scene.xml";
 const GRAPHS: &[&str] = &["graphs/pt.ron", "graphs/hybrid.ron", "graphs/ppm_only.ron"];
 
@@ -27,29 +27,6 @@ pub struct HybridBenchOptions<'a> {
     pub seconds: Vec<f64>,
     /// Iterations of the 512x512 workload actually run (its 512 spp are extrapolated).
     pub workload_iterations: u64,
-}
-
-/// A graph file with `replace` applied to its text (to set a param for one measurement).
-pub(crate) fn graph_with(path: &Path, replace: Option<(&str, &str)>) -> Result<ValidGraph, Error> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let text = match replace {
-        Some((from, to)) => text.replace(from, to),
-        None => text,
-    };
-    Ok(parse_graph(path, &text, passes::builtin_kinds())?)
-}
-
-pub(crate) fn run_iterations(renderer: &mut Renderer<'_>, iterations: u64) -> Result<f64, Error> {
-    let never = AtomicBool::new(false);
-    let target = renderer.samples_per_pixel() + iterations * renderer.spp_per_iteration().max(1);
-    let budget = Budget {
-        spp: Some(target),
-        ..Default::default()
-    };
-    Ok(renderer.run(budget, &never, |_, _| {})?.seconds)
 }
 
 /// Milliseconds per iteration of each node, and photon segments per second.
@@ -92,15 +69,6 @@ fn node_table(gpu: &GpuContext, locate: fn(&str) -> PathBuf) -> Result<String, E
 
 /// "node ms, node ms, ...": each node's wall milliseconds per iteration over `iterations`, with
 /// `decimals` decimals, in schedule order.
-pub(crate) fn node_ms(times: &[NodeTime], iterations: u64, decimals: usize) -> String {
-    let per_iteration = |t: &NodeTime| t.wall_seconds / iterations.max(1) as f64 * 1e3;
-    times
-        .iter()
-        .map(|t| format!("{} {:.decimals$}", t.name, per_iteration(t)))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 fn short(scene_path: &str) -> &str {
     scene_path
         .trim_end_matches("/scene.xml")

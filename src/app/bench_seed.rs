@@ -8,8 +8,9 @@
 use std::path::PathBuf;
 
 use crate::Error;
-use crate::app::bench::{stolen_cell, while_counting_steal};
-use crate::app::bench_hybrid::{GLASS, graph_with, node_ms, run_iterations};
+use crate::app::bench::{
+    GLASS, graph_with, node_ms, run_iterations, stolen_cell, while_counting_steal,
+};
 use crate::gpu::GpuContext;
 use crate::render::Renderer;
 

@@ -8,7 +8,9 @@ use glam::Vec3;
 use crate::gpu::layout::StructLayout;
 use crate::graph::pass::ResourceKind;
 use crate::passes::gather::BVH_GATHER;
-use crate::passes::sppm::SHADER as SPPM_SHADER;
+/// A kernel that reads the radius rule (the sppm estimator's), for its layout check.
+const SPPM_SHADER: crate::gpu::shaders::ShaderFile =
+    crate::shader_file!("shaders/passes/merge.wgsl");
 use crate::scene::bvh::{Aabb, BvhNode, build_sah};
 use crate::struct_layout;
 

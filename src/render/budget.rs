@@ -26,7 +26,7 @@ pub enum BudgetField {
     Seconds,
     TargetError,
     Adaptive,
-    /// A render job's shard and checkpoint interval ([`crate::app::job::RenderJob`]).
+    /// A render job's shard and checkpoint interval (`app::job::RenderJob`).
     Shard,
     CheckpointEvery,
 }
