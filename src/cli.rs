@@ -541,8 +541,12 @@ fn info(registry: &Registry) -> Result<(), Error> {
     Ok(())
 }
 
-fn check_scene(path: &Path, defines: &[(String, String)]) -> Result<(), Error> {
-    let report = crate::loaders::check_with(path, defines);
+fn check_scene(
+    registry: &Registry,
+    path: &Path,
+    defines: &[(String, String)],
+) -> Result<(), Error> {
+    let report = crate::loaders::check_in(path, defines, registry.bsdfs());
     for warning in &report.warnings {
         println!("warning: {warning}");
     }
@@ -574,8 +578,14 @@ fn check_scene(path: &Path, defines: &[(String, String)]) -> Result<(), Error> {
 }
 
 /// The scene at `path`, its warnings printed.
-fn load_scene(path: &Path, defines: &[(String, String)]) -> Result<scene::Scene, Error> {
-    let scene = crate::loaders::load_reporting(path, defines, |w| eprintln!("warning: {w}"))?;
+fn load_scene(
+    registry: &Registry,
+    path: &Path,
+    defines: &[(String, String)],
+) -> Result<scene::Scene, Error> {
+    let scene = crate::loaders::load_reporting(path, defines, registry.bsdfs(), |w| {
+        eprintln!("warning: {w}")
+    })?;
     Ok(scene)
 }
 
@@ -591,7 +601,7 @@ fn show_graph(
         eprintln!("warning: {warning}");
     }
     if let Some(scene_path) = scene_path {
-        let scene = load_scene(scene_path, defines)?;
+        let scene = load_scene(registry, scene_path, defines)?;
         let features = scene.features();
         println!("scene: {features}");
         for pruned in graph.prune(|need| registry.scene_meets(&scene, &features, need))? {
@@ -779,9 +789,9 @@ pub fn run_from(
             Ok(())
         }
         Command::Info { markdown: false } => info(&registry),
-        Command::Check { scene, defines } => check_scene(&scene, &defines),
+        Command::Check { scene, defines } => check_scene(&registry, &scene, &defines),
         Command::Plugins => {
-            print!("{}", crate::loaders::plugins::markdown());
+            print!("{}", crate::loaders::plugins::markdown(registry.bsdfs()));
             Ok(())
         }
         Command::Graph {

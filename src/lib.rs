@@ -37,6 +37,7 @@
 //! docs/writing-a-pass.md how a pass is added from another crate.
 
 pub mod app;
+pub mod bsdfs;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod error;

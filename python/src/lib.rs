@@ -121,8 +121,12 @@ fn load_scene(
     }
     let (scene, warnings) = py.allow_threads(|| {
         let mut warnings = Vec::new();
-        let scene =
-            hppm::loaders::load_reporting(&path, &defines, |w| warnings.push(w.to_string()));
+        let scene = hppm::loaders::load_reporting(
+            &path,
+            &defines,
+            hppm::bsdfs::BsdfRegistry::builtin_ref(),
+            |w| warnings.push(w.to_string()),
+        );
         (scene, warnings)
     });
     for warning in warnings {

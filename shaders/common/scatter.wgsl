@@ -10,10 +10,10 @@
 #import common::rng::{rng_next_f32, rng_next_vec2}
 #import common::bsdf::{BsdfSample, no_sample, reflect_about}
 #ifdef DIELECTRIC
-#import common::bsdf::sample_dielectric
+#import bsdfs::dielectric::sample_dielectric
 #endif
 #import common::material::material_sample
-#import common::normal_map::ShadingFrame
+#import bsdfs::normalmap::ShadingFrame
 
 // The surface as the chosen side sees it: a twosided material's back turns the normals over.
 fn seen_from(surface: Surface, back: bool) -> Surface {

@@ -4,7 +4,7 @@
 // (Texture::eval), which this must equal. Compiled in only for scenes with textures.
 
 #ifdef TEXTURES
-#import common::scene::{Material, NO_TEXTURE, MATERIAL_PRINCIPLED, MATERIAL_PRINCIPLED_THIN, bsdf_tables, texture_word}
+#import common::scene::{Material, NO_TEXTURE, bsdf_tables, texture_word, material_alpha_floor}
 #import common::sampling::luminance
 
 const TEXTURE_CHECKERBOARD: u32 = 0u;
@@ -176,9 +176,9 @@ fn texture_eval_1_grad(index: u32, uv: vec2<f32>) -> vec2<f32> {
 // evaluation and sampling, hit-point weights, photon bounces) sees the surface's own values.
 fn textured_material(m: Material, uv: vec2<f32>) -> Material {
     var out = m;
-    // The floor the untextured roughness gets too (src/gpu_scene/layout.rs); principled keeps
-    // roughness and metallic there as given (it floors its alphas itself), as principledthin.
-    let floor = select(1e-4, 0.0, m.kind == MATERIAL_PRINCIPLED || m.kind == MATERIAL_PRINCIPLED_THIN);
+    // The floor the untextured roughness gets too when packed; a kind may keep its roughness
+    // there as given (principled floors its alphas itself).
+    let floor = material_alpha_floor(m.kind);
     let slots = array<u32, 4>(m.diffuse_texture, m.specular_texture, m.alpha_u_texture, m.alpha_v_texture);
     var textured = 0u;
     for (var slot = 0u; slot < 4u; slot++) {

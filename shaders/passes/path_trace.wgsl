@@ -34,7 +34,7 @@
 #import common::surface::{Surface, unoccluded, surface_at, spawn_origin}
 #import common::material::{material_eval, material_has_continuous_lobe}
 #import common::scatter::{scatter, seen_from}
-#import common::blend::choose_material
+#import bsdfs::blendbsdf::choose_material
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
 #endif
@@ -47,9 +47,9 @@
 #ifdef TEXTURES
 #import common::texture::textured_material
 #endif
-#import common::normal_map::{ShadingFrame, plain_frame, frame_factor}
+#import bsdfs::normalmap::{ShadingFrame, plain_frame, frame_factor}
 #ifdef NORMAL_MAPS
-#import common::normal_map::shading_frame
+#import bsdfs::normalmap::shading_frame
 #endif
 #import common::lights::{sample_light, area_light_pdf}
 #ifdef ENVIRONMENT

@@ -25,10 +25,10 @@
 #import common::traversal::intersect_photon
 #import common::surface::{surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
 #import common::scatter::{scatter, seen_from}
-#import common::blend::choose_material
+#import bsdfs::blendbsdf::choose_material
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
-#import common::blend::diffuse_probability
+#import bsdfs::blendbsdf::diffuse_probability
 #endif
 #ifdef GLOSSY
 #import common::material::material_specular_share
@@ -43,9 +43,9 @@
 #ifdef TEXTURES
 #import common::texture::textured_material
 #endif
-#import common::normal_map::{plain_frame, frame_factor}
+#import bsdfs::normalmap::{plain_frame, frame_factor}
 #ifdef NORMAL_MAPS
-#import common::normal_map::shading_frame
+#import bsdfs::normalmap::shading_frame
 #endif
 #import common::hit_points::{PhotonHitsOut, PhotonHit}
 #import gpu::dispatch::next_item

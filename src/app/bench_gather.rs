@@ -220,7 +220,7 @@ pub fn run(adapter: Option<&str>, locate: fn(&str) -> PathBuf) -> Result<String,
     let gpu = GpuContext::new(adapter)?;
     let scene = crate::loaders::load(&locate(GLASS))?;
     let mut shared = Shared::default();
-    let resources = SceneResources::for_adapter(&gpu, &GpuScene::new(&scene, 128, 128))?;
+    let resources = SceneResources::for_adapter(&gpu, &GpuScene::new(&scene, 128, 128)?)?;
     let shaders = passes::shader_library(gpu.has_float_atomics(), &scene, &resources.placement)?;
     shared.insert(resources);
     let bench = Bench {

@@ -218,9 +218,12 @@ pub fn compare(
     if options.graphs.is_empty() {
         return Err(Error::Other("give at least one graph".into()));
     }
-    let scene = crate::loaders::load_reporting(&options.scene, &options.defines, |w| {
-        eprintln!("warning: {w}")
-    })?;
+    let scene = crate::loaders::load_reporting(
+        &options.scene,
+        &options.defines,
+        options.registry.bsdfs(),
+        |w| eprintln!("warning: {w}"),
+    )?;
     let (width, height) = options
         .size
         .unwrap_or((scene.camera.width, scene.camera.height));

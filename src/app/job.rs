@@ -139,7 +139,7 @@ fn plan(
     // stands for its compiled-in text.
     let (graph_file, graph_text) = crate::graph::bundled::read_graph(graph_path)?;
     let loading = std::time::Instant::now();
-    let scene = crate::loaders::load_reporting(scene_path, &job.defines, |w| {
+    let scene = crate::loaders::load_reporting(scene_path, &job.defines, registry.bsdfs(), |w| {
         watch.note(&format!("warning: {w}"))
     })?;
     let features = scene.features();

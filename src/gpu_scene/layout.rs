@@ -5,28 +5,15 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::scene::bsdf::Prepared;
+use crate::bsdfs::BsdfRegistry;
+pub use crate::scene::bsdf::GpuMaterial;
+use crate::scene::bsdf::mean;
 use crate::scene::bvh::split_boxes::split_references;
 use crate::scene::bvh::{self, BvhNode};
 use crate::scene::emitter::Environment;
 use crate::scene::filter::FILTER_TABLE_NODES;
 use crate::scene::texture::{self, NO_TEXTURE};
-use crate::scene::{Bsdf, Distribution, Microfacet, PerturbationKind, Scene, SideTextures, Tint};
-
-pub const MATERIAL_DIFFUSE: u32 = 0;
-pub const MATERIAL_DIELECTRIC: u32 = 1;
-pub const MATERIAL_MIRROR: u32 = 2;
-pub const MATERIAL_CONDUCTOR: u32 = 3;
-pub const MATERIAL_ROUGH_CONDUCTOR: u32 = 4;
-pub const MATERIAL_PLASTIC: u32 = 5;
-pub const MATERIAL_ROUGH_PLASTIC: u32 = 6;
-pub const MATERIAL_ROUGH_DIELECTRIC: u32 = 7;
-pub const MATERIAL_THIN_DIELECTRIC: u32 = 8;
-pub const MATERIAL_BLEND: u32 = 9;
-pub const MATERIAL_NULL: u32 = 10;
-pub const MATERIAL_PRINCIPLED: u32 = 11;
-pub const MATERIAL_POLARIZED_PLASTIC: u32 = 12;
-pub const MATERIAL_PRINCIPLED_THIN: u32 = 13;
+use crate::scene::{Bsdf, PerturbationKind, Scene, SceneError, SideTextures};
 
 /// `GpuMaterial::frame_kind`: the shading frame as the shape gives it, or perturbed by a
 /// normal map or a bump map (src/scene/normal_map.rs).
@@ -102,59 +89,6 @@ pub struct GpuSphere {
     pub light: u32,
     pub flip_normals: u32,
     pub _pad: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
-pub struct GpuMaterial {
-    /// Diffuse reflectance (diffuse, and plastic's base).
-    pub albedo: [f32; 3],
-    pub kind: u32,
-    pub emission: [f32; 3],
-    pub int_ior: f32,
-    /// Specular reflectance (conductors, plastic's coating).
-    pub specular: [f32; 3],
-    pub ext_ior: f32,
-    /// A conductor's complex index of refraction eta + i k.
-    pub eta: [f32; 3],
-    pub alpha_u: f32,
-    pub k: [f32; 3],
-    pub alpha_v: f32,
-    /// 0 Beckmann, 1 GGX.
-    pub distribution: u32,
-    /// The material the back side sees (twosided), or NO_BACK.
-    pub back: u32,
-    pub nonlinear: u32,
-    /// Plastic: probability weight of the coating's lobe.
-    pub specular_weight: f32,
-    /// Plastic: the coating's diffuse reflectance from inside.
-    pub internal_reflectance: f32,
-    /// Rough plastic: first entry of its transmittance table in `bsdf_tables`.
-    pub table: u32,
-    /// The textures that replace `albedo` and `specular` at each surface point (indices of
-    /// `GpuScene::textures`' headers), or `NO_TEXTURE`.
-    pub diffuse_texture: u32,
-    pub specular_texture: u32,
-    /// The scalar textures that replace `alpha_u` and `alpha_v`, or `NO_TEXTURE`.
-    pub alpha_u_texture: u32,
-    pub alpha_v_texture: u32,
-    /// A `normalmap` or `bumpmap` around the BSDF (`FRAME_*`), its texture (or NO_TEXTURE),
-    /// the bump map's scale and `FRAME_FLAG_*` bits.
-    pub frame_kind: u32,
-    pub frame_texture: u32,
-    pub frame_scale: f32,
-    pub frame_flags: u32,
-    /// Blend: the two materials it chooses between (indices of this table), the probability
-    /// of the second and the scalar texture replacing it (or NO_TEXTURE).
-    pub children: [u32; 2],
-    pub blend_weight: f32,
-    pub blend_weight_texture: u32,
-    /// Scalar textures that replace one component each of `specular`, `eta` and `k` (principled
-    /// keeps eight parameters there): `field_texture_count` pairs of `bsdf_tables` entries from
-    /// `field_textures`, each the component (of the three taken as one array of nine) and the
-    /// texture, as floats (exact below 2^24; shaders/common/texture.wgsl).
-    pub field_textures: u32,
-    pub field_texture_count: u32,
 }
 
 #[repr(C)]
@@ -291,21 +225,18 @@ pub struct GpuScene {
     pub smoothest_microfacet: f32,
 }
 
-fn mean(v: Vec3) -> f32 {
-    (v.x + v.y + v.z) / 3.0
-}
-
-/// The GPU form of one side's BSDF; its rough plastic table (if any) is appended to `tables`.
+/// The GPU form of one side's BSDF: the layout's fields (kind, emission, frame, texture slots),
+/// then what the BSDF packs; its tables (if any) are appended to `tables`.
 fn gpu_material(
     bsdf: &Bsdf,
-    textures: SideTextures,
+    textures: &SideTextures,
     emission: Vec3,
+    kind: u32,
     tables: &mut Vec<f32>,
 ) -> GpuMaterial {
-    let prepared = Prepared::new(*bsdf);
     let mut m = GpuMaterial {
         albedo: [0.0; 3],
-        kind: MATERIAL_DIFFUSE,
+        kind,
         emission: emission.to_array(),
         int_ior: 1.0,
         specular: [1.0; 3],
@@ -317,8 +248,8 @@ fn gpu_material(
         distribution: 0,
         back: NO_BACK,
         nonlinear: 0,
-        specular_weight: prepared.specular_weight,
-        internal_reflectance: prepared.internal_reflectance,
+        specular_weight: 0.0,
+        internal_reflectance: 0.0,
         table: 0,
         diffuse_texture: textures.diffuse.unwrap_or(NO_TEXTURE),
         specular_texture: textures.specular.unwrap_or(NO_TEXTURE),
@@ -345,175 +276,51 @@ fn gpu_material(
             | flag(frame.shadowing, FRAME_FLAG_SHADOWING)
             | flag(frame.outside_twosided, FRAME_FLAG_OUTSIDE_TWOSIDED);
     }
-    let rough = |m: &mut GpuMaterial, mf: &Microfacet| {
-        m.alpha_u = mf.alpha_u.max(1e-4);
-        m.alpha_v = mf.alpha_v.max(1e-4);
-        m.distribution = match mf.distribution {
-            Distribution::Beckmann => 0,
-            Distribution::Ggx => 1,
-        };
-    };
-    // A dielectric's tint: reflectance in `specular`, transmittance in `albedo` (where the
-    // specular and diffuse textures replace them).
-    let tinted = |m: &mut GpuMaterial, tint: &Tint| {
-        (m.specular, m.albedo) = (tint.reflectance.to_array(), tint.transmittance.to_array());
-    };
-    match *bsdf {
-        Bsdf::Diffuse { reflectance } => m.albedo = reflectance.to_array(),
-        Bsdf::Dielectric {
-            int_ior,
-            ext_ior,
-            tint,
-        } => {
-            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_DIELECTRIC, int_ior, ext_ior);
-            tinted(&mut m, &tint);
-        }
-        Bsdf::ThinDielectric {
-            int_ior,
-            ext_ior,
-            tint,
-        } => {
-            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_THIN_DIELECTRIC, int_ior, ext_ior);
-            tinted(&mut m, &tint);
-        }
-        Bsdf::RoughDielectric {
-            int_ior,
-            ext_ior,
-            microfacet,
-            tint,
-        } => {
-            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_ROUGH_DIELECTRIC, int_ior, ext_ior);
-            tinted(&mut m, &tint);
-            rough(&mut m, &microfacet);
-        }
-        Bsdf::Mirror => m.kind = MATERIAL_MIRROR,
-        Bsdf::Null => m.kind = MATERIAL_NULL,
-        // The principled parameters in the fields of the other kinds
-        // (shaders/common/principled.wgsl reads them back): base colour, roughness and
-        // metallic where the fixed texture slots replace them (`albedo`, `alpha_u`,
-        // `alpha_v`), the rest where field textures do.
-        Bsdf::Principled(p) => {
-            m.kind = MATERIAL_PRINCIPLED;
-            m.albedo = p.base_color.to_array();
-            (m.alpha_u, m.alpha_v) = (p.roughness, p.metallic);
-            m.specular = [p.anisotropic, p.spec_trans, p.spec_tint];
-            m.eta = [p.sheen, p.sheen_tint, p.flatness];
-            m.k = [p.clearcoat, p.clearcoat_gloss, p.eta];
-            (m.int_ior, m.ext_ior) = (p.spec_srate, p.clearcoat_srate);
-            m.specular_weight = p.diffuse_srate;
-            m.nonlinear = p.has;
-            field_textures(&mut m, &textures.principled, tables);
-        }
-        // As principled's, with diff_trans and eta in `k` and the four sampling rates in
-        // int_ior, ext_ior, specular_weight and internal_reflectance
-        // (shaders/common/principled_thin.wgsl).
-        Bsdf::PrincipledThin(p) => {
-            m.kind = MATERIAL_PRINCIPLED_THIN;
-            m.albedo = p.base_color.to_array();
-            m.alpha_u = p.roughness;
-            m.specular = [p.anisotropic, p.spec_trans, p.spec_tint];
-            m.eta = [p.sheen, p.sheen_tint, p.flatness];
-            m.k = [p.diff_trans, p.eta, 0.0];
-            (m.int_ior, m.ext_ior) = (p.spec_reflect_srate, p.spec_trans_srate);
-            (m.specular_weight, m.internal_reflectance) =
-                (p.diff_reflect_srate, p.diff_trans_srate);
-            field_textures(&mut m, &textures.principled, tables);
-        }
-        Bsdf::Blend {
-            weight,
-            first,
-            second,
-        } => {
-            m.kind = MATERIAL_BLEND;
-            // The fronts of the scene's materials keep their indices in the GPU table.
-            (m.children, m.blend_weight) = ([first, second], weight.clamp(0.0, 1.0));
-        }
-        Bsdf::Conductor { eta, k, specular } => {
-            m.kind = MATERIAL_CONDUCTOR;
-            (m.eta, m.k, m.specular) = (eta.to_array(), k.to_array(), specular.to_array());
-        }
-        Bsdf::RoughConductor {
-            eta,
-            k,
-            specular,
-            microfacet,
-        } => {
-            m.kind = MATERIAL_ROUGH_CONDUCTOR;
-            (m.eta, m.k, m.specular) = (eta.to_array(), k.to_array(), specular.to_array());
-            rough(&mut m, &microfacet);
-        }
-        Bsdf::Plastic {
-            int_ior,
-            ext_ior,
-            diffuse,
-            specular,
-            nonlinear,
-        } => {
-            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_PLASTIC, int_ior, ext_ior);
-            (m.albedo, m.specular) = (diffuse.to_array(), specular.to_array());
-            m.nonlinear = nonlinear as u32;
-        }
-        Bsdf::RoughPlastic {
-            int_ior,
-            ext_ior,
-            diffuse,
-            specular,
-            nonlinear,
-            microfacet,
-        } => {
-            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_ROUGH_PLASTIC, int_ior, ext_ior);
-            (m.albedo, m.specular) = (diffuse.to_array(), specular.to_array());
-            m.nonlinear = nonlinear as u32;
-            rough(&mut m, &microfacet);
-            m.table = tables.len() as u32;
-            tables.extend_from_slice(&prepared.transmittance);
-        }
-        Bsdf::PolarizedPlastic {
-            int_ior,
-            ext_ior,
-            diffuse,
-            specular,
-            microfacet,
-        } => {
-            (m.kind, m.int_ior, m.ext_ior) = (MATERIAL_POLARIZED_PLASTIC, int_ior, ext_ior);
-            (m.albedo, m.specular) = (diffuse.to_array(), specular.to_array());
-            rough(&mut m, &microfacet);
-        }
-    }
+    bsdf.pack(&mut m, textures, tables);
     m
 }
 
-/// Principled's and principledthin's field textures, `fields` in the order of their components
-/// in `specular`, `eta` and `k`, appended to `tables` as (component, texture) pairs.
-fn field_textures(m: &mut GpuMaterial, fields: &[Option<u32>], tables: &mut Vec<f32>) {
-    m.field_textures = tables.len() as u32;
-    for (component, texture) in fields.iter().enumerate() {
-        if let Some(texture) = *texture {
-            tables.extend([component as f32, texture as f32]);
-            m.field_texture_count += 1;
-        }
-    }
-}
-
 /// Every material's front, then the back sides of twosided ones (each front pointing at its
-/// back), and the BSDF tables they use.
-fn gpu_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<f32>) {
+/// back), and the BSDF tables they use; each BSDF's kind numbered by `bsdfs`.
+fn gpu_materials(
+    scene: &Scene,
+    bsdfs: &BsdfRegistry,
+) -> Result<(Vec<GpuMaterial>, Vec<f32>), SceneError> {
+    let number =
+        |bsdf: &Bsdf| {
+            bsdfs.number_of(bsdf.kind()).ok_or_else(|| SceneError::File {
+            file: scene.source.clone(),
+            message: format!(
+                "the scene uses the BSDF kind \"{}\", which the registry it is rendered with \
+                 does not have (its kinds: {})",
+                bsdf.kind(),
+                bsdfs.kinds().map(|(_, k)| k.name).collect::<Vec<_>>().join(", ")
+            ),
+        })
+        };
     let mut tables = Vec::new();
-    let mut materials: Vec<GpuMaterial> = scene
-        .materials
-        .iter()
-        .map(|m| gpu_material(&m.bsdf, m.textures.front, m.emission, &mut tables))
-        .collect();
+    let mut materials = Vec::with_capacity(scene.materials.len());
+    for m in &scene.materials {
+        let kind = number(&m.bsdf)?;
+        materials.push(gpu_material(
+            &m.bsdf,
+            &m.textures.front,
+            m.emission,
+            kind,
+            &mut tables,
+        ));
+    }
     for i in 0..scene.materials.len() {
         if let Some(back) = &scene.materials[i].back {
             let index = materials.len() as u32;
             // The back emits nothing: area emitters are one-sided.
-            let textures = scene.materials[i].textures.back;
-            materials.push(gpu_material(back, textures, Vec3::ZERO, &mut tables));
+            let textures = &scene.materials[i].textures.back;
+            let kind = number(back)?;
+            materials.push(gpu_material(back, textures, Vec3::ZERO, kind, &mut tables));
             materials[i].back = index;
         }
     }
-    (materials, tables)
+    Ok((materials, tables))
 }
 
 /// A light, its unnormalised power and the emitter it is part of.
@@ -783,7 +590,20 @@ impl GpuScene {
     }
 
     /// Lays out `scene` for rendering at `width` x `height`.
-    pub fn new(scene: &Scene, width: u32, height: u32) -> Self {
+    /// The scene with its BSDFs numbered as hppm's own registry numbers them
+    /// ([`Self::with_bsdfs`] for a registry with a program's BSDFs).
+    pub fn new(scene: &Scene, width: u32, height: u32) -> Result<Self, SceneError> {
+        Self::with_bsdfs(scene, width, height, BsdfRegistry::builtin_ref())
+    }
+
+    /// The scene as the GPU reads it, its material kinds numbered by `bsdfs` (the registry the
+    /// kernels' WGSL is generated from). Refused when the scene uses a BSDF kind `bsdfs` lacks.
+    pub fn with_bsdfs(
+        scene: &Scene,
+        width: u32,
+        height: u32,
+        bsdfs: &BsdfRegistry,
+    ) -> Result<Self, SceneError> {
         // The BVH is built over split references (src/scene/bvh/split_boxes.rs); its leaves then
         // name primitives, each possibly in several leaves.
         let refs = split_references(scene, SPLIT_EXTRA);
@@ -791,7 +611,7 @@ impl GpuScene {
         for r in &mut bvh.indices {
             *r = refs.prims[*r as usize];
         }
-        let (materials, mut bsdf_tables) = gpu_materials(scene);
+        let (materials, mut bsdf_tables) = gpu_materials(scene, bsdfs)?;
         let (lights, light_cdf) = normalise_lights(collect_lights(scene, &mut bsdf_tables));
         let mut light_of_prim = vec![NO_LIGHT; scene.triangles.len() + scene.spheres.len()];
         for (i, l) in lights.iter().enumerate() {
@@ -875,7 +695,7 @@ impl GpuScene {
         uniform.max_depth = scene.integrator.max_depth.unwrap_or(UNBOUNDED);
         uniform.rr_depth = scene.integrator.rr_depth.unwrap_or(UNBOUNDED);
         uniform.hide_emitters = scene.integrator.hide_emitters as u32;
-        let [x, y, z, radius] = padded_sphere(bounding_sphere(scene, Bsdf::is_delta));
+        let [x, y, z, radius] = padded_sphere(bounding_sphere(scene, |b: &Bsdf| b.is_delta()));
         uniform.specular_center = [x, y, z];
         uniform.specular_radius = radius;
         let glossy_sphere = padded_sphere(bounding_sphere(scene, |b: &Bsdf| {
@@ -886,7 +706,7 @@ impl GpuScene {
             .smoothest_microfacet
             .unwrap_or(f32::INFINITY);
 
-        Self {
+        Ok(Self {
             uniform,
             bvh_nodes: bvh.nodes,
             prim_indices: non_empty(bvh.indices),
@@ -901,7 +721,7 @@ impl GpuScene {
             textures,
             glossy_sphere,
             smoothest_microfacet,
-        }
+        })
     }
 }
 

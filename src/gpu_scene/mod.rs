@@ -12,13 +12,14 @@ pub mod tables;
 pub use layout::GpuScene;
 pub use resources::{PlacementRule, SceneResources, TablePlacement};
 
+use crate::bsdfs::BsdfRegistry;
 use crate::gpu::shaders::{ShaderFile, WgslModule};
 
 /// The scene's records and bindings as WGSL (`common::scene`), written by hand.
 const WGSL: ShaderFile = crate::shader_file!("src/gpu_scene/scene.wgsl");
 
 /// The module `common::scene`: scene.wgsl, then the chunked tables' bindings and readers
-/// generated from [`tables::CHUNKABLE`].
-pub fn wgsl_module() -> WgslModule {
-    WgslModule::FileThen(WGSL, tables::chunk_wgsl())
+/// generated from [`tables::CHUNKABLE`] and the material kinds' numbers generated from `bsdfs`.
+pub fn wgsl_module(bsdfs: &BsdfRegistry) -> WgslModule {
+    WgslModule::FileThen(WGSL, tables::chunk_wgsl() + &bsdfs.kinds_wgsl())
 }

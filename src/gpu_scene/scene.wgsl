@@ -1,12 +1,11 @@
 #define_import_path common::scene
 
-// Shader defs (src/shaders.rs, from the scene): SPHERES compiles in sphere intersection,
-// DIELECTRIC the smooth and thin dielectric BSDFs, CONDUCTOR the smooth and rough conductors,
-// PLASTIC plastic and rough plastic, ROUGH_DIELECTRIC the rough dielectric, POINT_LIGHTS
-// point and spot lights and projectors, SPOT_LIGHTS spot lights, PROJECTORS projectors,
-// DIRECTIONAL_LIGHTS directional lights,
-// ENVIRONMENT a constant or map light seen by escaping rays. Code for what a scene
-// lacks is left out of every kernel.
+// Shader defs (src/passes/shader_library.rs, from the scene): SPHERES compiles in sphere
+// intersection, POINT_LIGHTS point and spot lights and projectors, SPOT_LIGHTS spot lights,
+// PROJECTORS projectors, DIRECTIONAL_LIGHTS directional lights, ENVIRONMENT a constant or map
+// light seen by escaping rays, and each BSDF unit's def its WGSL (src/bsdfs/). Code for what a
+// scene lacks is left out of every kernel. The material kinds' numbers (MATERIAL_<KIND>) are
+// generated from the BSDF registry and follow this file.
 
 // The scene every pass shares (bind group 0): its records, constants, bindings and the readers of
 // tables split into chunks. Layouts mirror src/gpu_scene/layout.rs. Intersecting it is
@@ -138,13 +137,13 @@ struct Material {
     // Scalar textures replacing alpha_u and alpha_v, or NO_TEXTURE.
     alpha_u_texture: u32,
     alpha_v_texture: u32,
-    // A normalmap or bumpmap around the BSDF (common::normal_map's FRAME_*), its texture, the
+    // A normalmap or bumpmap around the BSDF (bsdfs::normalmap's FRAME_*), its texture, the
     // bump map's scale and FRAME_FLAG_* bits.
     frame_kind: u32,
     frame_texture: u32,
     frame_scale: f32,
     frame_flags: u32,
-    // A blend (common::blend): the two materials it chooses between, the probability of the
+    // A blend (bsdfs::blendbsdf): the two materials it chooses between, the probability of the
     // second and the scalar texture that replaces it, or NO_TEXTURE.
     children: vec2<u32>,
     blend_weight: f32,
@@ -191,20 +190,6 @@ struct Light {
     pad_y: u32,
 }
 
-const MATERIAL_DIFFUSE: u32 = 0u;
-const MATERIAL_DIELECTRIC: u32 = 1u;
-const MATERIAL_MIRROR: u32 = 2u;
-const MATERIAL_CONDUCTOR: u32 = 3u;
-const MATERIAL_ROUGH_CONDUCTOR: u32 = 4u;
-const MATERIAL_PLASTIC: u32 = 5u;
-const MATERIAL_ROUGH_PLASTIC: u32 = 6u;
-const MATERIAL_ROUGH_DIELECTRIC: u32 = 7u;
-const MATERIAL_THIN_DIELECTRIC: u32 = 8u;
-const MATERIAL_BLEND: u32 = 9u;
-const MATERIAL_NULL: u32 = 10u;
-const MATERIAL_PRINCIPLED: u32 = 11u;
-const MATERIAL_POLARIZED_PLASTIC: u32 = 12u;
-const MATERIAL_PRINCIPLED_THIN: u32 = 13u;
 const NO_BACK: u32 = 0xffffffffu;
 const LIGHT_TRIANGLE: u32 = 0u;
 const LIGHT_SPHERE: u32 = 1u;

@@ -12,6 +12,7 @@ pub mod spectrum;
 
 use std::path::Path;
 
+use crate::bsdfs::BsdfRegistry;
 use crate::scene::{Scene, SceneError};
 
 pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
@@ -57,8 +58,13 @@ impl Report {
 /// Checks a scene file: every problem a Mitsuba XML file has, at once (see
 /// [`mitsuba::check_with`]); other formats stop at their first.
 pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
+    check_in(path, defines, BsdfRegistry::builtin_ref())
+}
+
+/// [`check_with`], reading Mitsuba BSDFs with the units of `bsdfs` (a program's own among them).
+pub fn check_in(path: &Path, defines: &[(String, String)], bsdfs: &BsdfRegistry) -> Report {
     if is_mitsuba(path) {
-        return mitsuba::check_with(path, defines);
+        return mitsuba::check_file_with(path, defines, bsdfs);
     }
     match load_with(path, defines) {
         Ok(scene) => Report {
@@ -71,13 +77,15 @@ pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
     }
 }
 
-/// [`load_with`], handing each warning (what the scene renders without) to `warn`.
+/// [`load_with`] with the BSDF units of `bsdfs`, handing each warning (what the scene renders
+/// without) to `warn`.
 pub fn load_reporting(
     path: &Path,
     defines: &[(String, String)],
+    bsdfs: &BsdfRegistry,
     mut warn: impl FnMut(&SceneError),
 ) -> Result<Scene, SceneError> {
-    let report = check_with(path, defines);
+    let report = check_in(path, defines, bsdfs);
     report.warnings.iter().for_each(&mut warn);
     report.into_result()
 }

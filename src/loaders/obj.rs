@@ -11,7 +11,7 @@ use crate::error::Location;
 use crate::scene::filter::PixelFilter;
 use crate::scene::mesh::{MeshData, angle_weighted_normals};
 use crate::scene::{
-    Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Triangle, place_triangles,
+    Camera, Integrator, Material, PointLight, Scene, SceneError, Triangle, place_triangles,
 };
 
 /// The triangles of `path` placed by `transform` (a mirroring transform keeps the front side,
@@ -319,9 +319,7 @@ pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, Sce
         integrator: Integrator::default(),
         spp_hint: None,
         materials: vec![Material {
-            bsdf: Bsdf::Diffuse {
-                reflectance: Vec3::splat(0.8),
-            },
+            bsdf: crate::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.8)),
             back: None,
             emission: Vec3::ZERO,
             textures: Default::default(),

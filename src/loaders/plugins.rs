@@ -1,101 +1,10 @@
-//! The Mitsuba 3 plugins the XML loader reads, with every property each one reads, its default
-//! and what hppm does with it: the one list the loader's messages, `hppm plugins` and the
-//! table of docs/scenes.md come from. Tests hold it to the loader: every property listed is one the
+//! The Mitsuba 3 plugins the XML loader reads itself (the BSDFs' rows are their units', in
+//! src/bsdfs/), with every property each one reads, its default and what hppm does with it: the
+//! one list the loader's messages, `hppm plugins` and the table of docs/scenes.md come from. Tests hold it to the loader: every property listed is one the
 //! loader reads, and every property the loader reads is listed (tests/mitsuba_compat.rs).
 
-/// One plugin (or several that read the same properties): its object tag, its `type`s, the
-/// properties it reads and notes on what hppm does with it.
-#[derive(Debug, Clone, Copy)]
-pub struct Plugin {
-    /// `integrator`, `sensor`, `sampler`, `film`, `rfilter`, `shape`, `bsdf`, `texture`,
-    /// `emitter` or `spectrum`.
-    pub object: &'static str,
-    pub kinds: &'static [&'static str],
-    pub properties: &'static [Property],
-    pub notes: &'static str,
-}
-
-/// A property and its default as Mitsuba gives it ("" when it has none or the plugin needs it).
-#[derive(Debug, Clone, Copy)]
-pub struct Property {
-    pub name: &'static str,
-    pub default: &'static str,
-}
-
-const fn p(name: &'static str, default: &'static str) -> Property {
-    Property { name, default }
-}
-
-const IORS: &[Property] = &[
-    p("int_ior", "bk7"),
-    p("ext_ior", "air"),
-    p("specular_reflectance", "1"),
-    p("specular_transmittance", "1"),
-];
-
-const MICROFACET: &[Property] = &[
-    p("int_ior", "bk7"),
-    p("ext_ior", "air"),
-    p("distribution", "beckmann"),
-    p("alpha", "0.1"),
-    p("alpha_u", ""),
-    p("alpha_v", ""),
-    p("sample_visible", "true"),
-    p("specular_reflectance", "1"),
-    p("specular_transmittance", "1"),
-];
-
-const CONDUCTOR: &[Property] = &[
-    p("material", "none"),
-    p("eta", ""),
-    p("k", ""),
-    p("specular_reflectance", "1"),
-];
-
-const ROUGH_CONDUCTOR: &[Property] = &[
-    p("material", "none"),
-    p("eta", ""),
-    p("k", ""),
-    p("specular_reflectance", "1"),
-    p("distribution", "beckmann"),
-    p("alpha", "0.1"),
-    p("alpha_u", ""),
-    p("alpha_v", ""),
-    p("sample_visible", "true"),
-];
-
-const PLASTIC: &[Property] = &[
-    p("int_ior", "polypropylene"),
-    p("ext_ior", "air"),
-    p("diffuse_reflectance", "0.5"),
-    p("specular_reflectance", "1"),
-    p("nonlinear", "false"),
-];
-
-const ROUGH_PLASTIC: &[Property] = &[
-    p("int_ior", "polypropylene"),
-    p("ext_ior", "air"),
-    p("diffuse_reflectance", "0.5"),
-    p("specular_reflectance", "1"),
-    p("nonlinear", "false"),
-    p("distribution", "beckmann"),
-    p("alpha", "0.1"),
-    p("alpha_u", "refused: isotropic only"),
-    p("alpha_v", "refused: isotropic only"),
-    p("sample_visible", "true"),
-];
-
-const POLARIZED_PLASTIC: &[Property] = &[
-    p("int_ior", "polypropylene"),
-    p("ext_ior", "air"),
-    p("diffuse_reflectance", "0.5"),
-    p("specular_reflectance", "1"),
-    p("distribution", "beckmann"),
-    p("alpha", "0.1"),
-    p("alpha_u", "0.1"),
-    p("alpha_v", "0.1"),
-    p("sample_visible", "true"),
-];
+use crate::bsdfs::BsdfRegistry;
+use crate::scene::plugin::{Plugin, Property, p};
 
 const MESH_FILE: &[Property] = &[
     p("filename", ""),
@@ -106,8 +15,8 @@ const MESH_FILE: &[Property] = &[
     p("silhouette_sampling_weight", "1"),
 ];
 
-/// Every plugin the loader reads, in the order docs/scenes.md lists them.
-pub const PLUGINS: &[Plugin] = &[
+/// The plugins before the BSDFs, in the order docs/scenes.md lists them.
+pub const BEFORE_BSDFS: &[Plugin] = &[
     Plugin {
         object: "integrator",
         kinds: &["path", "any other"],
@@ -325,178 +234,11 @@ pub const PLUGINS: &[Plugin] = &[
         notes: "A `<ref>` to a shapegroup, placed after each shape's own `to_world`; each \
                 instance adds its own copy of the triangles.",
     },
-    Plugin {
-        object: "bsdf",
-        kinds: &["diffuse"],
-        properties: &[p("reflectance", "0.5")],
-        notes: "Lambertian, one-sided. `reflectance` may be a texture.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["dielectric", "thindielectric"],
-        properties: IORS,
-        notes: "Smooth. An index is a number or one of Mitsuba's named media (`water`, \
-                `acrylic glass`, `diamond`, ...). `specular_reflectance` and \
-                `specular_transmittance` scale the reflected and transmitted light as in \
-                Mitsuba (tinted glass; not energy-conserving), colours or textures.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["roughdielectric"],
-        properties: MICROFACET,
-        notes: "`distribution` beckmann or ggx; `alpha` or `alpha_u` + `alpha_v` (numbers or \
-                textures); `sample_visible` true only; tints as `dielectric`.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["conductor"],
-        properties: CONDUCTOR,
-        notes: "`material` one of the 71 measured metals of Mitsuba's data (`Au`, `Ag`, `Cu`, \
-                ...) or `none` (a perfect mirror), or `eta` + `k`; `specular_reflectance` may \
-                be a texture.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["roughconductor"],
-        properties: ROUGH_CONDUCTOR,
-        notes: "As `conductor`, rough; anisotropic along the tangent of the frame built from \
-                the normal (Mitsuba orients it along dp/du).",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["plastic"],
-        properties: PLASTIC,
-        notes: "Smooth coating over a diffuse base; both reflectances may be textures.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["roughplastic"],
-        properties: ROUGH_PLASTIC,
-        notes: "Isotropic `alpha` only, a number, as in Mitsuba; the coating's transmittance \
-                table is computed at load.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["pplastic"],
-        properties: POLARIZED_PLASTIC,
-        notes: "As Mitsuba's RGB variants render it (no polarisation): the rough reflection \
-                with the dielectric Fresnel term plus the diffuse base weighted by (1 - F) at \
-                wi and at wo; `alpha`, `alpha_u`, `alpha_v` numbers as in Mitsuba, both \
-                reflectances may be textures.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["twosided"],
-        properties: &[p("allow_transmission", "false")],
-        notes: "One nested BSDF (both sides) or two (front, back); they must not transmit, as \
-                in Mitsuba; `allow_transmission` true (which lets Mitsuba mirror a \
-                transmitting one) is refused.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["principled"],
-        properties: &[
-            p("base_color", "0.5"),
-            p("roughness", "0.5"),
-            p("anisotropic", "0"),
-            p("metallic", "0"),
-            p("spec_trans", "0"),
-            p("eta", "from specular"),
-            p("specular", "0.5"),
-            p("spec_tint", "0"),
-            p("sheen", "0"),
-            p("sheen_tint", "0"),
-            p("flatness", "0"),
-            p("clearcoat", "0"),
-            p("clearcoat_gloss", "0"),
-            p("main_specular_sampling_rate", "1"),
-            p("clearcoat_sampling_rate", "1"),
-            p("diffuse_reflectance_sampling_rate", "1"),
-        ],
-        notes: "Every lobe as Mitsuba 3.9.1 writes it (src/scene/principled.rs), its sampling \
-                too. Every parameter but `eta`, `specular` and the sampling rates may be a \
-                texture, as in Mitsuba (the rest are numbers there too). A continuous BSDF \
-                for the light-transport partition: caustics through it or onto it are path \
-                traced, never photon mapped.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["principledthin"],
-        properties: &[
-            p("base_color", "0.5"),
-            p("roughness", "0.5"),
-            p("anisotropic", "0"),
-            p("spec_trans", "0"),
-            p("eta", "1.5"),
-            p("spec_tint", "0"),
-            p("sheen", "0"),
-            p("sheen_tint", "0"),
-            p("flatness", "0"),
-            p("diff_trans", "0"),
-            p("specular_reflectance_sampling_rate", "1"),
-            p("specular_transmittance_sampling_rate", "1"),
-            p("diffuse_reflectance_sampling_rate", "1"),
-            p("diffuse_transmittance_sampling_rate", "1"),
-        ],
-        notes: "A sheet seen and lit from both sides, as Mitsuba 3.9.1 writes it \
-                (src/scene/principled_thin.rs): diffuse with sheen, diffuse transmission \
-                (`diff_trans` 0 to 2), a GGX reflection and a GGX transmission straight through \
-                (no bending). Every parameter but the sampling rates may be a texture, `eta` \
-                too. It transmits, so `twosided` refuses it (as in Mitsuba). Continuous for \
-                the light-transport partition, as `principled`.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["blendbsdf"],
-        properties: &[p("weight", "")],
-        notes: "Two nested BSDFs; `weight` (a float or scalar texture, clamped to [0, 1]) is the \
-                second's share. Each interaction picks one child by the weight and scatters \
-                with it alone, which is unbiased; Mitsuba 3.9.1 instead samples a child and \
-                divides by both children's densities, which for a delta child (a smooth \
-                conductor or dielectric) next to a continuous one mixes a probability with a \
-                density and renders darker (docs/mitsuba-scenes.md). Not inside `normalmap` or \
-                `bumpmap` (put those around the nested BSDFs).",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["mask"],
-        properties: &[p("opacity", "0.5")],
-        notes: "One nested BSDF; with probability 1 - `opacity` (a float or scalar texture) the \
-                ray passes straight through, as Mitsuba's null lobe: it counts as a bounce of \
-                `max_depth`, shadow rays stop at the surface, and a light path through it keeps \
-                its class (neither S nor D). Not inside `twosided` (Mitsuba refuses it too).",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["null"],
-        properties: &[],
-        notes: "Lets every ray through unchanged, as `mask` with opacity 0.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["normalmap"],
-        properties: &[
-            p("normalmap", ""),
-            p("flip_invalid_normals", "true"),
-            p("use_shadowing_function", "true"),
-        ],
-        notes: "A bitmap `normalmap` (x -> 2x - 1, the normal in the shading frame; `raw` as \
-                Mitsuba's docs ask) and one nested BSDF (inline or `<ref>`), evaluated and \
-                sampled in the perturbed frame with Mitsuba's masking and shadow terminator; \
-                `twosided` inside or outside it.",
-    },
-    Plugin {
-        object: "bsdf",
-        kinds: &["bumpmap"],
-        properties: &[
-            p("scale", "1"),
-            p("flip_invalid_normals", "true"),
-            p("use_shadowing_function", "true"),
-        ],
-        notes: "One bitmap (any name: the height, its luminance) and one nested BSDF; the \
-                normal from the texture's bilinear gradient (Mitsuba's `eval_1_grad`) along \
-                dp/du and dp/dv, otherwise as `normalmap`.",
-    },
+];
+
+/// The plugins after the BSDFs (whose rows come from their units), in the order docs/scenes.md
+/// lists them.
+pub const AFTER_BSDFS: &[Plugin] = &[
     Plugin {
         object: "texture",
         kinds: &["checkerboard"],
@@ -650,10 +392,25 @@ pub const PLUGINS: &[Plugin] = &[
     },
 ];
 
+/// Every plugin the loader reads with the BSDF units of `bsdfs`, in the order docs/scenes.md
+/// lists them.
+pub fn all(bsdfs: &BsdfRegistry) -> Vec<Plugin> {
+    BEFORE_BSDFS
+        .iter()
+        .copied()
+        .chain(bsdfs.plugin_rows())
+        .chain(AFTER_BSDFS.iter().copied())
+        .collect()
+}
+
+/// The loader's own plugins (all but the BSDFs).
+fn own() -> impl Iterator<Item = &'static Plugin> {
+    BEFORE_BSDFS.iter().chain(AFTER_BSDFS)
+}
+
 /// The plugins of `object` by type, for messages: "rectangle, cube, disk, ...".
 pub fn kinds_of(object: &str) -> String {
-    PLUGINS
-        .iter()
+    own()
         .filter(|p| p.object == object)
         .flat_map(|p| p.kinds.iter().copied())
         .filter(|k| *k != "any other")
@@ -661,11 +418,9 @@ pub fn kinds_of(object: &str) -> String {
         .join(", ")
 }
 
-/// The plugin of `object` with `type` `kind`, if the loader reads it.
+/// The plugin of `object` with `type` `kind`, if the loader reads it itself.
 pub fn find(object: &str, kind: &str) -> Option<&'static Plugin> {
-    PLUGINS
-        .iter()
-        .find(|p| p.object == object && p.kinds.contains(&kind))
+    own().find(|p| p.object == object && p.kinds.contains(&kind))
 }
 
 /// The properties `kind` of `object` reads, for messages: "int_ior, ext_ior".
@@ -682,10 +437,10 @@ pub fn properties_of(object: &str, kind: &str) -> String {
 }
 
 /// The table in Markdown (`hppm plugins`, docs/scenes.md).
-pub fn markdown() -> String {
+pub fn markdown(bsdfs: &BsdfRegistry) -> String {
     let mut out = String::from("| object | type | properties (Mitsuba's defaults) | notes |\n");
     out.push_str("|---|---|---|---|\n");
-    for plugin in PLUGINS {
+    for plugin in all(bsdfs) {
         let kinds: Vec<String> = plugin
             .kinds
             .iter()

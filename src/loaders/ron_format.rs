@@ -42,11 +42,14 @@ use std::path::Path;
 use glam::{Mat4, Vec3, Vec4};
 use serde::Deserialize;
 
+use crate::bsdfs::conductor::Mirror;
+use crate::bsdfs::dielectric::Dielectric;
+use crate::bsdfs::diffuse::Diffuse;
 use crate::error::Location;
 use crate::ron_span::{self, Item, Key, Kind, Outline, Token};
 use crate::scene::filter::PixelFilter;
 use crate::scene::{
-    Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, Tint, mesh,
+    Bsdf, Camera, Integrator, Material, PointLight, Scene, SceneError, Sphere, mesh,
 };
 
 #[derive(Deserialize)]
@@ -524,15 +527,9 @@ impl<'a> Builder<'a> {
 
 fn bsdf_of(m: &MaterialFile) -> Bsdf {
     match *m {
-        MaterialFile::Diffuse { reflectance } => Bsdf::Diffuse {
-            reflectance: reflectance.into(),
-        },
-        MaterialFile::Dielectric { int_ior, ext_ior } => Bsdf::Dielectric {
-            int_ior,
-            ext_ior,
-            tint: Tint::NONE,
-        },
-        MaterialFile::Mirror => Bsdf::Mirror,
+        MaterialFile::Diffuse { reflectance } => Diffuse::bsdf(reflectance.into()),
+        MaterialFile::Dielectric { int_ior, ext_ior } => Dielectric::bsdf(int_ior, ext_ior),
+        MaterialFile::Mirror => Mirror::bsdf(),
     }
 }
 

@@ -29,8 +29,8 @@ pub(crate) use partition::{check_glossy_threshold, depth_rule, glossy_defs, reso
 pub use registry::{NeedTest, Registry};
 
 pub use shader_library::{
-    COMMON_MODULES, PASS_DEFS, SCENE_DEFS, all_scene_defs, common_modules, scene_defs,
-    shader_library,
+    COMMON_MODULES, PASS_DEFS, PATH_MODULES, SCENE_DEFS, all_scene_defs, common_modules,
+    scene_def_names, scene_defs, shader_library,
 };
 
 /// The built-in pass kinds, in the order `hppm info` lists them ([`Registry::builtin`] holds

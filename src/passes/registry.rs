@@ -13,6 +13,7 @@
 
 use std::path::Path;
 
+use crate::bsdfs::{BsdfPlugin, BsdfRegistry};
 use crate::gpu::shaders::{ShaderFile, ShaderLibrary, WgslModule, defs_of};
 use crate::gpu_scene::TablePlacement;
 use crate::graph::pass::{PassKind, SceneNeed};
@@ -23,23 +24,27 @@ use crate::scene::{Scene, SceneFeatures};
 /// need as the pass declared it.
 pub type NeedTest = fn(&Scene, &SceneFeatures, &SceneNeed) -> bool;
 
-/// Pass kinds, importable WGSL modules and scene-need tests, by value.
+/// Pass kinds, importable WGSL modules, scene-need tests and the BSDF units, by value.
 #[derive(Clone)]
 pub struct Registry {
     kinds: Vec<&'static PassKind>,
-    modules: Vec<WgslModule>,
+    /// Modules a program added, composed after hppm's own.
+    modules: Vec<ShaderFile>,
     needs: Vec<(&'static str, NeedTest)>,
+    bsdfs: BsdfRegistry,
 }
 
 impl std::fmt::Debug for Registry {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let kinds: Vec<&str> = self.kinds.iter().map(|k| k.name).collect();
-        let modules: Vec<&str> = self.modules.iter().map(|m| m.path()).collect();
+        let modules: Vec<&str> = self.modules.iter().map(|m| m.path).collect();
+        let bsdfs: Vec<&str> = self.bsdfs.units().iter().map(|u| u.name).collect();
         let needs: Vec<&str> = self.needs.iter().map(|n| n.0).collect();
         f.debug_struct("Registry")
             .field("kinds", &kinds)
             .field("modules", &modules)
             .field("needs", &needs)
+            .field("bsdfs", &bsdfs)
             .finish()
     }
 }
@@ -55,7 +60,7 @@ impl Registry {
     pub fn builtin() -> Self {
         Self {
             kinds: super::builtin_kinds().to_vec(),
-            modules: super::common_modules(),
+            modules: Vec::new(),
             needs: vec![
                 (super::SPECULAR_SURFACE.name, |_, features, _| {
                     features.has_specular_surface()
@@ -65,6 +70,7 @@ impl Registry {
                     |_, features, need| features.has_specular_or_glossy_surface(need.glossy_below),
                 ),
             ],
+            bsdfs: BsdfRegistry::builtin(),
         }
     }
 
@@ -81,8 +87,21 @@ impl Registry {
     /// Adds an importable WGSL module (its file's `#define_import_path` names it), after the
     /// ones already registered: it may import those, and later ones may import it.
     pub fn with_module(mut self, module: ShaderFile) -> Self {
-        self.modules.push(WgslModule::File(module));
+        self.modules.push(module);
         self
+    }
+
+    /// Adds a BSDF unit (its Mitsuba types, kinds and WGSL; see [`BsdfRegistry::with`]): scenes
+    /// loaded with [`Self::bsdfs`] may use it, and every library this registry builds composes
+    /// its WGSL and dispatches to it.
+    pub fn with_bsdf(mut self, unit: &'static BsdfPlugin) -> Self {
+        self.bsdfs = self.bsdfs.with(unit);
+        self
+    }
+
+    /// The BSDF units scenes are loaded with and kernels dispatch to.
+    pub fn bsdfs(&self) -> &BsdfRegistry {
+        &self.bsdfs
     }
 
     /// Adds (or replaces) the test that answers the scene need `name` (a [`SceneNeed`] a pass
@@ -103,9 +122,13 @@ impl Registry {
         self.kinds.iter().find(|k| k.name == name).copied()
     }
 
-    /// The importable modules, in dependency order.
-    pub fn modules(&self) -> &[WgslModule] {
-        &self.modules
+    /// The importable modules, in dependency order: hppm's own with the BSDFs' generated from
+    /// [`Self::bsdfs`], then the program's.
+    pub fn modules(&self) -> Vec<WgslModule> {
+        let own = super::common_modules(&self.bsdfs);
+        own.into_iter()
+            .chain(self.modules.iter().map(|&file| WgslModule::File(file)))
+            .collect()
     }
 
     /// Whether `scene` (with `features`) meets `need`, as the need's registered test says.
@@ -144,12 +167,12 @@ impl Registry {
         scene: &Scene,
         placement: &TablePlacement,
     ) -> Result<ShaderLibrary, crate::Error> {
-        let mut defs = super::scene_defs(&scene.features());
+        let mut defs = super::scene_defs(&scene.features(), &self.bsdfs);
         if crate::scene::texture::has_float_bitmaps(&scene.textures) {
             defs.extend(defs_of(["FLOAT_TEXELS"]));
         }
         defs.extend(placement.defs());
-        Ok(ShaderLibrary::new(float_atomics, defs, &self.modules)?)
+        Ok(ShaderLibrary::new(float_atomics, defs, &self.modules())?)
     }
 
     /// Every kind's reference (`hppm info --markdown`, docs/pass-kinds.md).
@@ -178,10 +201,10 @@ impl Registry {
     /// the WGSL struct each mirrors, composed with every scene def: the WGSL names checked, or
     /// every difference found. A pass's own test calls this.
     pub fn check_layouts(&self) -> Result<Vec<&'static str>, Vec<String>> {
-        let mut defs = super::all_scene_defs();
+        let mut defs = super::all_scene_defs(&self.bsdfs);
         defs.extend(defs_of(["FLOAT_TEXELS"]));
         let library =
-            ShaderLibrary::new(true, defs, &self.modules).map_err(|e| vec![e.to_string()])?;
+            ShaderLibrary::new(true, defs, &self.modules()).map_err(|e| vec![e.to_string()])?;
         let shared = super::hit_points::LAYOUTS
             .iter()
             .chain(crate::gpu_scene::resources::LAYOUTS)

@@ -1,18 +1,20 @@
-//! The WGSL the built-in passes compose against: the shared modules of `shaders/common/`, the
-//! shader defs a scene's features set, and the library built from them for one scene.
+//! The WGSL the built-in passes compose against: the scene's module, the shared modules of
+//! `shaders/common/` with the BSDF units' between them, the shader defs a scene's features set,
+//! and the library built from them for one scene.
 
 use std::collections::HashMap;
 
 use naga_oil::compose::ShaderDefValue;
 
 use super::Registry;
+use crate::bsdfs::BsdfRegistry;
 use crate::gpu::shaders::{ShaderFile, ShaderLibrary, WgslModule, defs_of};
 use crate::gpu_scene::TablePlacement;
 use crate::scene::{Scene, SceneFeatures};
 use crate::shader_file;
 
-/// Importable modules under `shaders/common/`, in dependency order (a module may import only
-/// those above it); [`common_modules`] puts the scene's own (`common::scene`) before them.
+/// Importable modules under `shaders/common/` that the BSDFs' WGSL may use, in dependency order
+/// (a module may import only those above it).
 pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/rng.wgsl"),
     shader_file!("shaders/common/sampling.wgsl"),
@@ -26,17 +28,11 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     // Before lights: a spot's or projector's texture.
     shader_file!("shaders/common/texture.wgsl"),
     shader_file!("shaders/common/lights.wgsl"),
-    shader_file!("shaders/common/fresnel.wgsl"),
-    shader_file!("shaders/common/microfacet.wgsl"),
-    shader_file!("shaders/common/bsdf.wgsl"),
-    shader_file!("shaders/common/conductor.wgsl"),
-    shader_file!("shaders/common/plastic.wgsl"),
-    shader_file!("shaders/common/rough_dielectric.wgsl"),
-    shader_file!("shaders/common/principled.wgsl"),
-    shader_file!("shaders/common/principled_thin.wgsl"),
-    shader_file!("shaders/common/normal_map.wgsl"),
-    shader_file!("shaders/common/blend.wgsl"),
-    shader_file!("shaders/common/material.wgsl"),
+];
+
+/// Importable modules under `shaders/common/` that use the BSDFs' (the material dispatch among
+/// them), in dependency order.
+pub const PATH_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/scatter.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
@@ -45,47 +41,49 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     shader_file!("shaders/common/photon_grid.wgsl"),
 ];
 
-/// Every module the built-in passes import, in dependency order: the scene's bindings and
-/// readers (`common::scene`, [`crate::gpu_scene::wgsl_module`]), then [`COMMON_MODULES`].
-pub fn common_modules() -> Vec<WgslModule> {
-    std::iter::once(crate::gpu_scene::wgsl_module())
-        .chain(COMMON_MODULES.iter().map(|&file| WgslModule::File(file)))
+/// Every module the built-in passes import, in dependency order: the scene's bindings, readers
+/// and material kinds (`common::scene`), [`COMMON_MODULES`], the BSDFs' modules and the material
+/// dispatch generated from `bsdfs`, then [`PATH_MODULES`].
+pub fn common_modules(bsdfs: &BsdfRegistry) -> Vec<WgslModule> {
+    let files = |files: &'static [ShaderFile]| files.iter().map(|&f| WgslModule::File(f));
+    std::iter::once(crate::gpu_scene::wgsl_module(bsdfs))
+        .chain(files(COMMON_MODULES))
+        .chain(bsdfs.wgsl_modules())
+        .chain(files(PATH_MODULES))
         .collect()
 }
 
-/// Shader defs that compile in code for scene features; without them that code is left out.
+/// Shader defs that compile in code for scene features other than BSDFs (each BSDF unit names
+/// its own); without them that code is left out.
 pub const SCENE_DEFS: &[&str] = &[
-    "DIELECTRIC",
     "SPHERES",
     "POINT_LIGHTS",
     "SPOT_LIGHTS",
     "PROJECTORS",
     "DIRECTIONAL_LIGHTS",
     "ENVIRONMENT",
-    "CONDUCTOR",
-    "PLASTIC",
-    "ROUGH_DIELECTRIC",
     "TEXTURES",
     "FLOAT_TEXELS",
     "NORMAL_MAPS",
-    "BLENDS",
-    "PRINCIPLED",
 ];
 
-/// The shader defs a scene needs: `DIELECTRIC` when a shape has a smooth or thin dielectric
-/// BSDF, `CONDUCTOR` a conductor with a Fresnel term (smooth or rough), `PLASTIC` a plastic
-/// (smooth or rough), `ROUGH_DIELECTRIC` a rough dielectric, `SPHERES` when it has spheres,
-/// `POINT_LIGHTS` when it has a point or spot light or a projector, `SPOT_LIGHTS` a spot light,
-/// `PROJECTORS` a projector, `DIRECTIONAL_LIGHTS` a directional light, `ENVIRONMENT` a constant
-/// or map light, `TEXTURES` when a material or a light has a texture (the
-/// scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap (with `TEXTURES`), `BLENDS`
-/// a blendbsdf, mask or null BSDF, `PRINCIPLED` a principled BSDF.
-pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
+/// Every scene def there is with `bsdfs`: [`SCENE_DEFS`] and the BSDF units' defs.
+pub fn scene_def_names(bsdfs: &BsdfRegistry) -> Vec<&'static str> {
+    SCENE_DEFS.iter().copied().chain(bsdfs.all_defs()).collect()
+}
+
+/// The shader defs a scene needs: those of the BSDF units whose kinds its materials use
+/// (`DIELECTRIC`, `CONDUCTOR`, `PLASTIC`, `ROUGH_DIELECTRIC`, `BLENDS`, `PRINCIPLED` for hppm's
+/// own), `SPHERES` when it has spheres, `POINT_LIGHTS` when it has a point or spot light or a
+/// projector, `SPOT_LIGHTS` a spot light, `PROJECTORS` a projector, `DIRECTIONAL_LIGHTS` a
+/// directional light, `ENVIRONMENT` a constant or map light, `TEXTURES` when a material or a
+/// light has a texture (the scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap
+/// (with `TEXTURES`).
+pub fn scene_defs(
+    features: &SceneFeatures,
+    bsdfs: &BsdfRegistry,
+) -> HashMap<String, ShaderDefValue> {
     let present = [
-        ("DIELECTRIC", features.dielectric),
-        ("CONDUCTOR", features.conductor),
-        ("PLASTIC", features.plastic),
-        ("ROUGH_DIELECTRIC", features.rough_dielectric),
         ("SPHERES", features.spheres),
         ("POINT_LIGHTS", features.point_lights),
         ("SPOT_LIGHTS", features.spot_lights),
@@ -94,10 +92,9 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
         ("ENVIRONMENT", features.environment),
         ("TEXTURES", features.textures),
         ("NORMAL_MAPS", features.normal_maps),
-        ("BLENDS", features.blends),
-        ("PRINCIPLED", features.principled),
     ];
-    defs_of(present.iter().filter(|(_, on)| *on).map(|(name, _)| *name))
+    let scene = present.iter().filter(|(_, on)| *on).map(|(name, _)| *name);
+    defs_of(scene.chain(bsdfs.defs_for(&features.bsdfs)))
 }
 
 /// Shader defs a pass sets for itself from its params (on top of the scene's): `GLOSSY` compiles
@@ -106,8 +103,8 @@ pub fn scene_defs(features: &SceneFeatures) -> HashMap<String, ShaderDefValue> {
 pub const PASS_DEFS: &[&str] = &["GLOSSY"];
 
 /// Every scene def set: kernels composed this way contain all the code there is.
-pub fn all_scene_defs() -> HashMap<String, ShaderDefValue> {
-    defs_of(SCENE_DEFS.iter().copied())
+pub fn all_scene_defs(bsdfs: &BsdfRegistry) -> HashMap<String, ShaderDefValue> {
+    defs_of(scene_def_names(bsdfs))
 }
 
 /// The shader library the built-in passes compose against for `scene` on a device with or

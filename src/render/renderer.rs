@@ -307,7 +307,7 @@ impl<'a> Renderer<'a> {
         let features = scene.features();
         let pruned = graph.prune(|need| registry.scene_meets(scene, &features, need))?;
         graph.check_transport(&paths::CLASSES)?;
-        let mut gpu_scene = GpuScene::new(scene, width, height);
+        let mut gpu_scene = GpuScene::with_bsdfs(scene, width, height, registry.bsdfs())?;
         let scene_hash = scene_fingerprint(&gpu_scene);
         let placement = TablePlacement::for_adapter(gpu, &gpu_scene)?;
         let shaders = registry.shader_library(gpu.has_float_atomics(), scene, &placement)?;

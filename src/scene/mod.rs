@@ -9,11 +9,7 @@ pub mod emitter;
 pub mod filter;
 
 pub mod mesh;
-
-pub mod normal_map;
-
-pub mod principled;
-pub mod principled_thin;
+pub mod plugin;
 
 pub mod texture;
 
@@ -22,6 +18,8 @@ use std::path::PathBuf;
 use glam::Vec3;
 
 use crate::error::Location;
+
+pub use bsdf::Bsdf;
 
 /// A perspective camera: a pinhole, or a thin lens (`lens`). `fov_x_deg` is the full
 /// horizontal field of view of the whole film; loaders that read a vertical fov convert it with
@@ -86,288 +84,7 @@ impl Camera {
     }
 }
 
-/// Microfacet normal distributions (Mitsuba's `distribution`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Distribution {
-    Beckmann,
-    Ggx,
-}
-
-/// A rough surface's microfacet distribution: roughness `alpha_u` along the tangent (local x)
-/// and `alpha_v` along the bitangent; equal for an isotropic surface. Sampled by visible
-/// normals.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Microfacet {
-    pub distribution: Distribution,
-    pub alpha_u: f32,
-    pub alpha_v: f32,
-}
-
-/// A dielectric's `specular_reflectance` and `specular_transmittance` (Mitsuba's, 1 by
-/// default): factors on the light it reflects and transmits. Not physical (energy is not
-/// conserved when they differ from 1), but scenes use them to tint glass. Textures on them sit
-/// in the material's specular (reflectance) and diffuse (transmittance) texture slots.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Tint {
-    pub reflectance: Vec3,
-    pub transmittance: Vec3,
-}
-
-impl Tint {
-    /// Mitsuba's default: no tint.
-    pub const NONE: Tint = Tint {
-        reflectance: Vec3::ONE,
-        transmittance: Vec3::ONE,
-    };
-
-    /// The factor on reflected (`true`) or transmitted light.
-    pub fn factor(&self, reflected: bool) -> Vec3 {
-        if reflected {
-            self.reflectance
-        } else {
-            self.transmittance
-        }
-    }
-}
-
-/// One side's BSDF, as Mitsuba 3 defines each plugin (src/scene/bsdf.rs is the reference).
-/// Reflective BSDFs are one-sided (black from the back) unless the material has a `back`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Bsdf {
-    /// Lambertian.
-    Diffuse { reflectance: Vec3 },
-    /// Smooth dielectric with Fresnel-weighted reflection and refraction, no absorption.
-    Dielectric {
-        int_ior: f32,
-        ext_ior: f32,
-        tint: Tint,
-    },
-    /// Perfect mirror of reflectance 1 (Mitsuba `conductor` with `material="none"`).
-    Mirror,
-    /// Smooth conductor: Fresnel reflectance of the complex index eta + i k, times `specular`.
-    Conductor { eta: Vec3, k: Vec3, specular: Vec3 },
-    RoughConductor {
-        eta: Vec3,
-        k: Vec3,
-        specular: Vec3,
-        microfacet: Microfacet,
-    },
-    /// A diffuse base under a smooth dielectric coating (Mitsuba `plastic`).
-    Plastic {
-        int_ior: f32,
-        ext_ior: f32,
-        diffuse: Vec3,
-        specular: Vec3,
-        nonlinear: bool,
-    },
-    /// The same under a rough coating (isotropic, as Mitsuba's `roughplastic`).
-    RoughPlastic {
-        int_ior: f32,
-        ext_ior: f32,
-        diffuse: Vec3,
-        specular: Vec3,
-        nonlinear: bool,
-        microfacet: Microfacet,
-    },
-    /// Mitsuba's `pplastic` as its RGB variants render it: a microfacet reflection with the
-    /// dielectric Fresnel term plus a Lambertian base weighted by the two smooth refractions
-    /// through the interface, (1 - F(cos wi)) (1 - F(cos wo)); no internal reflections.
-    PolarizedPlastic {
-        int_ior: f32,
-        ext_ior: f32,
-        diffuse: Vec3,
-        specular: Vec3,
-        microfacet: Microfacet,
-    },
-    RoughDielectric {
-        int_ior: f32,
-        ext_ior: f32,
-        microfacet: Microfacet,
-        tint: Tint,
-    },
-    /// A thin slab of dielectric: reflects or passes straight through.
-    ThinDielectric {
-        int_ior: f32,
-        ext_ior: f32,
-        tint: Tint,
-    },
-    /// Lets light through unchanged (Mitsuba `null`): a vertex that is neither S nor D.
-    Null,
-    /// One of two materials, `second` with probability `weight` (clamped to [0, 1]; a texture
-    /// in the side's `blend_weight` replaces it), chosen anew at every interaction (Mitsuba
-    /// `blendbsdf`; `mask` is a blend of `null` and its BSDF by opacity). Indices into
-    /// `Scene::materials`, always below the blend's own.
-    Blend {
-        weight: f32,
-        first: u32,
-        second: u32,
-    },
-    /// Mitsuba 3's `principled` (src/scene/principled.rs), a continuous BSDF: never an S
-    /// vertex of the partition, whatever its roughness.
-    Principled(principled::Principled),
-    /// Mitsuba 3's `principledthin` (src/scene/principled_thin.rs): a sheet lit and seen from
-    /// both sides that transmits without bending; continuous like `principled`.
-    PrincipledThin(principled_thin::PrincipledThin),
-}
-
-impl Bsdf {
-    /// A BSDF with a delta lobe can make an S vertex of the light-transport partition (for
-    /// plastic, when its coating's lobe is sampled).
-    pub fn is_delta(&self) -> bool {
-        matches!(
-            self,
-            Bsdf::Dielectric { .. }
-                | Bsdf::Mirror
-                | Bsdf::Conductor { .. }
-                | Bsdf::Plastic { .. }
-                | Bsdf::ThinDielectric { .. }
-        )
-    }
-
-    /// The roughness `glossy_threshold` is compared with: the larger of the lobe's alpha_u and
-    /// alpha_v (untextured), or `None` without a microfacet lobe.
-    pub fn microfacet_roughness(&self) -> Option<f32> {
-        match self {
-            Bsdf::RoughConductor { microfacet, .. }
-            | Bsdf::RoughPlastic { microfacet, .. }
-            | Bsdf::PolarizedPlastic { microfacet, .. }
-            | Bsdf::RoughDielectric { microfacet, .. } => {
-                Some(microfacet.alpha_u.max(microfacet.alpha_v))
-            }
-            _ => None,
-        }
-    }
-
-    /// A BSDF with a microfacet lobe (rough conductor, dielectric or plastic's coating): an S
-    /// vertex of the partition when its roughness is below a graph's `glossy_threshold`.
-    pub fn has_microfacet_lobe(&self) -> bool {
-        matches!(
-            self,
-            Bsdf::RoughConductor { .. }
-                | Bsdf::RoughPlastic { .. }
-                | Bsdf::PolarizedPlastic { .. }
-                | Bsdf::RoughDielectric { .. }
-        )
-    }
-
-    /// Transmits light to the other side (such a BSDF has no back face to be given).
-    pub fn transmits(&self) -> bool {
-        matches!(
-            self,
-            Bsdf::Dielectric { .. }
-                | Bsdf::RoughDielectric { .. }
-                | Bsdf::ThinDielectric { .. }
-                | Bsdf::Null
-                | Bsdf::PrincipledThin(_)
-        )
-    }
-
-    /// Every number it holds is finite and every index of refraction positive.
-    fn is_valid(&self) -> bool {
-        let finite = |v: Vec3| v.is_finite();
-        let ior = |a: f32, b: f32| a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0;
-        let rough = |m: &Microfacet| {
-            m.alpha_u.is_finite() && m.alpha_v.is_finite() && m.alpha_u >= 0.0 && m.alpha_v >= 0.0
-        };
-        match self {
-            Bsdf::Diffuse { reflectance } => finite(*reflectance),
-            Bsdf::Dielectric {
-                int_ior,
-                ext_ior,
-                tint,
-            }
-            | Bsdf::ThinDielectric {
-                int_ior,
-                ext_ior,
-                tint,
-            } => ior(*int_ior, *ext_ior) && finite(tint.reflectance) && finite(tint.transmittance),
-            Bsdf::Mirror | Bsdf::Null => true,
-            Bsdf::Blend { weight, .. } => weight.is_finite(),
-            Bsdf::Principled(p) => {
-                let scalars = [
-                    p.roughness,
-                    p.anisotropic,
-                    p.metallic,
-                    p.spec_trans,
-                    p.spec_tint,
-                    p.sheen,
-                    p.sheen_tint,
-                    p.flatness,
-                    p.clearcoat,
-                    p.clearcoat_gloss,
-                    p.spec_srate,
-                    p.clearcoat_srate,
-                    p.diffuse_srate,
-                ];
-                finite(p.base_color) && scalars.iter().all(|v| v.is_finite()) && p.eta > 0.0
-            }
-            Bsdf::PrincipledThin(p) => {
-                let scalars = [
-                    p.roughness,
-                    p.anisotropic,
-                    p.spec_trans,
-                    p.spec_tint,
-                    p.sheen,
-                    p.sheen_tint,
-                    p.flatness,
-                    p.diff_trans,
-                    p.spec_reflect_srate,
-                    p.spec_trans_srate,
-                    p.diff_reflect_srate,
-                    p.diff_trans_srate,
-                ];
-                finite(p.base_color) && scalars.iter().all(|v| v.is_finite()) && p.eta > 0.0
-            }
-            Bsdf::Conductor { eta, k, specular } => finite(*eta) && finite(*k) && finite(*specular),
-            Bsdf::RoughConductor {
-                eta,
-                k,
-                specular,
-                microfacet,
-            } => finite(*eta) && finite(*k) && finite(*specular) && rough(microfacet),
-            Bsdf::Plastic {
-                int_ior,
-                ext_ior,
-                diffuse,
-                specular,
-                ..
-            } => ior(*int_ior, *ext_ior) && finite(*diffuse) && finite(*specular),
-            Bsdf::RoughPlastic {
-                int_ior,
-                ext_ior,
-                diffuse,
-                specular,
-                microfacet,
-                ..
-            }
-            | Bsdf::PolarizedPlastic {
-                int_ior,
-                ext_ior,
-                diffuse,
-                specular,
-                microfacet,
-            } => {
-                ior(*int_ior, *ext_ior)
-                    && finite(*diffuse)
-                    && finite(*specular)
-                    && rough(microfacet)
-            }
-            Bsdf::RoughDielectric {
-                int_ior,
-                ext_ior,
-                microfacet,
-                tint,
-            } => {
-                ior(*int_ior, *ext_ior)
-                    && rough(microfacet)
-                    && finite(tint.reflectance)
-                    && finite(tint.transmittance)
-            }
-        }
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Material {
     /// What the front (normal) side sees.
     pub bsdf: Bsdf,
@@ -422,37 +139,14 @@ pub struct SideTextures {
     pub frame: Option<FramePerturbation>,
     /// A blend's weight (`blendbsdf`) or opacity (`mask`), looked up as a scalar.
     pub blend_weight: Option<u32>,
-    /// `principled`'s scalar parameters in [`PRINCIPLED_TEXTURED`]'s order, or
-    /// `principledthin`'s in [`PRINCIPLED_THIN_TEXTURED`]'s (base colour, roughness and
-    /// metallic are `diffuse`, `alpha_u` and `alpha_v`).
-    pub principled: [Option<u32>; PRINCIPLED_TEXTURED.len()],
+    /// Scalar textures on components of the record's `specular`, `eta` and `k`
+    /// ([`bsdf::GpuMaterial::field_textures`]), in an order the BSDF defines (`principled`
+    /// keeps eight of its parameters there).
+    pub fields: [Option<u32>; MAX_FIELD_TEXTURES],
 }
 
-/// The parameters of Mitsuba's `principled` besides base colour, roughness and metallic, each of
-/// which its plugin reads as a texture (`eta` and `specular` are plain floats there).
-pub const PRINCIPLED_TEXTURED: [&str; 8] = [
-    "anisotropic",
-    "spec_trans",
-    "spec_tint",
-    "sheen",
-    "sheen_tint",
-    "flatness",
-    "clearcoat",
-    "clearcoat_gloss",
-];
-
-/// The same for Mitsuba's `principledthin`, each a texture there (`eta` too; the sampling
-/// rates are floats).
-pub const PRINCIPLED_THIN_TEXTURED: [&str; 8] = [
-    "anisotropic",
-    "spec_trans",
-    "spec_tint",
-    "sheen",
-    "sheen_tint",
-    "flatness",
-    "diff_trans",
-    "eta",
-];
+/// Field textures a side may have ([`SideTextures::fields`]).
+pub const MAX_FIELD_TEXTURES: usize = 8;
 
 impl SideTextures {
     pub fn any(&self) -> bool {
@@ -470,7 +164,7 @@ impl SideTextures {
             self.blend_weight,
         ]
         .into_iter()
-        .chain(self.principled.iter().copied())
+        .chain(self.fields.iter().copied())
     }
 }
 
@@ -548,17 +242,11 @@ impl Default for Integrator {
 }
 
 /// Which material, light and shape kinds a scene uses (only those some shape references).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct SceneFeatures {
-    pub diffuse: bool,
-    /// Smooth or thin dielectric.
-    pub dielectric: bool,
-    pub mirror: bool,
-    /// Smooth or rough conductor with a Fresnel term.
-    pub conductor: bool,
-    /// Smooth or rough plastic.
-    pub plastic: bool,
-    pub rough_dielectric: bool,
+    /// The BSDF kinds its materials use ([`bsdf::BsdfModel::kind`]), each once, in the order
+    /// first met: which BSDFs' WGSL the kernels compile in.
+    pub bsdfs: Vec<&'static str>,
     /// Some BSDF has a delta lobe (S vertices exist).
     pub delta: bool,
     /// Some BSDF has a microfacet lobe (S vertices below a `glossy_threshold`).
@@ -584,10 +272,14 @@ pub struct SceneFeatures {
     pub normal_maps: bool,
     /// Some shape's material is a blend or mask, or lets light through (`null`).
     pub blends: bool,
-    pub principled: bool,
 }
 
 impl SceneFeatures {
+    /// Some material uses the BSDF kind `kind`.
+    pub fn has_bsdf(&self, kind: &str) -> bool {
+        self.bsdfs.contains(&kind)
+    }
+
     /// Delta surfaces are the S vertices of caustic paths: without one there are no caustics.
     pub fn has_specular_surface(&self) -> bool {
         self.delta
@@ -624,16 +316,10 @@ impl std::fmt::Display for SceneFeatures {
         write!(
             f,
             "materials {}, lights {}, shapes {}",
-            list(&[
-                ("diffuse", self.diffuse),
-                ("dielectric", self.dielectric),
-                ("mirror", self.mirror),
-                ("conductor", self.conductor),
-                ("plastic", self.plastic),
-                ("rough dielectric", self.rough_dielectric),
-                ("blend/mask", self.blends),
-                ("principled", self.principled),
-            ]),
+            match self.bsdfs.as_slice() {
+                [] => "none".to_string(),
+                kinds => kinds.join("+"),
+            },
             list(&[
                 ("area", self.area_lights),
                 ("point", self.point_lights && !self.spot_lights),
@@ -842,18 +528,10 @@ impl Scene {
             }
             let m = m.1;
             for bsdf in m.bsdfs() {
-                match bsdf {
-                    Bsdf::Null | Bsdf::Blend { .. } => f.blends = true,
-                    Bsdf::Principled(_) | Bsdf::PrincipledThin(_) => f.principled = true,
-                    Bsdf::Diffuse { .. } => f.diffuse = true,
-                    Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => f.dielectric = true,
-                    Bsdf::Mirror => f.mirror = true,
-                    Bsdf::Conductor { .. } | Bsdf::RoughConductor { .. } => f.conductor = true,
-                    Bsdf::Plastic { .. }
-                    | Bsdf::RoughPlastic { .. }
-                    | Bsdf::PolarizedPlastic { .. } => f.plastic = true,
-                    Bsdf::RoughDielectric { .. } => f.rough_dielectric = true,
+                if !f.has_bsdf(bsdf.kind()) {
+                    f.bsdfs.push(bsdf.kind());
                 }
+                f.blends |= !bsdf.children().is_empty() || bsdf.lobes().pass_through;
                 f.delta |= bsdf.is_delta();
                 f.microfacet |= bsdf.has_microfacet_lobe();
                 if let Some(alpha) = bsdf.microfacet_roughness() {
@@ -885,11 +563,9 @@ impl Scene {
             };
             out.push((i, m));
             for bsdf in m.bsdfs() {
-                if let Bsdf::Blend { first, second, .. } = *bsdf
-                    && (first as usize) < i
-                    && (second as usize) < i
-                {
-                    pending.extend([first as usize, second as usize]);
+                let children = bsdf.children();
+                if children.iter().all(|&c| (c as usize) < i) {
+                    pending.extend(children.iter().map(|&c| c as usize));
                 }
             }
         }
@@ -972,13 +648,12 @@ impl Scene {
         for (i, m) in self.materials.iter().enumerate() {
             let sides = [m.textures.front, m.textures.back];
             // A blend's children come before it: choosing among them always ends.
-            let children_ok = m.bsdfs().all(|b| match *b {
-                Bsdf::Blend { first, second, .. } => (first as usize) < i && (second as usize) < i,
-                _ => true,
-            });
+            let children_ok = m
+                .bsdfs()
+                .all(|b| b.children().iter().all(|&c| (c as usize) < i));
             let ok = finite(m.emission)
                 && children_ok
-                && m.bsdfs().all(Bsdf::is_valid)
+                && m.bsdfs().all(|b| b.is_valid())
                 && sides.iter().all(|s| s.all().all(texture_ok))
                 && sides.iter().all(|s| {
                     s.frame.is_none_or(|f| match f.kind {

@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::{Document, Node};
 
+use crate::bsdfs::BsdfRegistry;
 use crate::error::{Location, edit_distance};
 use crate::loaders::{Report, plugins, spectrum};
 use crate::scene::emitter::{DirectionalLight, EnvMap, Environment, Projector, SpotLight};
@@ -28,9 +29,7 @@ use crate::scene::filter::{
 };
 use crate::scene::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use crate::scene::{
-    Bsdf, Camera, Crop, Distribution, FramePerturbation, Integrator, Lens, Material,
-    MaterialTextures, Microfacet, PRINCIPLED_TEXTURED, PRINCIPLED_THIN_TEXTURED, PerturbationKind,
-    PointLight, Scene, SceneError, SideTextures, Sphere, Tint, bsdf, mesh,
+    Camera, Crop, Integrator, Lens, Material, PointLight, Scene, SceneError, Sphere, mesh,
 };
 
 mod bsdfs;
@@ -39,10 +38,11 @@ mod sensors;
 mod shapes;
 mod textures;
 
-/// Mitsuba's default BSDF for a shape that names none.
-const DEFAULT_BSDF: Bsdf = Bsdf::Diffuse {
-    reflectance: Vec3::splat(0.5),
-};
+/// Mitsuba's default BSDF for a shape that names none: diffuse, reflectance 0.5.
+fn default_bsdf() -> crate::bsdfs::Sides {
+    let bsdf = crate::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.5));
+    crate::bsdfs::Sides::one(bsdf, Default::default())
+}
 
 /// The widest pixel filter accepted (radius or stddev, in pixels).
 const MAX_FILTER_WIDTH: f32 = 16.0;
@@ -79,14 +79,29 @@ pub fn parse_with(
 /// or declaration that cannot be read is reported and skipped, and reading goes on with the
 /// next.
 pub fn check_with(path: &Path, defines: &[(String, String)]) -> Report {
+    check_file_with(path, defines, BsdfRegistry::builtin_ref())
+}
+
+/// [`check_with`] reading BSDFs with the units of `bsdfs`.
+pub fn check_file_with(path: &Path, defines: &[(String, String)], bsdfs: &BsdfRegistry) -> Report {
     match crate::loaders::read_text(path) {
-        Ok(text) => check_text(path, &text, defines),
+        Ok(text) => check_text_with(path, &text, defines, bsdfs),
         Err(e) => Report::failed(e),
     }
 }
 
 /// [`check_with`] on `text` (`path` names it in messages and anchors relative paths).
 pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Report {
+    check_text_with(path, text, defines, BsdfRegistry::builtin_ref())
+}
+
+/// [`check_text`] reading BSDFs with the units of `bsdfs` (a program's own among them).
+pub fn check_text_with(
+    path: &Path,
+    text: &str,
+    defines: &[(String, String)],
+    bsdfs: &BsdfRegistry,
+) -> Report {
     let texts = with_includes(path, text);
     let mut docs = Vec::with_capacity(texts.len());
     for (file, text) in &texts {
@@ -112,6 +127,7 @@ pub fn check_text(path: &Path, text: &str, defines: &[(String, String)]) -> Repo
     let doc = &docs[0].1;
     let mut reader = Reader {
         path,
+        bsdfs,
         files,
         search_dirs: Vec::new(),
         defaults: defines.iter().cloned().collect(),
@@ -286,6 +302,8 @@ struct SourceFile<'a, 'input> {
 
 struct Reader<'a, 'input> {
     path: &'a Path,
+    /// The BSDF units `<bsdf>` types are read by.
+    bsdfs: &'a BsdfRegistry,
     /// The scene's file first, then those it includes.
     files: Vec<SourceFile<'a, 'input>>,
     /// Folders added by `<path value=...>`, searched after a file's own folder.
@@ -297,7 +315,7 @@ struct Reader<'a, 'input> {
     used: RefCell<HashSet<String>>,
     /// The names of the scene's `<default>`s, for messages.
     declared: Vec<String>,
-    named_bsdfs: HashMap<String, Sides>,
+    named_bsdfs: HashMap<String, crate::bsdfs::Sides>,
     /// Textures declared at top level with an `id`, and their index in `textures` once used.
     named_textures: HashMap<String, (Texture, RefCell<Option<u32>>)>,
     /// The textures the scene's materials use, in the order first used.
@@ -381,26 +399,6 @@ fn snake_case(name: &str) -> String {
     out
 }
 
-/// A `<bsdf>` as a shape uses it: the front BSDF and, for `twosided`, the back's, with the
-/// textures of their colour parameters.
-#[derive(Debug, Clone, Copy)]
-struct Sides {
-    front: Bsdf,
-    back: Option<Bsdf>,
-    textures: MaterialTextures,
-}
-
-impl Sides {
-    fn material(self, emission: Vec3) -> Material {
-        Material {
-            bsdf: self.front,
-            back: self.back,
-            emission,
-            textures: self.textures,
-        }
-    }
-}
-
 /// A view angle as a file gives it: degrees along `axis` (x, y, diagonal, smaller, larger),
 /// and the element a bad axis is reported at.
 struct ViewAngle<'a, 'input> {
@@ -417,43 +415,6 @@ const TEXTURED_PARAMETERS: &str = "reflectance (diffuse), diffuse_reflectance (p
     alpha_v (roughconductor, roughdielectric), weight (blendbsdf), opacity (mask), every \
     parameter of principled but eta, specular and its sampling rates, every parameter of \
     principledthin but its sampling rates";
-
-/// The roughness a microfacet BSDF reads: one number (`roughplastic`), numbers that may differ
-/// along u and v (`pplastic`), or numbers or textures along u and v (rough conductors and
-/// dielectrics), as each Mitsuba plugin reads it.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Alphas {
-    Isotropic,
-    Anisotropic,
-    Textured,
-}
-
-/// Mitsuba's named indices of refraction (include/mitsuba/render/ior.h).
-const NAMED_IORS: &[(&str, f32)] = &[
-    ("vacuum", 1.0),
-    ("helium", 1.000036),
-    ("hydrogen", 1.000132),
-    ("air", 1.000277),
-    ("carbon dioxide", 1.00045),
-    ("water", 1.3330),
-    ("acetone", 1.36),
-    ("ethanol", 1.361),
-    ("carbon tetrachloride", 1.461),
-    ("glycerol", 1.4729),
-    ("benzene", 1.501),
-    ("silicone oil", 1.52045),
-    ("bromine", 1.661),
-    ("water ice", 1.31),
-    ("fused quartz", 1.458),
-    ("pyrex", 1.470),
-    ("acrylic glass", 1.49),
-    ("polypropylene", 1.49),
-    ("bk7", 1.5046),
-    ("sodium chloride", 1.544),
-    ("amber", 1.55),
-    ("pet", 1.5750),
-    ("diamond", 2.419),
-];
 
 /// The parts of a shape that do not depend on its type.
 struct ShapeCommon {
@@ -681,7 +642,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 format!("<alias>: the id \"{alias}\" is taken already"),
             ));
         }
-        if let Some(bsdf) = self.named_bsdfs.get(&id).copied() {
+        if let Some(bsdf) = self.named_bsdfs.get(&id).cloned() {
             self.named_bsdfs.insert(alias, bsdf);
         } else if let Some((texture, _)) = self.named_textures.get(&id) {
             let copy = (texture.clone(), RefCell::new(None));
@@ -760,10 +721,19 @@ impl<'a, 'input> Reader<'a, 'input> {
         node: Node<'a, 'input>,
         nested: &[&str],
     ) -> Result<Props<'a, 'input>, SceneError> {
+        self.props_where(node, |child| nested.contains(&child.tag_name().name()))
+    }
+
+    /// [`Self::props`], with the caller's test of which children are objects.
+    fn props_where(
+        &self,
+        node: Node<'a, 'input>,
+        is_object: impl Fn(Node) -> bool,
+    ) -> Result<Props<'a, 'input>, SceneError> {
         let mut entries: Vec<(String, Node)> = Vec::new();
         for child in node.children().filter(Node::is_element) {
             let tag = child.tag_name().name();
-            if nested.contains(&tag) {
+            if is_object(child) {
                 continue;
             }
             if !PROPERTY_TAGS.contains(&tag) {

@@ -37,19 +37,15 @@ impl<'a, 'input> Reader<'a, 'input> {
                 _ => {}
             }
         }
-        let sides = bsdf.unwrap_or(Sides {
-            front: DEFAULT_BSDF,
-            back: None,
-            textures: MaterialTextures::default(),
-        });
+        let sides = bsdf.unwrap_or_else(default_bsdf);
         Ok(sides.material(emission.unwrap_or(Vec3::ZERO)))
     }
 
-    pub(super) fn bsdf_ref(&self, node: Node) -> Result<Sides, SceneError> {
+    pub(super) fn bsdf_ref(&self, node: Node) -> Result<crate::bsdfs::Sides, SceneError> {
         let id = self.required_attr(node, "id")?;
         self.named_bsdfs
             .get(&id)
-            .copied()
+            .cloned()
             .ok_or_else(|| self.missing_ref(node, &id, "bsdf", &format!("<ref id=\"{id}\">")))
     }
 

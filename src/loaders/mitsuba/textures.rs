@@ -4,37 +4,8 @@
 use super::*;
 
 impl<'a, 'input> Reader<'a, 'input> {
-    pub(super) fn color_param(
-        &self,
-        props: &mut Props,
-        name: &str,
-        default: f32,
-    ) -> Result<(Vec3, Option<u32>), SceneError> {
-        let Some(node) = props.take(name) else {
-            return Ok((Vec3::splat(default), None));
-        };
-        match self.texture_node(node, name)? {
-            Some((mean, index)) => Ok((Vec3::splat(mean), Some(index))),
-            None => Ok((self.non_negative_color(node)?, None)),
-        }
-    }
-
-    /// A scalar parameter `name` given as a number, or as a texture (its mean, and its index in
-    /// the scene's textures).
-    /// A scalar parameter that may be textured: a float (`default` when absent) or a texture,
-    /// as (value or the texture's mean, texture index).
-    pub(super) fn scalar_param(
-        &self,
-        props: &mut Props<'a, 'input>,
-        name: &str,
-        default: f32,
-    ) -> Result<(f32, Option<u32>), SceneError> {
-        match props.take(name) {
-            Some(node) => self.float_or_texture(node, name),
-            None => Ok((default, None)),
-        }
-    }
-
+    /// A float or a texture given to parameter `name`: the number, or the texture's mean and
+    /// its index in the scene's textures.
     pub(super) fn float_or_texture(
         &self,
         node: Node<'a, 'input>,

@@ -3,7 +3,7 @@
 //! `src/bsdfs/normalmap.cpp`, `bumpmap.cpp` and `normalmap_helpers.h`, with the unperturbed
 //! frame and dp_du / dp_dv as its shapes build them (`src/render/mesh.cpp`
 //! `compute_surface_interaction`, `src/shapes/sphere.cpp`, `interaction.h`
-//! `initialize_sh_frame`). This is the CPU reference of `shaders/common/normal_map.wgsl`;
+//! `initialize_sh_frame`). This is the CPU reference of `normalmap.wgsl` beside it;
 //! tests/normal_map.rs checks both against frames read from Mitsuba itself.
 //!
 //! How the nestings with `twosided` differ: `twosided` turns the local directions over (z to
@@ -15,8 +15,8 @@
 
 use glam::{Vec2, Vec3};
 
-use super::texture::Texture;
-use super::{FramePerturbation, PerturbationKind};
+use crate::scene::texture::Texture;
+use crate::scene::{FramePerturbation, PerturbationKind};
 
 /// What the perturbation reads of the surface point, for its front side as the shape defines
 /// it (after `flip_normals`).

@@ -1,39 +1,11 @@
-#define_import_path common::bsdf
+#define_import_path bsdfs::dielectric
 
-// What the BSDF modules share, and the smooth dielectrics. Local directions are named as in
-// Mitsuba: `wi` towards the previous vertex (the camera for radiance, the light for photons),
-// `wo` the next; z is the normal of the side the BSDF sees. Values are f |cos wo| (eval) or
-// f |cos wo| / pdf (samples). The CPU reference is src/scene/bsdf.rs.
+// Mitsuba's smooth `dielectric`: Fresnel-weighted reflection or refraction, a delta lobe each.
+// The passes sample it in world space (common::scatter), where it makes the caustic paths'
+// specular vertices; the CPU reference is src/bsdfs/dielectric/mod.rs.
 
-struct BsdfEval {
-    // f(wi, wo) |cos wo| of the non-delta lobes.
-    value: vec3<f32>,
-    // Density of sampling wo (solid angle), lobe choice included.
-    pdf: f32,
-}
+#import common::bsdf::reflect_about
 
-struct BsdfSample {
-    wo: vec3<f32>,
-    weight: vec3<f32>,
-    // Solid-angle density, or the choice probability of a delta lobe.
-    pdf: f32,
-    delta: bool,
-    valid: bool,
-}
-
-fn no_sample() -> BsdfSample {
-    return BsdfSample(vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0), 0.0, false, false);
-}
-
-fn mirror_local(wi: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(-wi.x, -wi.y, wi.z);
-}
-
-fn reflect_about(wo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return 2.0 * dot(wo, n) * n - wo;
-}
-
-#ifdef DIELECTRIC
 // Unpolarised Fresnel reflectance of a smooth dielectric interface. `cos_i` >= 0 is measured on
 // the incident side and `eta` = n_incident / n_transmitted. Returns 1 under total internal
 // reflection.
@@ -79,15 +51,3 @@ fn sample_dielectric(wo: vec3<f32>, normal: vec3<f32>, int_ior: f32, ext_ior: f3
     let weight = select(1.0, eta * eta, radiance);
     return SpecularSample(dir, weight, false);
 }
-
-// Mitsuba's thindielectric: a slab whose internal reflections are summed, r' = 2r / (1 + r);
-// what is not reflected passes straight through, unbent.
-fn sample_thin_dielectric(wi: vec3<f32>, int_ior: f32, ext_ior: f32, u: f32) -> BsdfSample {
-    var r = fresnel_dielectric(abs(wi.z), ext_ior / int_ior);
-    r *= 2.0 / (1.0 + r);
-    if u <= r {
-        return BsdfSample(mirror_local(wi), vec3<f32>(1.0), r, true, true);
-    }
-    return BsdfSample(-wi, vec3<f32>(1.0), 1.0 - r, true, true);
-}
-#endif

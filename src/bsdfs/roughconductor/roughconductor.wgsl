@@ -1,10 +1,11 @@
-#define_import_path common::conductor
+#define_import_path bsdfs::roughconductor
 
-// Mitsuba 3's conductor and roughconductor (src/bsdfs/conductor.cpp, roughconductor.cpp):
-// Fresnel of the complex index eta + i k times specular_reflectance; one-sided.
+// Mitsuba 3's roughconductor (src/bsdfs/roughconductor.cpp): a microfacet reflection with the
+// conductor's Fresnel term times specular_reflectance; one-sided. The CPU reference is
+// src/bsdfs/roughconductor/mod.rs.
 
 #import common::scene::Material
-#import common::bsdf::{BsdfEval, BsdfSample, no_sample, mirror_local}
+#import common::bsdf::{BsdfEval, BsdfSample, no_sample}
 #import common::fresnel::fresnel_conductor
 #import common::microfacet::{Microfacet, microfacet_d, microfacet_g1, microfacet_pdf, microfacet_sample}
 
@@ -12,14 +13,7 @@ fn material_microfacet(m: Material) -> Microfacet {
     return Microfacet(m.alpha_u, m.alpha_v, m.distribution == 1u);
 }
 
-fn conductor_sample(m: Material, wi: vec3<f32>) -> BsdfSample {
-    if wi.z <= 0.0 {
-        return no_sample();
-    }
-    return BsdfSample(mirror_local(wi), m.specular * fresnel_conductor(wi.z, m.eta, m.k), 1.0, true, true);
-}
-
-fn rough_conductor_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
+fn roughconductor_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> BsdfEval {
     if wi.z <= 0.0 || wo.z <= 0.0 {
         return BsdfEval(vec3<f32>(0.0), 0.0);
     }
@@ -32,7 +26,7 @@ fn rough_conductor_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
     return BsdfEval(value, d * g1_i / (4.0 * wi.z));
 }
 
-fn rough_conductor_sample(m: Material, wi: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+fn roughconductor_sample(m: Material, wi: vec3<f32>, u1: f32, u: vec2<f32>, radiance: bool) -> BsdfSample {
     if wi.z <= 0.0 {
         return no_sample();
     }

@@ -1,4 +1,4 @@
-#define_import_path common::normal_map
+#define_import_path bsdfs::normalmap
 
 // The shading frame a BSDF is evaluated and sampled in: the surface's own, or the one Mitsuba's
 // normalmap and bumpmap perturb from a texture. The CPU reference is src/scene/normal_map.rs

@@ -1,4 +1,4 @@
-#define_import_path common::principled
+#define_import_path bsdfs::principled
 
 // Mitsuba 3's principled BSDF, lobe for lobe as src/scene/principled.rs (the CPU reference,
 // which says where each formula comes from). The parameters live in the fields of the other

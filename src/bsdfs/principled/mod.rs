@@ -3,15 +3,19 @@
 //! with Integrated Subsurface Scattering", 2015): a diffuse lobe with retro-reflection and a
 //! fake subsurface blend, sheen, a GGX specular reflection whose Fresnel blends dielectric,
 //! tinted and metallic terms, a GGX specular transmission and a GTR1 clearcoat. This is the CPU
-//! reference that shaders/common/principled.wgsl must equal, lobe by lobe, including Mitsuba's
+//! reference that src/bsdfs/principled/principled.wgsl must equal, lobe by lobe, including Mitsuba's
 //! own choices (the clearcoat's missing 1/(4 cos cos), lobe choice by the Fresnel of the
 //! sampled specular normal).
 
 use glam::{Vec2, Vec3};
 
-use super::bsdf::{Mode, fresnel, reflect, refract, square_to_cosine_hemisphere};
-use super::texture::luminance;
-use super::{Distribution, Microfacet};
+use crate::bsdfs::shared::fresnel::{fresnel, reflect, refract};
+use crate::bsdfs::shared::microfacet::{Distribution, Microfacet, square_to_cosine_hemisphere};
+use crate::bsdfs::{BsdfPlugin, BsdfReader, GpuKind, Sides, WgslCall};
+use crate::scene::bsdf::{Bsdf, BsdfModel, GpuMaterial, Lobes, Mode, Sample};
+use crate::scene::plugin::{Plugin, p};
+use crate::scene::texture::luminance;
+use crate::scene::{SceneError, SideTextures};
 
 /// Bits of [`Principled`]'s `has`: Mitsuba's `m_has_*`, set when the file gives the parameter (a
 /// texture, or a float other than 0). They change more than the weight: a lobe's sampling
@@ -111,7 +115,7 @@ impl Principled {
 
 /// The GGX distribution of a roughness and anisotropy (Mitsuba's calc_dist_params; an
 /// anisotropy of 0 is its isotropic case).
-pub(super) fn ggx(anisotropic: f32, roughness: f32) -> Microfacet {
+pub(crate) fn ggx(anisotropic: f32, roughness: f32) -> Microfacet {
     let r2 = roughness * roughness;
     let aspect = (1.0 - 0.9 * anisotropic).sqrt();
     Microfacet {
@@ -121,27 +125,27 @@ pub(super) fn ggx(anisotropic: f32, roughness: f32) -> Microfacet {
     }
 }
 
-pub(super) fn lerp(a: f32, b: f32, t: f32) -> f32 {
+pub(crate) fn lerp(a: f32, b: f32, t: f32) -> f32 {
     a * (1.0 - t) + b * t
 }
 
-pub(super) fn lerp3(a: Vec3, b: Vec3, t: f32) -> Vec3 {
+pub(crate) fn lerp3(a: Vec3, b: Vec3, t: f32) -> Vec3 {
     a * (1.0 - t) + b * t
 }
 
 /// `a` with the sign of `b` flipped in when `b` is negative (drjit's mulsign).
-pub(super) fn mulsign(a: Vec3, b: f32) -> Vec3 {
+pub(crate) fn mulsign(a: Vec3, b: f32) -> Vec3 {
     if b.is_sign_negative() { -a } else { a }
 }
 
-pub(super) fn schlick_weight(cos: f32) -> f32 {
+pub(crate) fn schlick_weight(cos: f32) -> f32 {
     let m = (1.0 - cos).clamp(0.0, 1.0);
     m * m * m * m * m
 }
 
 /// Schlick's Fresnel from `r0`, taken at the transmitted angle when light leaves the denser
 /// side (Mitsuba's calc_schlick).
-pub(super) fn calc_schlick(r0: Vec3, cos_i: f32, eta: f32) -> Vec3 {
+pub(crate) fn calc_schlick(r0: Vec3, cos_i: f32, eta: f32) -> Vec3 {
     let outside = cos_i >= 0.0;
     let (eta_it, eta_ti) = if outside {
         (eta, 1.0 / eta)
@@ -159,13 +163,13 @@ pub(super) fn calc_schlick(r0: Vec3, cos_i: f32, eta: f32) -> Vec3 {
     Vec3::splat(w) * (Vec3::ONE - r0) + r0
 }
 
-pub(super) fn schlick_r0(eta: f32) -> f32 {
+pub(crate) fn schlick_r0(eta: f32) -> f32 {
     ((eta - 1.0) / (eta + 1.0)).powi(2)
 }
 
 /// Micro- and macro-surface agree on the sides of `wi` and `wo` (Mitsuba's
 /// mac_mic_compatibility).
-pub(super) fn compatible(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
+pub(crate) fn compatible(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
     let m_i = mulsign(m, cos_i);
     let m_o = if reflection { m_i } else { -m_i };
     wi.dot(m_i) > 0.0 && wo.dot(m_o) > 0.0
@@ -191,7 +195,7 @@ fn principled_fresnel(p: &Principled, f_dielectric: f32, cos_i: f32, front: bool
 }
 
 /// The base colour's hue at luminance 1 (white for black).
-pub(super) fn tint_of(c: Vec3) -> Vec3 {
+pub(crate) fn tint_of(c: Vec3) -> Vec3 {
     let lum = luminance(c);
     if lum > 0.0 { c / lum } else { Vec3::ONE }
 }
@@ -234,7 +238,7 @@ fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
 /// The diffuse lobe's shape (times base colour / pi it is f): Burley's diffuse with its
 /// retro-reflection, blended towards the fake subsurface term by `flatness` (Hanrahan-Krueger
 /// based; Mitsuba's principledhelpers). `cos_d` is the half vector's cosine with wo.
-pub(super) fn diffuse_lobe(
+pub(crate) fn diffuse_lobe(
     roughness: f32,
     flatness: f32,
     cos_i: f32,
@@ -256,7 +260,7 @@ pub(super) fn diffuse_lobe(
 
 /// The sheen lobe's f (before its weight against the other lobes), white tinted towards the
 /// base colour's hue by `sheen_tint`.
-pub(super) fn sheen_lobe(sheen: f32, sheen_tint: f32, base_color: Vec3, cos_d: f32) -> Vec3 {
+pub(crate) fn sheen_lobe(sheen: f32, sheen_tint: f32, base_color: Vec3, cos_d: f32) -> Vec3 {
     let tint = if sheen_tint == 0.0 {
         Vec3::ONE
     } else {
@@ -419,4 +423,226 @@ pub fn sample(
 /// The `eta` a `specular` of 0..1 stands for (Mitsuba: eta = 2 / (1 - sqrt(0.08 specular)) - 1).
 pub fn eta_from_specular(specular: f32) -> f32 {
     2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0
+}
+
+/// Continuous: caustics through it or onto it are path traced, never photon mapped, whatever
+/// its roughness.
+const LOBES: Lobes = Lobes {
+    delta: false,
+    microfacet: false,
+    continuous: true,
+    transmits: false,
+    pass_through: false,
+};
+
+const MODULE: &str = "bsdfs::principled";
+
+pub static PLUGIN: BsdfPlugin = BsdfPlugin {
+    name: "principled",
+    reads: &[Plugin {
+        object: "bsdf",
+        kinds: &["principled"],
+        properties: &[
+            p("base_color", "0.5"),
+            p("roughness", "0.5"),
+            p("anisotropic", "0"),
+            p("metallic", "0"),
+            p("spec_trans", "0"),
+            p("eta", "from specular"),
+            p("specular", "0.5"),
+            p("spec_tint", "0"),
+            p("sheen", "0"),
+            p("sheen_tint", "0"),
+            p("flatness", "0"),
+            p("clearcoat", "0"),
+            p("clearcoat_gloss", "0"),
+            p("main_specular_sampling_rate", "1"),
+            p("clearcoat_sampling_rate", "1"),
+            p("diffuse_reflectance_sampling_rate", "1"),
+        ],
+        notes: "Every lobe as Mitsuba 3.9.1 writes it (src/bsdfs/principled/mod.rs), its \
+                sampling too. Every parameter but `eta`, `specular` and the sampling rates may \
+                be a texture, as in Mitsuba (the rest are numbers there too). A continuous BSDF \
+                for the light-transport partition: caustics through it or onto it are path \
+                traced, never photon mapped.",
+    }],
+    read,
+    objects: &[],
+    kinds: &[GpuKind {
+        eval: Some(WgslCall::new(MODULE, "principled_eval")),
+        sample: Some(WgslCall::new(MODULE, "principled_sample")),
+        // Principled floors its alphas itself (`ggx`).
+        alpha_floor: 0.0,
+        ..GpuKind::inline("principled", LOBES)
+    }],
+    def: Some("PRINCIPLED"),
+    wgsl: Some(crate::shader_file!("src/bsdfs/principled/principled.wgsl")),
+};
+
+/// The parameters besides base colour, roughness and metallic that Mitsuba's plugin reads as
+/// textures (`eta` and `specular` are plain floats there), in the order of the record's field
+/// textures.
+pub const TEXTURED: [&str; 8] = [
+    "anisotropic",
+    "spec_trans",
+    "spec_tint",
+    "sheen",
+    "sheen_tint",
+    "flatness",
+    "clearcoat",
+    "clearcoat_gloss",
+];
+
+/// Every property its plugin reads; each parameter its plugin reads as a texture may be one.
+fn read(r: &mut dyn BsdfReader) -> Result<Sides, SceneError> {
+    let mut textures = SideTextures::default();
+    let (base_color, base_texture) = r.color_or_texture("base_color", 0.5)?;
+    textures.diffuse = base_texture;
+    let mut has = 0;
+    // (value, texture), and whether Mitsuba counts it as given (m_has_*: a texture, or a float
+    // other than 0; every parameter with a bit defaults to 0).
+    let mut scalar = |r: &mut dyn BsdfReader, name: &str, default: f32, bit: u32| {
+        let (value, texture) = r.scalar_or_texture(name, default)?;
+        if texture.is_some() || value != 0.0 {
+            has |= bit;
+        }
+        Ok::<_, SceneError>((value, texture))
+    };
+    let (roughness, roughness_texture) = scalar(r, "roughness", 0.5, 0)?;
+    let (metallic, metallic_texture) = scalar(r, "metallic", 0.0, HAS_METALLIC)?;
+    (textures.alpha_u, textures.alpha_v) = (roughness_texture, metallic_texture);
+    let bits = [
+        HAS_ANISOTROPIC,
+        HAS_SPEC_TRANS,
+        HAS_SPEC_TINT,
+        HAS_SHEEN,
+        HAS_SHEEN_TINT,
+        HAS_FLATNESS,
+        HAS_CLEARCOAT,
+        0,
+    ];
+    let mut values = [0.0; TEXTURED.len()];
+    for (i, (name, bit)) in TEXTURED.iter().zip(bits).enumerate() {
+        (values[i], textures.fields[i]) = scalar(r, name, 0.0, bit)?;
+    }
+    let [
+        anisotropic,
+        spec_trans,
+        spec_tint,
+        sheen,
+        sheen_tint,
+        flatness,
+        clearcoat,
+        clearcoat_gloss,
+    ] = values;
+    let mut rate = |name: &str| Ok::<_, SceneError>(r.float(name)?.unwrap_or(1.0));
+    let spec_srate = rate("main_specular_sampling_rate")?;
+    let clearcoat_srate = rate("clearcoat_sampling_rate")?;
+    let diffuse_srate = rate("diffuse_reflectance_sampling_rate")?;
+    let transmits = has & HAS_SPEC_TRANS != 0;
+    let eta = match (r.has("eta"), r.has("specular")) {
+        (true, true) => {
+            return Err(r.error_at(
+                "specular",
+                "principled: give eta or specular, not both (as in Mitsuba)".into(),
+            ));
+        }
+        (true, false) => {
+            let eta = r.float("eta")?.unwrap_or(1.5);
+            if eta.is_nan() || eta <= 0.0 {
+                return Err(r.error_at("eta", format!("eta {eta}: must be positive")));
+            }
+            // Mitsuba's nudge: eta 1 cannot refract.
+            if transmits && eta == 1.0 { 1.001 } else { eta }
+        }
+        (false, _) => {
+            let specular = r.float("specular")?.unwrap_or(0.5);
+            let specular = if transmits && specular == 0.0 {
+                1e-3
+            } else {
+                specular
+            };
+            eta_from_specular(specular)
+        }
+    };
+    let model = Principled {
+        base_color,
+        roughness,
+        anisotropic,
+        metallic,
+        spec_trans,
+        spec_tint,
+        sheen,
+        sheen_tint,
+        flatness,
+        clearcoat,
+        clearcoat_gloss,
+        eta,
+        spec_srate,
+        clearcoat_srate,
+        diffuse_srate,
+        has,
+    };
+    Ok(Sides::one(Bsdf::new(model), textures))
+}
+
+impl BsdfModel for Principled {
+    fn kind(&self) -> &'static str {
+        "principled"
+    }
+
+    fn lobes(&self) -> Lobes {
+        LOBES
+    }
+
+    fn is_valid(&self) -> bool {
+        let scalars = [
+            self.roughness,
+            self.anisotropic,
+            self.metallic,
+            self.spec_trans,
+            self.spec_tint,
+            self.sheen,
+            self.sheen_tint,
+            self.flatness,
+            self.clearcoat,
+            self.clearcoat_gloss,
+            self.spec_srate,
+            self.clearcoat_srate,
+            self.diffuse_srate,
+        ];
+        self.base_color.is_finite() && scalars.iter().all(|v| v.is_finite()) && self.eta > 0.0
+    }
+
+    fn eval(&self, wi: Vec3, wo: Vec3, mode: Mode) -> Vec3 {
+        eval(self, wi, wo, mode)
+    }
+
+    fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        pdf(self, wi, wo)
+    }
+
+    fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<Sample> {
+        sample(self, wi, u1, u2, mode).map(|(wo, weight, pdf)| Sample {
+            wo,
+            weight,
+            pdf,
+            delta: false,
+        })
+    }
+
+    /// The parameters in the slots of the other kinds (principled.wgsl reads them back): base
+    /// colour, roughness and metallic where the fixed texture slots replace them (`albedo`,
+    /// `alpha_u`, `alpha_v`), the rest where field textures do.
+    fn pack(&self, record: &mut GpuMaterial, textures: &SideTextures, tables: &mut Vec<f32>) {
+        record.albedo = self.base_color.to_array();
+        (record.alpha_u, record.alpha_v) = (self.roughness, self.metallic);
+        record.specular = [self.anisotropic, self.spec_trans, self.spec_tint];
+        record.eta = [self.sheen, self.sheen_tint, self.flatness];
+        record.k = [self.clearcoat, self.clearcoat_gloss, self.eta];
+        (record.int_ior, record.ext_ior) = (self.spec_srate, self.clearcoat_srate);
+        record.specular_weight = self.diffuse_srate;
+        record.nonlinear = self.has;
+        record.set_field_textures(&textures.fields, tables);
+    }
 }

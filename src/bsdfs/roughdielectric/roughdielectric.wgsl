@@ -1,4 +1,4 @@
-#define_import_path common::rough_dielectric
+#define_import_path bsdfs::roughdielectric
 
 // Mitsuba 3's roughdielectric (src/bsdfs/roughdielectric.cpp; Walter et al. 2007): reflection
 // and refraction through microfacets sampled by visible normals, chosen by Fresnel. Tracing

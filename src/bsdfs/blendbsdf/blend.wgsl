@@ -1,4 +1,4 @@
-#define_import_path common::blend
+#define_import_path bsdfs::blendbsdf
 
 // Which material a surface point scatters with: the back of a twosided material, and one child
 // of each blend or mask (Mitsuba's blendbsdf and mask; src/scene/mod.rs, Bsdf::Blend). A blend

@@ -12,11 +12,15 @@
 
 use glam::{Vec2, Vec3};
 
-use super::Microfacet;
-use super::bsdf::{fresnel, reflect, square_to_cosine_hemisphere};
-use super::principled::{
+use crate::bsdfs::principled::{
     calc_schlick, compatible, diffuse_lobe, ggx, lerp3, mulsign, schlick_r0, sheen_lobe, tint_of,
 };
+use crate::bsdfs::shared::fresnel::{fresnel, reflect};
+use crate::bsdfs::shared::microfacet::{Microfacet, square_to_cosine_hemisphere};
+use crate::bsdfs::{BsdfPlugin, BsdfReader, GpuKind, Sides, WgslCall};
+use crate::scene::bsdf::{Bsdf, BsdfModel, GpuMaterial, Lobes, Mode, Sample};
+use crate::scene::plugin::{Plugin, p};
+use crate::scene::{SceneError, SideTextures};
 
 /// The parameters at one surface point (textures already looked up).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -194,4 +198,177 @@ pub fn sample(p: &PrincipledThin, wi_given: Vec3, u1: f32, u2: Vec2) -> Option<(
         return None;
     }
     Some((wo, eval(p, wi_given, wo) / density, density))
+}
+
+/// Continuous, as `principled`; it transmits, so `twosided` refuses it (as Mitsuba does).
+const LOBES: Lobes = Lobes {
+    delta: false,
+    microfacet: false,
+    continuous: true,
+    transmits: true,
+    pass_through: false,
+};
+
+const MODULE: &str = "bsdfs::principledthin";
+
+pub static PLUGIN: BsdfPlugin = BsdfPlugin {
+    name: "principledthin",
+    reads: &[Plugin {
+        object: "bsdf",
+        kinds: &["principledthin"],
+        properties: &[
+            p("base_color", "0.5"),
+            p("roughness", "0.5"),
+            p("anisotropic", "0"),
+            p("spec_trans", "0"),
+            p("eta", "1.5"),
+            p("spec_tint", "0"),
+            p("sheen", "0"),
+            p("sheen_tint", "0"),
+            p("flatness", "0"),
+            p("diff_trans", "0"),
+            p("specular_reflectance_sampling_rate", "1"),
+            p("specular_transmittance_sampling_rate", "1"),
+            p("diffuse_reflectance_sampling_rate", "1"),
+            p("diffuse_transmittance_sampling_rate", "1"),
+        ],
+        notes: "A sheet seen and lit from both sides, as Mitsuba 3.9.1 writes it \
+                (src/bsdfs/principledthin/mod.rs): diffuse with sheen, diffuse transmission \
+                (`diff_trans` 0 to 2), a GGX reflection and a GGX transmission straight through \
+                (no bending). Every parameter but the sampling rates may be a texture, `eta` \
+                too. It transmits, so `twosided` refuses it (as in Mitsuba). Continuous for \
+                the light-transport partition, as `principled`.",
+    }],
+    read,
+    objects: &[],
+    kinds: &[GpuKind {
+        eval: Some(WgslCall::new(MODULE, "principled_thin_eval")),
+        sample: Some(WgslCall::new(MODULE, "principled_thin_sample")),
+        alpha_floor: 0.0,
+        ..GpuKind::inline("principledthin", LOBES)
+    }],
+    def: Some("PRINCIPLED"),
+    wgsl: Some(crate::shader_file!(
+        "src/bsdfs/principledthin/principledthin.wgsl"
+    )),
+};
+
+/// The parameters Mitsuba's plugin reads as textures besides base colour and roughness, `eta`
+/// last, in the order of the record's field textures.
+pub const TEXTURED: [&str; 8] = [
+    "anisotropic",
+    "spec_trans",
+    "spec_tint",
+    "sheen",
+    "sheen_tint",
+    "flatness",
+    "diff_trans",
+    "eta",
+];
+
+/// Every property its plugin reads; all but the sampling rates may be textures.
+fn read(r: &mut dyn BsdfReader) -> Result<Sides, SceneError> {
+    let mut textures = SideTextures::default();
+    let (base_color, base_texture) = r.color_or_texture("base_color", 0.5)?;
+    textures.diffuse = base_texture;
+    let (roughness, roughness_texture) = r.scalar_or_texture("roughness", 0.5)?;
+    textures.alpha_u = roughness_texture;
+    let mut values = [0.0; TEXTURED.len()];
+    // The last is eta, which is checked apart.
+    let [params @ .., eta_slot] = &TEXTURED;
+    for (i, name) in params.iter().enumerate() {
+        (values[i], textures.fields[i]) = r.scalar_or_texture(name, 0.0)?;
+    }
+    let [
+        anisotropic,
+        spec_trans,
+        spec_tint,
+        sheen,
+        sheen_tint,
+        flatness,
+        diff_trans,
+        _,
+    ] = values;
+    let (eta, eta_texture) = r.scalar_or_texture(eta_slot, 1.5)?;
+    if eta_texture.is_none() && (eta.is_nan() || eta <= 0.0) {
+        return Err(r.error_at(eta_slot, format!("eta {eta}: must be positive")));
+    }
+    textures.fields[params.len()] = eta_texture;
+    let mut rate = |name: &str| Ok::<_, SceneError>(r.float(name)?.unwrap_or(1.0));
+    let model = PrincipledThin {
+        base_color,
+        roughness,
+        anisotropic,
+        spec_trans,
+        spec_tint,
+        sheen,
+        sheen_tint,
+        flatness,
+        diff_trans,
+        eta,
+        spec_reflect_srate: rate("specular_reflectance_sampling_rate")?,
+        spec_trans_srate: rate("specular_transmittance_sampling_rate")?,
+        diff_reflect_srate: rate("diffuse_reflectance_sampling_rate")?,
+        diff_trans_srate: rate("diffuse_transmittance_sampling_rate")?,
+    };
+    Ok(Sides::one(Bsdf::new(model), textures))
+}
+
+impl BsdfModel for PrincipledThin {
+    fn kind(&self) -> &'static str {
+        "principledthin"
+    }
+
+    fn lobes(&self) -> Lobes {
+        LOBES
+    }
+
+    fn is_valid(&self) -> bool {
+        let scalars = [
+            self.roughness,
+            self.anisotropic,
+            self.spec_trans,
+            self.spec_tint,
+            self.sheen,
+            self.sheen_tint,
+            self.flatness,
+            self.diff_trans,
+            self.spec_reflect_srate,
+            self.spec_trans_srate,
+            self.diff_reflect_srate,
+            self.diff_trans_srate,
+        ];
+        self.base_color.is_finite() && scalars.iter().all(|v| v.is_finite()) && self.eta > 0.0
+    }
+
+    fn eval(&self, wi: Vec3, wo: Vec3, _mode: Mode) -> Vec3 {
+        eval(self, wi, wo)
+    }
+
+    fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        pdf(self, wi, wo)
+    }
+
+    fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, _mode: Mode) -> Option<Sample> {
+        sample(self, wi, u1, u2).map(|(wo, weight, pdf)| Sample {
+            wo,
+            weight,
+            pdf,
+            delta: false,
+        })
+    }
+
+    /// As principled's, with diff_trans and eta in `k` and the four sampling rates in
+    /// int_ior, ext_ior, specular_weight and internal_reflectance (principledthin.wgsl).
+    fn pack(&self, record: &mut GpuMaterial, textures: &SideTextures, tables: &mut Vec<f32>) {
+        record.albedo = self.base_color.to_array();
+        record.alpha_u = self.roughness;
+        record.specular = [self.anisotropic, self.spec_trans, self.spec_tint];
+        record.eta = [self.sheen, self.sheen_tint, self.flatness];
+        record.k = [self.diff_trans, self.eta, 0.0];
+        (record.int_ior, record.ext_ior) = (self.spec_reflect_srate, self.spec_trans_srate);
+        (record.specular_weight, record.internal_reflectance) =
+            (self.diff_reflect_srate, self.diff_trans_srate);
+        record.set_field_textures(&textures.fields, tables);
+    }
 }

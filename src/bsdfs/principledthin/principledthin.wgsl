@@ -1,4 +1,4 @@
-#define_import_path common::principled_thin
+#define_import_path bsdfs::principledthin
 
 // Mitsuba 3's principledthin BSDF, lobe for lobe as src/scene/principled_thin.rs (the CPU
 // reference, which says where each formula comes from). The parameters live where
@@ -12,7 +12,7 @@
 #import common::fresnel::fresnel_full
 #import common::microfacet::{Microfacet, microfacet_d, microfacet_g1, microfacet_pdf, microfacet_sample}
 #import common::sampling::{INV_PI, square_to_cosine_hemisphere}
-#import common::principled::{ggx, mulsign, tint_of, calc_schlick, schlick_r0, compatible, diffuse_lobe, sheen_lobe}
+#import bsdfs::principled::{ggx, mulsign, tint_of, calc_schlick, schlick_r0, compatible, diffuse_lobe, sheen_lobe}
 
 struct Thin {
     base_color: vec3<f32>,
@@ -124,7 +124,7 @@ fn thin_pdf(p: Thin, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
     return pdf;
 }
 
-fn principled_thin_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
+fn principled_thin_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> BsdfEval {
     if wi.z == 0.0 {
         return BsdfEval(vec3<f32>(0.0), 0.0);
     }
@@ -141,7 +141,7 @@ fn principled_thin_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>) -> BsdfEval {
 }
 
 // As Mitsuba: the lobe by `u1` with fixed probabilities, its direction from `u2`.
-fn principled_thin_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>) -> BsdfSample {
+fn principled_thin_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: bool) -> BsdfSample {
     let side = wi.z;
     if side == 0.0 {
         return no_sample();

@@ -1,0 +1,134 @@
+//! Mitsuba's `pplastic` as its RGB variants render it (no polarisation): roughplastic's rough
+//! coating with the dielectric Fresnel term, over a Lambertian base weighted by the two smooth
+//! refractions through the interface, (1 - F(cos wi)) (1 - F(cos wo)); no internal reflections,
+//! its lobes chosen with fixed probabilities.
+
+use glam::{Vec2, Vec3};
+
+use crate::bsdfs::plastic::Coated;
+use crate::bsdfs::roughplastic::{coating_or_base, coating_pdf, rough_reflection};
+use crate::bsdfs::shared::fresnel::fresnel;
+use crate::bsdfs::shared::microfacet::Microfacet;
+use crate::bsdfs::shared::{Alphas, distinct_iors, microfacet};
+use crate::bsdfs::{BsdfPlugin, BsdfReader, Glossy, GpuKind, Sides, WgslCall};
+use crate::scene::bsdf::{Bsdf, BsdfModel, GpuMaterial, Lobes, Mode, Sample, sample_from_eval};
+use crate::scene::plugin::{Plugin, p};
+use crate::scene::{SceneError, SideTextures};
+
+const LOBES: Lobes = Lobes {
+    delta: false,
+    microfacet: true,
+    continuous: true,
+    transmits: false,
+    pass_through: false,
+};
+
+const MODULE: &str = "bsdfs::pplastic";
+
+pub static PLUGIN: BsdfPlugin = BsdfPlugin {
+    name: "pplastic",
+    reads: &[Plugin {
+        object: "bsdf",
+        kinds: &["pplastic"],
+        properties: &[
+            p("int_ior", "polypropylene"),
+            p("ext_ior", "air"),
+            p("diffuse_reflectance", "0.5"),
+            p("specular_reflectance", "1"),
+            p("distribution", "beckmann"),
+            p("alpha", "0.1"),
+            p("alpha_u", "0.1"),
+            p("alpha_v", "0.1"),
+            p("sample_visible", "true"),
+        ],
+        notes: "As Mitsuba's RGB variants render it (no polarisation): the rough reflection \
+                with the dielectric Fresnel term plus the diffuse base weighted by (1 - F) at \
+                wi and at wo; `alpha`, `alpha_u`, `alpha_v` numbers as in Mitsuba, both \
+                reflectances may be textures.",
+    }],
+    read,
+    objects: &[],
+    kinds: &[GpuKind {
+        name: "pplastic",
+        lobes: LOBES,
+        eval: Some(WgslCall::new(MODULE, "pplastic_eval")),
+        sample: Some(WgslCall::new(MODULE, "pplastic_sample")),
+        glossy: Glossy::Split {
+            eval: WgslCall::new(MODULE, "pplastic_coating"),
+            share: WgslCall::new(MODULE, "pplastic_coating_share"),
+        },
+        alpha_floor: 1e-4,
+    }],
+    def: Some("PLASTIC"),
+    wgsl: Some(crate::shader_file!("src/bsdfs/pplastic/pplastic.wgsl")),
+};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PolarizedPlastic {
+    pub coated: Coated,
+    pub microfacet: Microfacet,
+}
+
+fn read(r: &mut dyn BsdfReader) -> Result<Sides, SceneError> {
+    let mut textures = SideTextures::default();
+    let coated = Coated::read(r, &mut textures)?;
+    distinct_iors(r, coated.int_ior, coated.ext_ior)?;
+    let microfacet = microfacet(r, Alphas::Anisotropic, &mut textures)?;
+    let model = PolarizedPlastic { coated, microfacet };
+    Ok(Sides::one(Bsdf::new(model), textures))
+}
+
+impl BsdfModel for PolarizedPlastic {
+    fn kind(&self) -> &'static str {
+        "pplastic"
+    }
+
+    fn lobes(&self) -> Lobes {
+        LOBES
+    }
+
+    fn roughness(&self) -> Option<f32> {
+        Some(self.microfacet.roughness())
+    }
+
+    fn is_valid(&self) -> bool {
+        self.coated.is_valid() && self.microfacet.is_valid()
+    }
+
+    fn eval(&self, wi: Vec3, wo: Vec3, _mode: Mode) -> Vec3 {
+        let (ci, co) = (wi.z, wo.z);
+        if ci <= 0.0 || co <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let c = &self.coated;
+        let eta = c.int_ior / c.ext_ior;
+        let spec = c.specular * rough_reflection(&self.microfacet, eta, wi, wo);
+        let (fi, fo) = (fresnel(ci, eta).0, fresnel(co, eta).0);
+        spec + c.diffuse * ((1.0 - fi) * (1.0 - fo) * co * std::f32::consts::FRAC_1_PI)
+    }
+
+    fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        let (ci, co) = (wi.z, wo.z);
+        if ci <= 0.0 || co <= 0.0 {
+            return 0.0;
+        }
+        // Mitsuba's fixed lobe probabilities (no Fresnel term in them).
+        let w = self.coated.specular_weight();
+        let cosine = co.max(0.0) * std::f32::consts::FRAC_1_PI;
+        w * coating_pdf(&self.microfacet, wi, wo) + (1.0 - w) * cosine
+    }
+
+    fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<Sample> {
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let prob_diffuse = 1.0 - self.coated.specular_weight();
+        let wo = coating_or_base(&self.microfacet, wi, u1, u2, prob_diffuse);
+        sample_from_eval(self, wi, wo, mode)
+    }
+
+    fn pack(&self, record: &mut GpuMaterial, _textures: &SideTextures, _tables: &mut Vec<f32>) {
+        self.coated.pack(record);
+        self.microfacet.pack(record);
+    }
+}

@@ -1,0 +1,113 @@
+//! What a BSDF unit reads its properties through. The Mitsuba loader gives each `<bsdf>`
+//! element one; it takes each property once, knows where each is in the file (so a unit's
+//! error lands at file:line:col) and reports what no unit took as unknown, with a did-you-mean.
+
+use glam::Vec3;
+
+use crate::scene::bsdf::Bsdf;
+use crate::scene::{Material, MaterialTextures, SceneError};
+
+/// A `<bsdf>` as a shape uses it: the front BSDF and, for `twosided`, the back's, with the
+/// textures of their parameters.
+#[derive(Debug, Clone)]
+pub struct Sides {
+    pub front: Bsdf,
+    pub back: Option<Bsdf>,
+    pub textures: MaterialTextures,
+}
+
+impl Sides {
+    /// One side's BSDF with its textures.
+    pub fn one(front: Bsdf, textures: crate::scene::SideTextures) -> Self {
+        Sides {
+            front,
+            back: None,
+            textures: MaterialTextures {
+                front: textures,
+                back: Default::default(),
+            },
+        }
+    }
+
+    pub fn material(self, emission: Vec3) -> Material {
+        Material {
+            bsdf: self.front,
+            back: self.back,
+            emission,
+            textures: self.textures,
+        }
+    }
+}
+
+/// The properties and nested objects of one `<bsdf>` element. Each property is taken once;
+/// `Ok(None)` is a property the file does not give (the unit applies Mitsuba's default).
+pub trait BsdfReader {
+    /// The `type` the element gives (one unit may read several: `blendbsdf` and `mask`).
+    fn plugin(&self) -> &str;
+
+    /// Whether the file gives property `name` (not yet taken).
+    fn has(&self, name: &str) -> bool;
+
+    /// Whether property `name` is given as a `<string>` (an index of refraction by name).
+    fn is_string(&self, name: &str) -> bool;
+
+    fn float(&mut self, name: &str) -> Result<Option<f32>, SceneError>;
+
+    fn boolean(&mut self, name: &str) -> Result<Option<bool>, SceneError>;
+
+    fn string(&mut self, name: &str) -> Result<Option<String>, SceneError>;
+
+    /// A colour: `<rgb>`, a spectrum, or a `<float>` for grey; no texture.
+    fn color(&mut self, name: &str) -> Result<Option<Vec3>, SceneError>;
+
+    /// A colour or a texture (inline or a `<ref>`), `default` when absent: the colour, or the
+    /// texture's mean (Mitsuba's `Texture::mean`, what a plastic's lobe weights use) and the
+    /// texture's index in the scene.
+    fn color_or_texture(
+        &mut self,
+        name: &str,
+        default: f32,
+    ) -> Result<(Vec3, Option<u32>), SceneError>;
+
+    /// A number or a scalar texture, `default` when absent, as [`Self::color_or_texture`].
+    fn scalar_or_texture(
+        &mut self,
+        name: &str,
+        default: f32,
+    ) -> Result<(f32, Option<u32>), SceneError>;
+
+    /// A texture given as property `name`: its index, or an error when it is something else.
+    fn texture(&mut self, name: &str) -> Result<Option<u32>, SceneError>;
+
+    /// Textures given as objects (a `<texture>` child of any name, or a `<ref>` to one), for
+    /// a unit that lists `texture` among its objects.
+    fn texture_objects(&mut self) -> Result<Vec<u32>, SceneError>;
+
+    /// Whether texture `index` is a bitmap (the others have no gradient and no RGB lookup).
+    fn is_bitmap(&self, index: u32) -> bool;
+
+    /// The BSDFs nested in the element (`<bsdf>` children and `<ref>`s to declared ones), each
+    /// read through the registry, in file order.
+    fn nested(&mut self) -> Result<Vec<Sides>, SceneError>;
+
+    /// Adds a material for a blend to choose (its children come before it); its index.
+    fn add_material(&mut self, material: Material) -> u32;
+
+    /// A material added before, by index.
+    fn material(&self, index: u32) -> Option<Material>;
+
+    /// An error at property `name` (its value), or at the element when it is not given.
+    fn error_at(&self, name: &str, message: String) -> SceneError;
+
+    /// An error at the `index`-th nested BSDF.
+    fn error_at_nested(&self, index: usize, message: String) -> SceneError;
+
+    /// An error at the element.
+    fn error(&self, message: String) -> SceneError;
+
+    /// How messages name the element: `<bsdf type="roughplastic">`.
+    fn describe(&self) -> String;
+
+    /// How messages name property `name` as the file gives it: `<float name="alpha">`.
+    fn describe_property(&self, name: &str) -> String;
+}
