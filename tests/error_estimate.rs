@@ -18,7 +18,7 @@ fn shader_library(gpu: &hppm::gpu::GpuContext) -> ShaderLibrary {
     ShaderLibrary::new(
         gpu.has_float_atomics(),
         Default::default(),
-        &hppm::passes::common_modules(),
+        &hppm::passes::common_modules(&hppm::bsdfs::BsdfRegistry::builtin()),
     )
     .expect("shader library")
 }

@@ -267,11 +267,11 @@ fn caustic_flux(
 }
 
 /// The directional albedo of `bsdf` seen from `cos` off the normal (isotropic): the integral of
-/// the CPU reference's f |cos wo| (src/scene/bsdf.rs, checked against Mitsuba's in
+/// the CPU reference's f |cos wo| (its unit's model under src/bsdfs/, checked against Mitsuba's in
 /// tests/bsdf.rs) over outgoing directions, by the midpoint rule over half vectors (dwo = 4
 /// |wo.m| dm; 800 x 200 cells over the half-vector hemisphere's mirror-symmetric half).
-fn directional_albedo(prepared: &hppm::scene::bsdf::Prepared, cos: f32) -> [f64; 3] {
-    use hppm::scene::bsdf::{Mode, eval};
+fn directional_albedo(bsdf: &hppm::scene::Bsdf, cos: f32) -> [f64; 3] {
+    use hppm::scene::bsdf::Mode;
     let wi = Vec3::new((1.0 - cos * cos).max(0.0).sqrt(), 0.0, cos);
     let (n_theta, n_phi) = (800, 200);
     let (d_theta, d_phi) = (
@@ -295,7 +295,7 @@ fn directional_albedo(prepared: &hppm::scene::bsdf::Prepared, cos: f32) -> [f64;
             let wo = 2.0 * wi_m * m - wi;
             // Both halves of the circle of azimuths: twice the measure.
             let measure = 2.0 * 4.0 * wi_m as f64 * theta.sin() * d_theta * d_phi;
-            let f = eval(prepared, wi, wo, Mode::Importance);
+            let f = bsdf.eval(wi, wo, Mode::Importance);
             for c in 0..3 {
                 albedo[c] += f[c] as f64 * measure;
             }
@@ -309,7 +309,6 @@ fn directional_albedo(prepared: &hppm::scene::bsdf::Prepared, cos: f32) -> [f64;
 /// the integral over the mirror of its directional albedo times the solid angle, by the midpoint
 /// rule on 64 x 64 cells, the albedo interpolated linearly between 17 cosines spanning theirs.
 fn rough_mirror_flux(bsdf: &hppm::scene::Bsdf, light: Vec3, intensity: [f64; 3]) -> [f64; 3] {
-    let prepared = hppm::scene::bsdf::Prepared::new(*bsdf);
     let cells = 64;
     let normal = Vec3::new(0.0, -1.0, 0.0);
     let mut patches = Vec::new();
@@ -327,7 +326,7 @@ fn rough_mirror_flux(bsdf: &hppm::scene::Bsdf, light: Vec3, intensity: [f64; 3])
     let hi = patches.iter().map(|p| p.0).fold(0.0, f32::max);
     let knots = 17;
     let table: Vec<[f64; 3]> = (0..knots)
-        .map(|k| directional_albedo(&prepared, lo + (hi - lo) * k as f32 / (knots - 1) as f32))
+        .map(|k| directional_albedo(bsdf, lo + (hi - lo) * k as f32 / (knots - 1) as f32))
         .collect();
     let mut flux = [0.0f64; 3];
     for (cos, solid_angle) in patches {
@@ -360,7 +359,7 @@ fn caustic_photons_continue_through_a_glossy_mirror_with_its_albedo() {
     let mirror = scene
         .materials
         .iter()
-        .find(|m| matches!(m.bsdf, hppm::scene::Bsdf::RoughConductor { .. }))
+        .find(|m| m.bsdf.kind() == "roughconductor")
         .expect("the rough mirror");
     let light = &scene.point_lights[0];
     let intensity = light.intensity.to_array().map(|c| c as f64);

@@ -569,7 +569,10 @@ fn a_registry_takes_kinds_needs_and_modules_from_outside() {
         .with_module(hppm::shader_file!("shaders/common/rng.wgsl"))
         .modules()
         .len();
-    assert_eq!(modules, hppm::passes::common_modules().len() + 1);
+    assert_eq!(
+        modules,
+        hppm::passes::common_modules(&hppm::bsdfs::BsdfRegistry::builtin()).len() + 1
+    );
 }
 
 /// docs/pass-kinds.md is the registry's own reference (`hppm info --markdown`): a slot or param

@@ -5,6 +5,10 @@
 use std::path::Path;
 
 use glam::Vec3;
+use hppm::bsdfs::blendbsdf::Blend;
+use hppm::bsdfs::dielectric::Dielectric;
+use hppm::bsdfs::diffuse::Diffuse;
+use hppm::bsdfs::null::Null;
 use hppm::loaders::{Report, mitsuba};
 use hppm::scene::filter::PixelFilter;
 use hppm::scene::{Bsdf, Scene};
@@ -215,8 +219,12 @@ fn a_crop_window_sees_what_the_film_sees_there() {
     let crop = scene_of(cropped(&window));
     let film = scene_of(cropped(&[]));
     for scale in [1, 2] {
-        let c = GpuScene::new(&crop, 32 * scale, 24 * scale).uniform;
-        let f = GpuScene::new(&film, 96 * scale, 64 * scale).uniform;
+        let c = GpuScene::new(&crop, 32 * scale, 24 * scale)
+            .expect("layout")
+            .uniform;
+        let f = GpuScene::new(&film, 96 * scale, 64 * scale)
+            .expect("layout")
+            .uniform;
         let plane = |u: &hppm::gpu_scene::layout::GpuSceneUniform, x: f32, y: f32| {
             (
                 u.plane_origin[0] + x * u.plane_step_x,
@@ -489,10 +497,11 @@ fn old_scenes_are_upgraded_as_mitsuba_upgrades_them() {
     // fov 40 along y of a 2:1 film.
     let x_fov = 2.0 * (20f32.to_radians().tan() * 2.0).atan().to_degrees();
     assert!((scene.camera.fov_x_deg - x_fov).abs() < 1e-3);
-    assert!(scene.materials.iter().any(|m| matches!(
-        m.bsdf,
-        Bsdf::Diffuse { reflectance } if reflectance == Vec3::splat(0.25)
-    )));
+    assert!(scene.materials.iter().any(|m| {
+        m.bsdf
+            .get::<Diffuse>()
+            .is_some_and(|d| d.reflectance == Vec3::splat(0.25))
+    }));
     assert_eq!(said.len(), 2, "{said:?}");
     assert!(said[0].contains("strict_normals") && said[1].contains("high_quality_edges"));
 
@@ -619,14 +628,16 @@ fn includes_paths_and_aliases_load() {
     );
     write("scene.xml", &scene_text);
     let scene = scene_of(mitsuba::check_with(&dir.join("scene.xml"), &[]));
-    assert!(scene.materials.iter().any(|m| matches!(
-        m.bsdf,
-        Bsdf::Diffuse { reflectance } if reflectance == Vec3::splat(0.3)
-    )));
-    assert!(scene.materials.iter().any(|m| matches!(
-        m.bsdf,
-        Bsdf::Dielectric { int_ior, .. } if int_ior == 1.49
-    )));
+    assert!(scene.materials.iter().any(|m| {
+        m.bsdf
+            .get::<Diffuse>()
+            .is_some_and(|d| d.reflectance == Vec3::splat(0.3))
+    }));
+    assert!(scene.materials.iter().any(|m| {
+        m.bsdf
+            .get::<Dielectric>()
+            .is_some_and(|d| d.int_ior == 1.49)
+    }));
     assert_eq!(
         scene.triangles.len(),
         1 + 2,
@@ -840,9 +851,8 @@ fn host(object: &str, kind: &str, property: &str) -> String {
 /// the loader but not to the table, or listed but never read, fails here.
 #[test]
 fn the_plugin_table_is_what_the_loader_reads() {
-    use hppm::loaders::plugins::PLUGINS;
     let mut failures = Vec::new();
-    for plugin in PLUGINS {
+    for plugin in hppm::loaders::plugins::all(&hppm::bsdfs::BsdfRegistry::builtin()) {
         for kind in plugin.kinds {
             let kind = if *kind == "any other" {
                 "made_up"
@@ -906,7 +916,7 @@ fn the_plugin_table_of_docs_is_generated_from_the_code() {
         .find("<!-- plugins:end -->")
         .expect("plugins:end marker");
     assert!(
-        doc[start..end] == hppm::loaders::plugins::markdown(),
+        doc[start..end] == hppm::loaders::plugins::markdown(&hppm::bsdfs::BsdfRegistry::builtin()),
         "docs/scenes.md's plugin table differs from `hppm plugins`: regenerate it"
     );
 }
@@ -914,19 +924,18 @@ fn the_plugin_table_of_docs_is_generated_from_the_code() {
 /// The materials a shape's blend chooses among, as (weight, first, second) and the children.
 fn blend_of(scene: &Scene, material: u32) -> (f32, Bsdf, Bsdf) {
     let m = &scene.materials[material as usize];
-    let Bsdf::Blend {
+    let Some(&Blend {
         weight,
-        first,
-        second,
-    } = m.bsdf
+        children: [first, second],
+    }) = m.bsdf.get::<Blend>()
     else {
         panic!("not a blend: {:?}", m.bsdf);
     };
     assert!(first < material && second < material, "children come first");
     (
         weight,
-        scene.materials[first as usize].bsdf,
-        scene.materials[second as usize].bsdf,
+        scene.materials[first as usize].bsdf.clone(),
+        scene.materials[second as usize].bsdf.clone(),
     )
 }
 
@@ -950,20 +959,22 @@ fn blends_and_masks_load_as_mitsuba_reads_them() {
     );
     let scene = scene_of(check(&body));
     let shape = |i: usize| scene.triangles[12 * i].material;
-    let red = Bsdf::Diffuse {
-        reflectance: Vec3::new(0.8, 0.1, 0.1),
-    };
+    let red = hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::new(0.8, 0.1, 0.1));
     let (w, first, second) = blend_of(&scene, shape(0));
-    assert_eq!((w, first), (0.25, red));
-    assert!(matches!(second, Bsdf::RoughConductor { .. }));
-    assert_eq!(blend_of(&scene, shape(1)), (0.5, Bsdf::Null, red));
-    assert_eq!(scene.materials[shape(2) as usize].bsdf, Bsdf::Null);
+    assert_eq!((w, &first), (0.25, &red));
+    assert!(second.kind() == "roughconductor");
+    assert_eq!(blend_of(&scene, shape(1)), (0.5, Null::bsdf(), red.clone()));
+    assert_eq!(scene.materials[shape(2) as usize].bsdf, Null::bsdf());
     let textured = &scene.materials[shape(3) as usize];
     assert!(textured.textures.front.blend_weight.is_some());
     let (_, inner, outer_second) = blend_of(&scene, shape(3));
-    assert!(matches!(inner, Bsdf::Blend { .. }));
+    assert!(inner.kind() == "blend");
     assert_eq!(outer_second, red);
-    let Bsdf::Blend { first, second, .. } = scene.materials[shape(4) as usize].bsdf else {
+    let Some(&Blend {
+        children: [first, second],
+        ..
+    }) = scene.materials[shape(4) as usize].bsdf.get::<Blend>()
+    else {
         panic!("bumpmap > mask is a blend");
     };
     assert_eq!(blend_of(&scene, shape(4)).0, 0.7);
@@ -973,7 +984,7 @@ fn blends_and_masks_load_as_mitsuba_reads_them() {
         frame(shape(5)).is_none(),
         "the referenced BSDF keeps its own frame"
     );
-    assert!(scene.features().blends);
+    assert!(scene.features().has_bsdf("blend"));
 }
 
 /// What Mitsuba refuses, hppm refuses at the element, every problem at once: a blendbsdf
@@ -1024,7 +1035,9 @@ fn broken_blends_are_errors_at_their_line() {
 /// specular-to-eta mapping, a texture silently dropped or kept in another parameter's slot.
 #[test]
 fn principled_reads_what_mitsuba_reads() {
-    use hppm::scene::principled::{HAS_CLEARCOAT, HAS_METALLIC, HAS_SHEEN, HAS_SPEC_TRANS};
+    use hppm::bsdfs::principled::{
+        HAS_CLEARCOAT, HAS_METALLIC, HAS_SHEEN, HAS_SPEC_TRANS, Principled,
+    };
     let shape = |bsdf: &str| {
         format!(
             "{}\n<shape type=\"cube\"><bsdf type=\"principled\">{bsdf}</bsdf></shape>{LIGHT}",
@@ -1035,7 +1048,7 @@ fn principled_reads_what_mitsuba_reads() {
         r#"<float name="sheen" value="0"/><float name="clearcoat" value="0.5"/><texture name="metallic" type="checkerboard"/><texture name="roughness" type="checkerboard"/><texture name="spec_trans" type="checkerboard"/>"#,
     )));
     let m = &scene.materials[scene.triangles[0].material as usize];
-    let Bsdf::Principled(p) = m.bsdf else {
+    let Some(p) = m.bsdf.get::<Principled>() else {
         panic!("not principled: {:?}", m.bsdf);
     };
     assert!(
@@ -1049,10 +1062,10 @@ fn principled_reads_what_mitsuba_reads() {
         HAS_CLEARCOAT | HAS_METALLIC | HAS_SPEC_TRANS
     );
     assert!(m.textures.front.alpha_u.is_some() && m.textures.front.alpha_v.is_some());
-    let spec_trans = hppm::scene::PRINCIPLED_TEXTURED
+    let spec_trans = hppm::bsdfs::principled::TEXTURED
         .iter()
         .position(|&n| n == "spec_trans");
-    for (i, slot) in m.textures.front.principled.iter().enumerate() {
+    for (i, slot) in m.textures.front.fields.iter().enumerate() {
         assert_eq!(slot.is_some(), Some(i) == spec_trans, "principled slot {i}");
     }
     for (bsdf, expected) in [

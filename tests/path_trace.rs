@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use hppm::scene::{Bsdf, Camera, Integrator, Material, Scene, Sphere};
+use hppm::scene::{Camera, Integrator, Material, Scene, Sphere};
 
 /// Asserts every pixel and the mean of `image` are near `expected` (same value in each channel).
 fn assert_uniform(image: &hppm::image::Image, expected: f32, mean_tol: f64, pixel_tol: f32) {
@@ -71,9 +71,7 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
         },
         spp_hint: None,
         materials: vec![Material {
-            bsdf: Bsdf::Diffuse {
-                reflectance: Vec3::splat(albedo),
-            },
+            bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(albedo)),
             back: None,
             emission: Vec3::splat(emission),
             textures: Default::default(),

@@ -198,8 +198,8 @@ fn cpu_caustic_deposits(
             if wi.dot(normal) <= 0.0 {
                 break;
             }
-            match scene.materials[tri.material as usize].bsdf {
-                hppm::scene::Bsdf::Mirror => {
+            match scene.materials[tri.material as usize].bsdf.kind() {
+                "mirror" => {
                     dir = 2.0 * wi.dot(normal) * normal - wi;
                     after_specular = true;
                     let side = if dir.dot(normal) >= 0.0 { 1.0 } else { -1.0 };
@@ -634,7 +634,11 @@ fn merge_matches_the_progressive_update_in_f64() {
     let (width, height, slots) = (4u32, 2u32, 2u32);
     let count = (width * height * slots) as usize;
     let alpha = 0.7f64;
-    let min_radius = 1e-5 * GpuScene::new(&scene, width, height).uniform.scene_radius as f64;
+    let min_radius = 1e-5
+        * GpuScene::new(&scene, width, height)
+            .expect("layout")
+            .uniform
+            .scene_radius as f64;
     let mut rng = Lcg(9);
     let mut points: Vec<GpuHitPoint> = (0..count)
         .map(|i| {
@@ -785,7 +789,11 @@ fn merge_stays_finite_and_exact_over_a_hundred_thousand_iterations() {
     let (width, height) = (4u32, 2u32);
     let count = (width * height) as usize;
     let alpha = 0.7f64;
-    let min_radius = 1e-5 * GpuScene::new(&scene, width, height).uniform.scene_radius as f64;
+    let min_radius = 1e-5
+        * GpuScene::new(&scene, width, height)
+            .expect("layout")
+            .uniform
+            .scene_radius as f64;
     let counts = [0u32, 1, 3, 200, 3000, 70_000, 70_000, 12];
     let radii = [
         0.1f32,

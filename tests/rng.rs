@@ -45,8 +45,12 @@ fn gpu_streams_equal_the_cpu_mirror() {
         [12345, 678, hppm::passes::rng::camera_seed(u64::MAX), 0],
     ];
     let n = keys.len();
-    let library =
-        ShaderLibrary::new(false, Default::default(), &common_modules()).expect("library");
+    let library = ShaderLibrary::new(
+        false,
+        Default::default(),
+        &common_modules(&hppm::bsdfs::BsdfRegistry::builtin()),
+    )
+    .expect("library");
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let key_buffer = gpu
         .create_buffer_init("keys", bytemuck::cast_slice(&keys), storage)

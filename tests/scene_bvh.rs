@@ -8,7 +8,7 @@ use hppm::scene::bvh::{
     Aabb, Bvh, BvhNode, MAX_SAH_DEPTH, build_sah, closest_hit, intersect_primitive,
     intersect_sphere, intersect_triangle, scene_boxes,
 };
-use hppm::scene::{Bsdf, Camera, Integrator, Material, Scene, Sphere, Triangle};
+use hppm::scene::{Camera, Integrator, Material, Scene, Sphere, Triangle};
 
 /// A deterministic pseudo-random stream (no extra dependency).
 struct Rng(u64);
@@ -309,9 +309,7 @@ fn primitive_intersections() {
 
 fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
     let material = Material {
-        bsdf: Bsdf::Diffuse {
-            reflectance: Vec3::splat(0.5),
-        },
+        bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.5)),
         back: None,
         emission: Vec3::ZERO,
         textures: Default::default(),

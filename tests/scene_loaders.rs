@@ -4,8 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
+use hppm::bsdfs::conductor::Mirror;
+use hppm::bsdfs::dielectric::Dielectric;
 use hppm::loaders::{mitsuba, obj, ron_format};
-use hppm::scene::{self, Bsdf, Scene, Tint};
+use hppm::scene::{self, Scene};
 
 fn repo(relative: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
@@ -56,9 +58,7 @@ fn cornell_diffuse_counts_camera_and_light() {
     ));
     assert!(close(s.camera.up, Vec3::Y, 1e-6));
     assert_eq!(emitters(&s), vec![CORNELL_LIGHT]);
-    let white = Bsdf::Diffuse {
-        reflectance: CORNELL_WHITE,
-    };
+    let white = hppm::bsdfs::diffuse::Diffuse::bsdf(CORNELL_WHITE);
     assert_eq!(s.materials.iter().filter(|m| m.bsdf == white).count(), 5);
     assert_eq!(s.integrator.max_depth, Some(12));
     assert_eq!(s.spp_hint, Some(64));
@@ -117,15 +117,11 @@ fn cornell_glass_sphere_spheres_and_materials() {
     assert_eq!(glass.radius, 0.38);
     assert_eq!(
         s.materials[glass.material as usize].bsdf,
-        Bsdf::Dielectric {
-            int_ior: 1.5,
-            ext_ior: 1.0,
-            tint: Tint::NONE,
-        }
+        Dielectric::bsdf(1.5, 1.0)
     );
     let mirror = s.spheres[1];
     assert_eq!(mirror.radius, 0.35);
-    assert_eq!(s.materials[mirror.material as usize].bsdf, Bsdf::Mirror);
+    assert_eq!(s.materials[mirror.material as usize].bsdf, Mirror::bsdf());
     assert!(!glass.flip_normals && !mirror.flip_normals);
     assert_eq!(emitters(&s), vec![CORNELL_LIGHT]);
     // rr_depth 1000 >= max_depth 12: roulette could never start, stored as "never".
@@ -254,9 +250,7 @@ fn furnace_is_a_closed_inward_facing_emitting_grey_cube() {
     for m in &s.materials {
         assert_eq!(
             m.bsdf,
-            Bsdf::Diffuse {
-                reflectance: Vec3::splat(0.5)
-            }
+            hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.5))
         );
         assert_eq!(m.emission, Vec3::ONE);
     }
@@ -290,18 +284,9 @@ fn mitsuba_conventions() {
         <shape type="sphere"><ref id="glass"/><point name="center" value="1, 2, 3"/></shape>"#);
     assert_eq!(
         s.materials[0].bsdf,
-        Bsdf::Diffuse {
-            reflectance: Vec3::splat(0.5)
-        }
+        hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.5))
     );
-    assert_eq!(
-        s.materials[1].bsdf,
-        Bsdf::Dielectric {
-            int_ior: 1.5046,
-            ext_ior: 1.000277,
-            tint: Tint::NONE,
-        }
-    );
+    assert_eq!(s.materials[1].bsdf, Dielectric::bsdf(1.5046, 1.000277));
     assert_eq!(s.spheres[1].center, Vec3::new(1.0, 2.0, 3.0));
 
     // $name defaults, grey from one number, -1 = unbounded.
@@ -318,9 +303,7 @@ fn mitsuba_conventions() {
     assert_eq!(s.integrator.rr_depth, Some(3));
     assert_eq!(
         s.materials[0].bsdf,
-        Bsdf::Diffuse {
-            reflectance: Vec3::splat(0.25)
-        }
+        hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.25))
     );
 }
 
@@ -417,9 +400,7 @@ fn obj_meshes_and_bare_obj_scenes() {
     assert_eq!(
         s.materials,
         vec![scene::Material {
-            bsdf: Bsdf::Diffuse {
-                reflectance: Vec3::splat(0.8)
-            },
+            bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.8)),
             back: None,
             emission: Vec3::ZERO,
             textures: Default::default(),
@@ -459,14 +440,7 @@ fn ron_conveniences() {
         );
     }
     assert_eq!((s.spheres[0].center, s.spheres[0].radius), (Vec3::X, 1.0));
-    assert_eq!(
-        s.materials[1].bsdf,
-        Bsdf::Dielectric {
-            int_ior: 1.33,
-            ext_ior: 1.0,
-            tint: Tint::NONE,
-        }
-    );
+    assert_eq!(s.materials[1].bsdf, Dielectric::bsdf(1.33, 1.0));
     assert_eq!(s.triangles.len(), 2 + 12);
     for t in &s.triangles[2..] {
         let c = (t.v[0] + t.v[1] + t.v[2]) / 3.0;
@@ -540,7 +514,7 @@ fn scene_features_list_what_the_scene_uses() {
     assert_eq!(
         diffuse,
         SceneFeatures {
-            diffuse: true,
+            bsdfs: vec!["diffuse"],
             area_lights: true,
             triangles: true,
             ..SceneFeatures::default()
@@ -552,7 +526,8 @@ fn scene_features_list_what_the_scene_uses() {
         "materials diffuse, lights area, shapes triangles"
     );
     let glass = load("tests/refs/scenes/cornell_glass_sphere/scene.xml").features();
-    assert!(glass.dielectric && glass.mirror && glass.spheres && glass.has_specular_surface());
+    assert!(glass.has_bsdf("dielectric") && glass.has_bsdf("mirror"));
+    assert!(glass.spheres && glass.has_specular_surface());
     assert!(!glass.point_lights);
     let point = load("tests/refs/scenes/point_light_caustic/scene.xml").features();
     assert!(point.point_lights && point.has_lights());
@@ -564,6 +539,9 @@ fn scene_features_list_what_the_scene_uses() {
             <emitter type="area"><rgb name="radiance" value="0, 0, 0"/></emitter>
         </shape>"#)
     .features();
-    assert!(!unused.dielectric, "an unreferenced BSDF is not a feature");
+    assert!(
+        !unused.has_bsdf("dielectric"),
+        "an unreferenced BSDF is not a feature"
+    );
     assert!(!unused.has_lights(), "a zero-radiance emitter is no light");
 }

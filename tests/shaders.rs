@@ -16,11 +16,19 @@ fn library_with(
     float_atomics: bool,
     defs: HashMap<String, naga_oil::compose::ShaderDefValue>,
 ) -> ShaderLibrary {
-    ShaderLibrary::new(float_atomics, defs, &common_modules()).expect("modules compose")
+    ShaderLibrary::new(
+        float_atomics,
+        defs,
+        &common_modules(&hppm::bsdfs::BsdfRegistry::builtin()),
+    )
+    .expect("modules compose")
 }
 
 fn library(float_atomics: bool) -> ShaderLibrary {
-    library_with(float_atomics, hppm::passes::all_scene_defs())
+    library_with(
+        float_atomics,
+        hppm::passes::all_scene_defs(&hppm::bsdfs::BsdfRegistry::builtin()),
+    )
 }
 
 /// Validates a composed module with every check and capability naga has; `what` names it.
@@ -276,12 +284,16 @@ fn scene_features_compile_code_in_and_out() {
     };
     let diffuse = library_with(
         true,
-        hppm::passes::scene_defs(&load("tests/refs/scenes/cornell_diffuse/scene.xml").features()),
+        hppm::passes::scene_defs(
+            &load("tests/refs/scenes/cornell_diffuse/scene.xml").features(),
+            &hppm::bsdfs::BsdfRegistry::builtin(),
+        ),
     );
     let glass = library_with(
         true,
         hppm::passes::scene_defs(
             &load("tests/refs/scenes/cornell_glass_sphere/scene.xml").features(),
+            &hppm::bsdfs::BsdfRegistry::builtin(),
         ),
     );
     for path in [
@@ -312,7 +324,10 @@ fn scene_features_compile_code_in_and_out() {
     // The BSDF kinds: each module only where the scene has its kind.
     let materials = library_with(
         true,
-        hppm::passes::scene_defs(&load("tests/refs/scenes/materials_cornell/scene.xml").features()),
+        hppm::passes::scene_defs(
+            &load("tests/refs/scenes/materials_cornell/scene.xml").features(),
+            &hppm::bsdfs::BsdfRegistry::builtin(),
+        ),
     );
     for path in [
         "shaders/passes/path_trace.wgsl",
@@ -347,7 +362,10 @@ fn scene_features_compile_code_in_and_out() {
     // Texture lookups only where a material has a texture.
     let textured = library_with(
         true,
-        hppm::passes::scene_defs(&load("tests/data/scenes/textured_box.xml").features()),
+        hppm::passes::scene_defs(
+            &load("tests/data/scenes/textured_box.xml").features(),
+            &hppm::bsdfs::BsdfRegistry::builtin(),
+        ),
     );
     for path in [
         "shaders/passes/path_trace.wgsl",
@@ -368,6 +386,7 @@ fn scene_features_compile_code_in_and_out() {
         true,
         hppm::passes::scene_defs(
             &load("tests/refs/scenes/point_light_caustic/scene.xml").features(),
+            &hppm::bsdfs::BsdfRegistry::builtin(),
         ),
     );
     for (path, function) in [
@@ -441,7 +460,7 @@ fn every_pass_shader_composes_with_uniform_scene_tables() {
         "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
     )))
     .expect("scene");
-    let gpu_scene = hppm::gpu_scene::layout::GpuScene::new(&scene, 8, 8);
+    let gpu_scene = hppm::gpu_scene::layout::GpuScene::new(&scene, 8, 8).expect("layout");
     let limits = wgpu::Limits::default();
     let uniform = TablePlacement::choose(PlacementRule::UniformWithBvh, &gpu_scene, &limits);
     let all = uniform.defs();
@@ -449,7 +468,7 @@ fn every_pass_shader_composes_with_uniform_scene_tables() {
     let mut sets: Vec<HashMap<_, _>> = vec![all.clone()];
     sets.extend(all.iter().map(|(k, v)| HashMap::from([(k.clone(), *v)])));
     for tables in sets {
-        let mut defs = hppm::passes::all_scene_defs();
+        let mut defs = hppm::passes::all_scene_defs(&hppm::bsdfs::BsdfRegistry::builtin());
         defs.extend(tables.clone());
         let lib = library_with(true, defs);
         for file in pass_shaders() {
@@ -473,13 +492,13 @@ fn every_pass_shader_composes_testing_every_primitive() {
         "/tests/refs/scenes/cornell_glass_sphere/scene.xml"
     )))
     .expect("scene");
-    let gpu_scene = hppm::gpu_scene::layout::GpuScene::new(&scene, 8, 8);
+    let gpu_scene = hppm::gpu_scene::layout::GpuScene::new(&scene, 8, 8).expect("layout");
     let uniform = TablePlacement::choose(
         PlacementRule::UniformWithBvh,
         &gpu_scene,
         &wgpu::Limits::default(),
     );
-    let mut defs = hppm::passes::all_scene_defs();
+    let mut defs = hppm::passes::all_scene_defs(&hppm::bsdfs::BsdfRegistry::builtin());
     defs.extend(uniform.defs());
     defs.insert("EVERY_PRIM".into(), ShaderDefValue::Bool(true));
     for (size, first) in [

@@ -9,7 +9,7 @@ use glam::{Mat4, Vec3};
 use hppm::image::Image;
 use hppm::scene::filter::PixelFilter;
 use hppm::scene::mesh::MeshData;
-use hppm::scene::{Bsdf, Camera, Integrator, Material, PointLight, Scene, Sphere};
+use hppm::scene::{Camera, Integrator, Material, PointLight, Scene, Sphere};
 
 /// A UV sphere of `rings` x `2 rings` quads on the unit sphere, counter-clockwise seen from
 /// outside, with its exact (radial) vertex normals.
@@ -80,9 +80,7 @@ fn lit_sphere(mesh: Option<MeshData>) -> Scene {
         },
         spp_hint: None,
         materials: vec![Material {
-            bsdf: Bsdf::Diffuse {
-                reflectance: Vec3::splat(0.7),
-            },
+            bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.7)),
             emission: Vec3::ZERO,
             back: None,
             textures: Default::default(),
@@ -209,9 +207,7 @@ fn shading_normals_create_no_energy_in_a_furnace() {
         },
         spp_hint: None,
         materials: vec![Material {
-            bsdf: Bsdf::Diffuse {
-                reflectance: Vec3::splat(0.8),
-            },
+            bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.8)),
             emission: Vec3::splat(0.5),
             back: None,
             textures: Default::default(),

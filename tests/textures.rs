@@ -294,7 +294,7 @@ fn bitmaps_are_decoded_from_srgb_unless_raw() {
         0.04
     ));
     // The diffuse BSDF's constant holds the texture's mean (plastic's sampling weight uses it).
-    let hppm::scene::Bsdf::Diffuse { reflectance } = srgb.materials[0].bsdf else {
+    let Some(&hppm::bsdfs::diffuse::Diffuse { reflectance }) = srgb.materials[0].bsdf.get() else {
         panic!("diffuse expected");
     };
     assert_eq!(reflectance, Vec3::splat(srgb.textures[0].mean()));
@@ -466,7 +466,9 @@ fn analytic_image(
     constant_only: bool,
 ) -> Vec<Option<Vec3>> {
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let u = hppm::gpu_scene::layout::GpuScene::new(scene, w, h).uniform;
+    let u = hppm::gpu_scene::layout::GpuScene::new(scene, w, h)
+        .expect("layout")
+        .uniform;
     let origin = Vec3::from_array(u.camera_origin);
     let light = scene.point_lights[0];
     let n = 8;
@@ -771,7 +773,7 @@ fn principled_field_textures_land_in_their_parameters() {
     let all = r#"<float name="eta" value="1.4"/>"#;
     field_textures_land(
         "principled",
-        &hppm::scene::PRINCIPLED_TEXTURED,
+        &hppm::bsdfs::principled::TEXTURED,
         all,
         &some,
         floats,
@@ -788,7 +790,7 @@ fn principled_thin_field_textures_land_in_their_parameters() {
         checker_texture("eta", 7)
     );
     let floats = [[0.0; 9], [0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.7, 0.0, 0.0]];
-    let names = &hppm::scene::PRINCIPLED_THIN_TEXTURED;
+    let names = &hppm::bsdfs::principledthin::TEXTURED;
     field_textures_land("principledthin", names, "", &some, floats);
 }
 
@@ -833,7 +835,7 @@ fn field_textures_land(
     // The loader kept each parameter's texture in its own slot: the checkerboard made for
     // index i sits at component i.
     for material in &scene.materials {
-        for (i, slot) in material.textures.front.principled.iter().enumerate() {
+        for (i, slot) in material.textures.front.fields.iter().enumerate() {
             if let Some(t) = slot {
                 let Texture::Checkerboard { color0, .. } = scene.textures[*t as usize] else {
                     panic!("{plugin}: slot {i} holds a bitmap");
@@ -879,7 +881,7 @@ fn field_textures_land(
         let material = q.z as usize;
         let fields = [got[0].truncate(), got[1].truncate(), got[2].truncate()];
         let fields: Vec<f32> = fields.iter().flat_map(|v| v.to_array()).collect();
-        let textures = scene.materials[material].textures.front.principled;
+        let textures = scene.materials[material].textures.front.fields;
         for (i, got) in fields.iter().enumerate() {
             let want = match textures.get(i).copied().flatten() {
                 Some(t) => scene.textures[t as usize].eval_1(q.truncate().truncate()),

@@ -632,7 +632,7 @@ mod tests {
 
     fn scene_at(relative: &str) -> GpuScene {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
-        GpuScene::new(&crate::loaders::load(&path).expect("scene"), 16, 16)
+        GpuScene::new(&crate::loaders::load(&path).expect("scene"), 16, 16).expect("layout")
     }
 
     /// water_glass's BVH has 3,249 nodes (2,081 before its references were split): more than a

@@ -37,7 +37,7 @@ impl<'a> PassHarness<'a> {
     /// `float_atomics`: compose the kernels with `atomic<f32>` (the device must have it) or with
     /// the compare-and-swap fallback, so tests can run both paths on one device.
     pub fn new(gpu: &'a GpuContext, scene: &Scene, size: (u32, u32), float_atomics: bool) -> Self {
-        let gpu_scene = GpuScene::new(scene, size.0, size.1);
+        let gpu_scene = GpuScene::new(scene, size.0, size.1).expect("layout");
         let mut shared = Shared::default();
         let resources = SceneResources::for_adapter(gpu, &gpu_scene).expect("scene upload");
         let shaders = hppm::passes::shader_library(float_atomics, scene, &resources.placement)
