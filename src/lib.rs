@@ -50,6 +50,7 @@ pub mod passes;
 pub mod render;
 pub mod ron_span;
 pub mod scene;
+pub mod testing;
 
 pub use error::Location;
 

@@ -1,4 +1,4 @@
-//! The BSDFs: the CPU reference (src/scene/bsdf.rs) against Mitsuba 3's own values, against
+//! The BSDFs: the CPU reference (each unit's model under src/bsdfs/) against Mitsuba 3's own values, against
 //! energy conservation, reciprocity and its own sampler (chi-square), and the GPU modules
 //! (shaders/common/*.wgsl) against the CPU reference on a table of directions.
 

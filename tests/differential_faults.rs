@@ -152,7 +152,7 @@ fn a_traversal_fault_in_one_direction_is_caught() {
 fn a_wrong_bsdf_pdf_is_caught() {
     assert_caught(Fault {
         name: "rough conductor sampling pdf halved",
-        file: "shaders/common/conductor.wgsl",
+        file: "src/bsdfs/roughconductor/roughconductor.wgsl",
         correct: "let pdf = microfacet_pdf(mf, wi, h) / (4.0 * dot(wo, h));",
         faulty: "let pdf = 0.5 * microfacet_pdf(mf, wi, h) / (4.0 * dot(wo, h));",
         graph: "graphs/pt.ron",

@@ -1,5 +1,5 @@
 //! Mitsuba's `normalmap` and `bumpmap`: the perturbed shading frames of the CPU reference
-//! (src/scene/normal_map.rs) and of the WGSL module (shaders/common/normal_map.wgsl) against
+//! (src/bsdfs/normalmap/frame.rs) and of the WGSL module (src/bsdfs/normalmap/normalmap.wgsl) against
 //! Mitsuba 3.9.1's own, read at 320 ray hits on the shapes of tests/data/normal_map/scene.xml
 //! (written with its fixture by make_fixture.py there); and how the loader reads the two
 //! plugins and their nestings with `twosided`, and refuses what it cannot render.

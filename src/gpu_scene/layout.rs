@@ -16,7 +16,7 @@ use crate::scene::texture::{self, NO_TEXTURE};
 use crate::scene::{Bsdf, PerturbationKind, Scene, SceneError, SideTextures};
 
 /// `GpuMaterial::frame_kind`: the shading frame as the shape gives it, or perturbed by a
-/// normal map or a bump map (src/scene/normal_map.rs).
+/// normal map or a bump map (src/bsdfs/normalmap/frame.rs).
 pub const FRAME_NONE: u32 = 0;
 pub const FRAME_NORMAL_MAP: u32 = 1;
 pub const FRAME_BUMP_MAP: u32 = 2;

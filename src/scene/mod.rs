@@ -106,7 +106,7 @@ pub enum PerturbationKind {
     Bump { scale: f32 },
 }
 
-/// A side's shading frame perturbed by a texture (src/scene/normal_map.rs is the reference).
+/// A side's shading frame perturbed by a texture (src/bsdfs/normalmap/frame.rs is the reference).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FramePerturbation {
     pub kind: PerturbationKind,

@@ -1,7 +1,7 @@
 #define_import_path bsdfs::normalmap
 
 // The shading frame a BSDF is evaluated and sampled in: the surface's own, or the one Mitsuba's
-// normalmap and bumpmap perturb from a texture. The CPU reference is src/scene/normal_map.rs
+// normalmap and bumpmap perturb from a texture. The CPU reference is src/bsdfs/normalmap/frame.rs
 // (which says where each formula comes from in Mitsuba 3.9.1); this must equal it. Without
 // NORMAL_MAPS every frame is the surface's and every factor 1.
 

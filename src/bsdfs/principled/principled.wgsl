@@ -1,6 +1,6 @@
 #define_import_path bsdfs::principled
 
-// Mitsuba 3's principled BSDF, lobe for lobe as src/scene/principled.rs (the CPU reference,
+// Mitsuba 3's principled BSDF, lobe for lobe as src/bsdfs/principled/mod.rs (the CPU reference,
 // which says where each formula comes from). The parameters live in the fields of the other
 // kinds (src/gpu_scene/layout.rs): base colour in albedo, roughness and metallic in alpha_u
 // and alpha_v (textures replace those three), (anisotropic, spec_trans, spec_tint) in

@@ -1,6 +1,6 @@
 #define_import_path bsdfs::principledthin
 
-// Mitsuba 3's principledthin BSDF, lobe for lobe as src/scene/principled_thin.rs (the CPU
+// Mitsuba 3's principledthin BSDF, lobe for lobe as src/bsdfs/principledthin/mod.rs (the CPU
 // reference, which says where each formula comes from). The parameters live where
 // principled keeps its own (src/gpu_scene/layout.rs): base colour in albedo, roughness in
 // alpha_u, (anisotropic, spec_trans, spec_tint) in specular, (sheen, sheen_tint, flatness) in

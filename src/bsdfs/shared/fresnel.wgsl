@@ -1,7 +1,7 @@
 #define_import_path common::fresnel
 
 // Fresnel terms as Mitsuba 3 writes them (include/mitsuba/render/fresnel.h); the CPU reference
-// is src/scene/bsdf.rs.
+// is src/bsdfs/shared/fresnel.rs.
 
 struct Fresnel {
     // Reflectance.

@@ -2,7 +2,7 @@
 
 // Beckmann and GGX microfacet distributions with visible-normal sampling, as Mitsuba 3 writes
 // them (include/mitsuba/render/microfacet.h: Walter et al. 2007; Heitz and d'Eon 2014). Local
-// frame: z is the normal. The CPU reference is src/scene/bsdf.rs.
+// frame: z is the normal. The CPU reference is src/bsdfs/shared/microfacet.rs.
 
 #import common::sampling::{PI, square_to_disk_concentric}
 

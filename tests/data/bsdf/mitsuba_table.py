@@ -1,5 +1,5 @@
 """Writes mitsuba_values.csv: Mitsuba 3's own BSDF values on a table of directions, against
-which tests/bsdf.rs checks hppm's CPU reference (src/scene/bsdf.rs).
+which tests/bsdf.rs checks hppm's CPU reference (each unit's model under src/bsdfs/).
 
     pip install mitsuba==3.9.1 && python3 mitsuba_table.py
 

@@ -1,4 +1,4 @@
-"""Prints the NAMED_CONDUCTORS table of src/scene/bsdf.rs: Mitsuba 3's measured conductor
+"""Prints the NAMED_CONDUCTORS table of src/bsdfs/conductor/named.rs: Mitsuba 3's measured conductor
 spectra (the mitsuba-data repository's ior/*.spd) converted to RGB the way Mitsuba's RGB
 variants convert them (include/mitsuba/render/ior.h, complex_ior_from_file ->
 spectrum_list_to_srgb in src/core/spectrum.cpp: 1000 steps over 360-830 nm, linear
