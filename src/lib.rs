@@ -31,10 +31,13 @@
 //!
 //! Layers point one way: `gpu` (device, buffers, shader composition, radix sort) knows nothing
 //! above it; `graph` (schema, validation, pruning, schedule, allocation, execution) knows `gpu`
-//! only; `scene` knows neither graph nor passes; `passes` knows all three; `app` (render loop,
-//! compare, bench, checkpoints) and `cli` (the command line, behind the default `cli` feature)
-//! are clients of them. docs/library.md lists the calls a program uses,
-//! docs/writing-a-pass.md how a pass is added from another crate.
+//! only; `scene` (the model and the BSDF interface) knows neither graph nor passes; `bsdfs`
+//! (one unit per BSDF and their registry) and `loaders` (Mitsuba XML, RON, OBJ, PLY) build on
+//! it; `gpu_scene` is the scene as the GPU reads it; `passes` knows all of those; `render` (the
+//! renderer, budgets, the error estimate, checkpoints), `app` (render jobs, compare, bench, the
+//! live view) and `cli` (the command line, behind the default `cli` feature) are clients of
+//! them. docs/library.md lists the calls a program uses, docs/writing-a-pass.md and
+//! docs/writing-a-bsdf.md how a pass or a BSDF is added from another crate.
 
 pub mod app;
 pub mod bsdfs;

@@ -221,7 +221,7 @@ fn cpu_reference_matches_mitsubas_frames() {
 const KERNEL: &str = "#import common::scene::{materials, NO_BACK, NO_HIT}
 #import common::traversal::intersect_scene
 #import common::surface::surface_at
-#import common::normal_map::{shading_frame, frame_factor}
+#import bsdfs::normalmap::{shading_frame, frame_factor}
 @group(1) @binding(0) var<storage, read> queries: array<vec4<f32>>;
 @group(1) @binding(1) var<storage, read_write> out: array<vec4<f32>>;
 @compute @workgroup_size(64)

@@ -334,7 +334,7 @@ fn scene_features_compile_code_in_and_out() {
         "shaders/passes/photon_trace.wgsl",
     ] {
         for function in [
-            "rough_conductor_sample",
+            "roughconductor_sample",
             "rough_plastic_sample",
             "plastic_sample",
             "rough_dielectric_sample",

@@ -56,6 +56,7 @@ pub fn builtin() -> &'static [&'static BsdfPlugin] {
         &principledthin::PLUGIN,
         &twosided::PLUGIN,
         &normalmap::PLUGIN,
+        &normalmap::BUMP_PLUGIN,
     ];
     UNITS
 }

@@ -19,7 +19,7 @@ use crate::gpu::shaders::{ShaderFile, WgslModule};
 const WGSL: ShaderFile = crate::shader_file!("src/gpu_scene/scene.wgsl");
 
 /// The module `common::scene`: scene.wgsl, then the chunked tables' bindings and readers
-/// generated from [`tables::CHUNKABLE`] and the material kinds' numbers generated from `bsdfs`.
+/// generated from `tables::CHUNKABLE` and the material kinds' numbers generated from `bsdfs`.
 pub fn wgsl_module(bsdfs: &BsdfRegistry) -> WgslModule {
     WgslModule::FileThen(WGSL, tables::chunk_wgsl() + &bsdfs.kinds_wgsl())
 }

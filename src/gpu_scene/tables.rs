@@ -1,5 +1,5 @@
 //! The scene tables that grow with the triangles and may be larger than one binding: the one
-//! list of them ([`CHUNKABLE`]), how each is cut into chunks, and the WGSL that binds the chunks
+//! list of them (`CHUNKABLE`), how each is cut into chunks, and the WGSL that binds the chunks
 //! and reads an entry from whichever chunk holds it, generated from that list and appended to
 //! `scene.wgsl` (the module `common::scene`).
 

@@ -100,9 +100,9 @@ pub fn chi_square(bsdf: &Bsdf, wi: Vec3, samples: usize, rng: &mut Rng) -> ChiSq
             for a in 0..SUB {
                 for c in 0..SUB {
                     let cz = -1.0 + (z as f64 + (a as f64 + 0.5) / SUB as f64) * 2.0 / ZB as f64;
-                    let cp = (ph as f64 + (c as f64 + 0.5) / SUB as f64) * 2.0
-                        * std::f64::consts::PI
-                        / PB as f64;
+                    let cp =
+                        (ph as f64 + (c as f64 + 0.5) / SUB as f64) * 2.0 * std::f64::consts::PI
+                            / PB as f64;
                     let r = (1.0 - cz * cz).max(0.0).sqrt();
                     let wo = Vec3::new((r * cp.cos()) as f32, (r * cp.sin()) as f32, cz as f32);
                     sum += bsdf.pdf(wi, wo) as f64;

@@ -69,19 +69,21 @@ fn minnaert_is_read_from_mitsuba_xml_by_its_name() {
     assert!(scene.materials[2].textures.front.diffuse.is_some());
     assert_eq!(scene.features().bsdfs, vec!["minnaert"]);
 
-    let error = |bsdf: &str| {
-        spheres(&registry, &[bsdf])
-            .expect_err(bsdf)
-            .to_string()
-    };
+    let error = |bsdf: &str| spheres(&registry, &[bsdf]).expect_err(bsdf).to_string();
     let low = error(r#"<bsdf type="minnaert"><float name="k" value="0.5"/></bsdf>"#);
-    assert!(low.starts_with("minnaert_test.xml:3:") && low.contains("at least 1"), "{low}");
+    assert!(
+        low.starts_with("minnaert_test.xml:3:") && low.contains("at least 1"),
+        "{low}"
+    );
     let typo = error(r#"<bsdf type="minnaert"><float name="kk" value="2"/></bsdf>"#);
     assert!(typo.contains("did you mean \"k\""), "{typo}");
     let builtin = spheres(&Registry::builtin(), &[r#"<bsdf type="minnaert"/>"#])
         .expect_err("hppm alone has no minnaert")
         .to_string();
-    assert!(builtin.contains("bsdf type \"minnaert\" is not supported"), "{builtin}");
+    assert!(
+        builtin.contains("bsdf type \"minnaert\" is not supported"),
+        "{builtin}"
+    );
 }
 
 /// hppm's source never names it: the loader's dispatch, the kind number, the WGSL constant and
@@ -106,7 +108,10 @@ fn hppm_never_names_minnaert() {
     }
     assert!(named.is_empty(), "hppm names minnaert in {named:?}");
     let generated = registry().bsdfs().dispatch_wgsl();
-    assert!(generated.contains("if m.kind == MATERIAL_MINNAERT"), "{generated}");
+    assert!(
+        generated.contains("if m.kind == MATERIAL_MINNAERT"),
+        "{generated}"
+    );
     assert_eq!(PLUGIN.kinds[0].constant(), "MATERIAL_MINNAERT");
 }
 
@@ -216,8 +221,8 @@ fn furnace_image(size: u32, reflectance: Vec3, k: f32) -> Vec<Vec3> {
                 for i in 0..sub {
                     let u = (x as f32 + (i as f32 + 0.5) / sub as f32) / size as f32;
                     let v = (y as f32 + (j as f32 + 0.5) / sub as f32) / size as f32;
-                    let dir = Vec3::new((2.0 * u - 1.0) * half, (1.0 - 2.0 * v) * half, -1.0)
-                        .normalize();
+                    let dir =
+                        Vec3::new((2.0 * u - 1.0) * half, (1.0 - 2.0 * v) * half, -1.0).normalize();
                     let b = origin.dot(dir);
                     let disc = b * b - (origin.length_squared() - 1.0);
                     sum += if disc > 0.0 {
@@ -247,7 +252,10 @@ fn furnace_renders_match_the_closed_form() {
     let size = scene.camera.width;
     let expected = furnace_image(size, Vec3::new(0.9, 0.6, 0.3), 3.0);
     let ring = |i: usize| {
-        let (x, y) = ((i as u32 % size) as f32 + 0.5, (i as u32 / size) as f32 + 0.5);
+        let (x, y) = (
+            (i as u32 % size) as f32 + 0.5,
+            (i as u32 / size) as f32 + 0.5,
+        );
         let r = ((x - size as f32 / 2.0).powi(2) + (y - size as f32 / 2.0).powi(2)).sqrt();
         ((r / (size as f32 / 2.0)) * 5.0).min(4.0) as usize
     };
@@ -286,15 +294,24 @@ fn hybrid_equals_pt_with_a_minnaert_floor() {
     let size = scene.camera.width as usize;
     let block = |i: usize| (i % size) / 8 + 4 * ((i / size) / 8);
     let means = |graph: &str| {
-        let renders: Vec<Image> = (0..3).map(|seed| render(&scene, graph, 128, seed)).collect();
+        let renders: Vec<Image> = (0..3)
+            .map(|seed| render(&scene, graph, 128, seed))
+            .collect();
         (0..16)
             .map(|b| {
                 let per_seed: Vec<f64> = renders
                     .iter()
                     .map(|img| {
-                        let values = img.pixels.iter().enumerate().filter(|(i, _)| block(*i) == b);
+                        let values = img
+                            .pixels
+                            .iter()
+                            .enumerate()
+                            .filter(|(i, _)| block(*i) == b);
                         let n = 3.0 * 64.0;
-                        values.map(|(_, p)| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / n
+                        values
+                            .map(|(_, p)| (p[0] + p[1] + p[2]) as f64)
+                            .sum::<f64>()
+                            / n
                     })
                     .collect();
                 let mean = per_seed.iter().sum::<f64>() / 3.0;

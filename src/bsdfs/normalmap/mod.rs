@@ -1,5 +1,5 @@
-//! Mitsuba's `normalmap` and `bumpmap`: one nested BSDF evaluated and sampled in a shading frame
-//! a bitmap perturbs. They add no kind: the perturbation is the material side's `frame` (its
+//! Mitsuba's `normalmap` and `bumpmap` (two plugins of one unit): one nested BSDF evaluated and
+//! sampled in a shading frame a bitmap perturbs. They add no kind: the perturbation is the material side's `frame` (its
 //! texture slot and the GPU record's frame fields), which `normalmap.wgsl` applies before any
 //! BSDF sees a direction; `frame.rs` is its CPU reference.
 
@@ -13,39 +13,49 @@ use crate::scene::{FramePerturbation, PerturbationKind, SceneError};
 
 pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     name: "normalmap",
-    reads: &[
-        Plugin {
-            object: "bsdf",
-            kinds: &["normalmap"],
-            properties: &[
-                p("normalmap", ""),
-                p("flip_invalid_normals", "true"),
-                p("use_shadowing_function", "true"),
-            ],
-            notes: "A bitmap `normalmap` (x -> 2x - 1, the normal in the shading frame; `raw` \
-                    as Mitsuba's docs ask) and one nested BSDF (inline or `<ref>`), evaluated \
-                    and sampled in the perturbed frame with Mitsuba's masking and shadow \
-                    terminator; `twosided` inside or outside it.",
-        },
-        Plugin {
-            object: "bsdf",
-            kinds: &["bumpmap"],
-            properties: &[
-                p("scale", "1"),
-                p("flip_invalid_normals", "true"),
-                p("use_shadowing_function", "true"),
-            ],
-            notes: "One bitmap (any name: the height, its luminance) and one nested BSDF; the \
-                    normal from the texture's bilinear gradient (Mitsuba's `eval_1_grad`) along \
-                    dp/du and dp/dv, otherwise as `normalmap`.",
-        },
-    ],
+    reads: &[Plugin {
+        object: "bsdf",
+        kinds: &["normalmap"],
+        properties: &[
+            p("normalmap", ""),
+            p("flip_invalid_normals", "true"),
+            p("use_shadowing_function", "true"),
+        ],
+        notes: "A bitmap `normalmap` (x -> 2x - 1, the normal in the shading frame; `raw` as \
+                Mitsuba's docs ask) and one nested BSDF (inline or `<ref>`), evaluated and \
+                sampled in the perturbed frame with Mitsuba's masking and shadow terminator; \
+                `twosided` inside or outside it.",
+    }],
     read,
-    objects: &["bsdf", "ref", "texture"],
+    objects: &["bsdf", "ref"],
     kinds: &[],
     // Set from the scene's perturbed sides (`SceneFeatures::normal_maps`), not from a kind.
     def: None,
     wgsl: Some(crate::shader_file!("src/bsdfs/normalmap/normalmap.wgsl")),
+};
+
+/// `bumpmap`: the same perturbation, its normal from a height map's gradient. Its texture is an
+/// object of any name (Mitsuba takes the one it finds), so it reads textures as objects, which
+/// `normalmap` does not; its WGSL is `normalmap`'s.
+pub static BUMP_PLUGIN: BsdfPlugin = BsdfPlugin {
+    name: "bumpmap",
+    reads: &[Plugin {
+        object: "bsdf",
+        kinds: &["bumpmap"],
+        properties: &[
+            p("scale", "1"),
+            p("flip_invalid_normals", "true"),
+            p("use_shadowing_function", "true"),
+        ],
+        notes: "One bitmap (any name: the height, its luminance) and one nested BSDF; the \
+                normal from the texture's bilinear gradient (Mitsuba's `eval_1_grad`) along \
+                dp/du and dp/dv, otherwise as `normalmap`.",
+    }],
+    read,
+    objects: &["bsdf", "ref", "texture"],
+    kinds: &[],
+    def: None,
+    wgsl: None,
 };
 
 fn read(r: &mut dyn BsdfReader) -> Result<Sides, SceneError> {

@@ -39,10 +39,20 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         };
         let mut element = Element::new(self, node, kind, unit)?;
-        let sides = (unit.read)(&mut element)?;
+        let read = (unit.read)(&mut element);
         let takes = unit.properties_of(&element.kind);
+        if read.is_err() {
+            // A property the plugin never reads is the likelier cause (a misspelt name), so it
+            // is reported rather than what its absence made the unit say; those the unit did not
+            // get to before its error are not unknown.
+            let kind = element.kind.clone();
+            element
+                .props
+                .entries
+                .retain(|(name, _)| !unit.has_property(&kind, name));
+        }
         self.finish_with(element.props, node, Some(&takes))?;
-        Ok(sides)
+        read
     }
 
     /// Adds a material the scene's shapes or blends refer to; its index.
