@@ -27,31 +27,23 @@
 // at its position, and only its hit points carry its signed weight f / (q F_W).
 
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
-#import common::sampling::{PI, INV_PI, sample_cosine_hemisphere, power_heuristic, max_component, any_not_finite}
+#import common::sampling::{PI, INV_PI, power_heuristic, max_component, any_not_finite}
 #import common::scene::{scene_info, materials, Material, NO_HIT, NO_LIGHT, UNBOUNDED, MATERIAL_DIFFUSE}
 #import common::intersection::Hit
 #import common::traversal::intersect_scene
-#import common::surface::{Surface, unoccluded, surface_at, spawn_origin}
-#import common::material::{material_eval, material_has_continuous_lobe}
-#import common::scatter::{scatter, seen_from}
-#import bsdfs::blendbsdf::choose_material
+#import common::surface::{Surface, surface_at, spawn_origin}
+#import common::material::material_has_continuous_lobe
+#import common::path_step::{arrive, bounce, direct_light}
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
 #endif
 #ifdef GLOSSY
-#import common::material::{material_specular_eval, material_specular_share}
+#import common::material::material_specular_share
 #endif
 #import common::camera::{CameraRay, camera_ray, camera_ray_through, has_lens, film_index, film_pixel}
 #import common::signed_filter::signed_draw_density
 #import common::pixel_filter::{filter_radius, filter_weight}
-#ifdef TEXTURES
-#import common::texture::textured_material
-#endif
-#import bsdfs::normalmap::{ShadingFrame, plain_frame, frame_factor}
-#ifdef NORMAL_MAPS
-#import bsdfs::normalmap::shading_frame
-#endif
-#import common::lights::{sample_light, area_light_pdf}
+#import common::lights::area_light_pdf
 #ifdef ENVIRONMENT
 #import common::environment::escaped
 #endif
@@ -156,12 +148,6 @@ struct PathState {
     depth: u32,
 }
 
-// A BSDF's value towards a light sample (cosine and frame factor included) and its pdf there.
-struct BsdfTowards {
-    value: vec3<f32>,
-    pdf: f32,
-}
-
 // Where the camera pass hands a sample over to photon mapping.
 struct HitPointSink {
     pixel: u32,
@@ -186,55 +172,6 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
         radius = initial_radius(radii.rule, footprint);
     }
     hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight * sink.film_weight, footprint);
-}
-
-// What the BSDF at `surface` sends back along `wo` of light arriving from world direction `dir`
-// (cosine and frame factor included), and its pdf of sampling `dir`. `wi` is local, in
-// `shading`'s frame; `shading` (around surface.shading_normal) adds a normal map's masking and
-// shadow terminator. With GLOSSY the `mapped` share of the specular lobes' part is left out
-// (photons carry it).
-fn bsdf_towards(surface: Surface, material: Material, shading: ShadingFrame, wi: vec3<f32>, mapped: vec3<f32>, dir: vec3<f32>) -> BsdfTowards {
-    if material.kind == MATERIAL_DIFFUSE {
-        let cos_i = dot(surface.shading_normal, dir);
-        let factor = frame_factor(shading, dir);
-        if cos_i <= 0.0 || factor <= 0.0 {
-            return BsdfTowards(vec3<f32>(0.0), 0.0);
-        }
-        return BsdfTowards(material.albedo * INV_PI * cos_i * factor, cos_i * INV_PI);
-    }
-    let local = dir * shading.frame;
-    let e = material_eval(material, wi, local, true);
-#ifdef GLOSSY
-    let specular = material_specular_eval(material, wi, local, e, params.glossy_threshold);
-    return BsdfTowards((e.value - mapped * specular) * frame_factor(shading, dir), e.pdf);
-#else
-    return BsdfTowards(e.value * frame_factor(shading, dir), e.pdf);
-#endif
-}
-
-// Next-event estimation: one light sample, MIS-weighted against sampling the BSDF. Every lobe
-// that light sampling can reach comes through this one call site: lavapipe inlines each call of
-// the shadow ray's traversal, and its compile time grows with every copy.
-fn direct_light(surface: Surface, material: Material, shading: ShadingFrame, wi: vec3<f32>, mapped: vec3<f32>, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
-    let u_pick = rng_next_f32(rng);
-    let u = rng_next_vec2(rng);
-    let ls = sample_light(surface.position, u_pick, u);
-    if !ls.valid {
-        return vec3<f32>(0.0);
-    }
-    let towards = bsdf_towards(surface, material, shading, wi, mapped, ls.dir);
-    if max_component(towards.value) <= 0.0 {
-        return vec3<f32>(0.0);
-    }
-    *rays += 1u;
-    if !unoccluded(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal) {
-        return vec3<f32>(0.0);
-    }
-    var weight = 1.0;
-    if !ls.is_delta {
-        weight = power_heuristic(ls.pdf, towards.pdf);
-    }
-    return towards.value * ls.radiance * weight / ls.pdf;
 }
 
 // Caustic flux arriving per unit area at `surface` from the front, by this iteration's photons
@@ -405,39 +342,24 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
 #endif
         return false;
     }
-    var surface = surface_at(hit, (*path).origin, (*path).dir);
-    var material = materials[surface.material];
+    let arrived = surface_at(hit, (*path).origin, (*path).dir);
     let wo = -(*path).dir;
-    var cos_o = dot(wo, surface.normal);
+    let cos_o = dot(wo, arrived.normal);
     (*path).travelled += hit.t;
 
     let kept = path_traced_share(*path);
-    if surface.light != NO_LIGHT && cos_o > 0.0 && !hidden && max_component(kept) > 0.0 {
+    if arrived.light != NO_LIGHT && cos_o > 0.0 && !hidden && max_component(kept) > 0.0 {
         // The rest keeps its MIS weight (after a glossy lobe, its pdf, not a delta's).
         var weight = 1.0;
         if !full_weight(*path) {
-            weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(surface.light, hit.t, cos_o));
+            weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(arrived.light, hit.t, cos_o));
         }
-        (*path).radiance += (*path).throughput * kept * material.emission * weight;
+        (*path).radiance += (*path).throughput * kept * materials[arrived.material].emission * weight;
     }
-    // A twosided material's back is its own BSDF, seen with the normal flipped; a blend
-    // scatters with one of its children.
-    let chosen = choose_material(surface.material, cos_o, surface.uv, rng);
-    material = chosen.material;
-    let back = chosen.back;
-    surface = seen_from(surface, back);
-    cos_o = select(cos_o, -cos_o, back);
-#ifdef TEXTURES
-    // Before any use of the colours: NEE, the bounce, hit-point weights, grid lookups.
-    material = textured_material(material, surface.uv);
-#endif
-    // The BSDF's frame: a normal or bump map turns the shading normal every branch below
-    // shades with (which vertices are diffuse or specular stays the material's kind).
-    var shading = plain_frame(surface.shading_normal);
-#ifdef NORMAL_MAPS
-    shading = shading_frame(material, surface, hit.prim, back, wo, true);
-    surface.shading_normal = shading.frame[2];
-#endif
+    // The side and blend child this vertex scatters with, textured, in its shading frame.
+    let v = arrive(arrived, hit.prim, wo, true, rng);
+    let surface = v.surface;
+    let material = v.material;
     if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
         return false;
     }
@@ -465,7 +387,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     if diffuse {
         // One-sided, as Mitsuba's diffuse: black from behind, and where the shading normal
         // turns away from the viewer.
-        if cos_o <= 0.0 || dot(surface.shading_normal, wo) <= 0.0 {
+        if v.cos_back <= 0.0 || dot(surface.shading_normal, wo) <= 0.0 {
             return false;
         }
         (*path).diffuse_vertices += 1u;
@@ -491,33 +413,21 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         }
     }
     // One next-event estimate for every lobe light sampling can reach (see direct_light).
-    let wi = wo * shading.frame;
     if diffuse || material_has_continuous_lobe(material.kind) {
-        (*path).radiance += (*path).throughput * direct_light(surface, material, shading, wi, (*path).mapped, rng, rays);
+        (*path).radiance += (*path).throughput * direct_light(v, (*path).mapped, params.glossy_threshold, rng, rays);
     }
-    if diffuse {
-        let dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
-        let cos_i = dot(dir, surface.shading_normal);
-        if cos_i <= 0.0 {
-            return false;
-        }
-        (*path).throughput *= material.albedo * frame_factor(shading, dir);
-        (*path).bsdf_pdf = cos_i * INV_PI;
-        (*path).after_delta = false;
-        (*path).dir = dir;
-    } else {
-        // Every other kind, in the shading frame of the side it is seen from.
-        let out = scatter(material, shading, cos_o, wo, true, rng);
-        if !out.sample.valid {
-            return false;
-        }
-        (*path).dir = out.dir;
-        (*path).throughput *= out.weight * frame_factor(shading, out.dir);
-        (*path).after_delta = out.sample.delta;
-        if !out.sample.delta {
-            (*path).bsdf_pdf = out.sample.pdf;
-        }
-        keep_photon_share(path, material, wi, out.sample);
+    let out = bounce(v, true, rng);
+    if !out.sample.valid {
+        return false;
+    }
+    (*path).dir = out.dir;
+    (*path).throughput *= out.weight;
+    (*path).after_delta = out.sample.delta;
+    if !out.sample.delta {
+        (*path).bsdf_pdf = out.sample.pdf;
+    }
+    if !diffuse {
+        keep_photon_share(path, material, wo * v.shading.frame, out.sample);
     }
     (*path).origin = spawn_origin(surface, (*path).dir);
     if max_component((*path).throughput) <= 0.0 {

@@ -23,9 +23,8 @@
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
 #import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, LIGHT_POINT, LIGHT_SPOT, LIGHT_PROJECTOR, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP}
 #import common::traversal::intersect_photon
-#import common::surface::{surface_at, offset_ray_origin, spawn_origin, photon_shading_correction}
-#import common::scatter::{scatter, seen_from}
-#import bsdfs::blendbsdf::choose_material
+#import common::surface::{surface_at, offset_ray_origin, spawn_origin}
+#import common::path_step::{arrive, bounce}
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
 #import bsdfs::blendbsdf::diffuse_probability
@@ -40,13 +39,7 @@
 #ifdef ENVIRONMENT
 #import common::environment::sample_environment_light
 #endif
-#ifdef TEXTURES
-#import common::texture::textured_material
-#endif
-#import bsdfs::normalmap::{plain_frame, frame_factor}
-#ifdef NORMAL_MAPS
-#import bsdfs::normalmap::shading_frame
-#endif
+#import bsdfs::normalmap::frame_factor
 #import common::hit_points::{PhotonHitsOut, PhotonHit}
 #import gpu::dispatch::next_item
 
@@ -336,15 +329,16 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     if hit.prim == NO_HIT {
         return false;
     }
-    var surface = surface_at(hit, photon.origin, photon.dir);
     let wi = -photon.dir;
-    var cos_i = dot(wi, surface.normal);
-    let facing = cos_i;
-    let chosen = choose_material(surface.material, cos_i, surface.uv, rng);
-    var material = chosen.material;
-    let back = chosen.back;
-    surface = seen_from(surface, back);
-    cos_i = select(cos_i, -cos_i, back);
+    // The side and blend child this vertex scatters with, textured, in its shading frame: a
+    // normal or bump map's as the camera pass has it but for flipping invalid normals, which
+    // depends on the viewer (taken as not flipped: exact wherever the camera direction sees
+    // the perturbed normal from above). Its masking and shadow terminator belong to the
+    // light's direction, here where the photon came from (`wi`).
+    let v = arrive(surface_at(hit, photon.origin, photon.dir), hit.prim, wi, false, rng);
+    let surface = v.surface;
+    let material = v.material;
+    let cos_i = v.cos_back;
 #ifdef BLENDS
     if material.kind == MATERIAL_NULL {
         // A mask's pass-through: the photon goes on unchanged, its class with it.
@@ -353,20 +347,6 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         return true;
     }
 #endif
-#ifdef TEXTURES
-    // The diffuse bounce and every other lobe scatter with the surface's own colours.
-    material = textured_material(material, surface.uv);
-#endif
-    // A normal or bump map's frame, as the camera pass has it but for flipping invalid
-    // normals, which depends on the viewer: taken as not flipped (exact wherever the camera
-    // direction sees the perturbed normal from above). Its masking and shadow terminator
-    // belong to the light's direction, here where the photon came from (`wi`).
-    var shading = plain_frame(surface.shading_normal);
-#ifdef NORMAL_MAPS
-    shading = shading_frame(material, surface, hit.prim, back, wi, false);
-    surface.shading_normal = shading.frame[2];
-#endif
-    let factor = frame_factor(shading, wi);
     if material.kind == MATERIAL_DIFFUSE {
         // One-sided, as the camera pass: the back of a diffuse surface absorbs.
         if cos_i <= 0.0 || dot(wi, surface.shading_normal) <= 0.0 {
@@ -375,12 +355,12 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         // The hit point weighs flux per unit area by the BSDF alone: the shading cosine
         // over the geometric one it arrived with turns it into what the camera pass would
         // gather there (1 on flat-shaded surfaces).
-        var deposited = photon.flux * (dot(wi, surface.shading_normal) * factor / cos_i);
+        var deposited = photon.flux * (dot(wi, surface.shading_normal) * frame_factor(v.shading, wi) / cos_i);
 #ifdef BLENDS
         // The flux arriving is the same whichever child of a blend this photon took, but only
         // a diffuse one deposits it.
-        if chosen.blended {
-            deposited /= diffuse_probability(surface.material, facing, surface.uv);
+        if v.blended {
+            deposited /= diffuse_probability(surface.material, v.facing, surface.uv);
         }
 #endif
         if params.mode == MODE_CAUSTIC {
@@ -390,20 +370,23 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
             return false;
         }
         deposit(surface.position, wi, deposited, segments);
-        photon.dir = sample_cosine_hemisphere(surface.shading_normal, rng_next_vec2(rng));
-        // Cosine sampling: f cos / pdf = albedo.
-        photon.flux *= material.albedo * factor * photon_shading_correction(surface, wi, photon.dir);
+        let out = bounce(v, false, rng);
+        if !out.sample.valid {
+            return false;
+        }
+        photon.dir = out.dir;
+        photon.flux *= out.weight;
         after_specular = false;
     } else {
         // Every other kind, as the camera pass scatters but carrying flux.
-        let out = scatter(material, shading, cos_i, wi, false, rng);
+        let out = bounce(v, false, rng);
         if !out.sample.valid {
             return false;
         }
 #ifdef GLOSSY
         var share = vec3<f32>(1.0);
         if params.mode == MODE_CAUSTIC {
-            share = material_specular_share(material, wi * shading.frame, out.sample, params.glossy_threshold);
+            share = material_specular_share(material, wi * v.shading.frame, out.sample, params.glossy_threshold);
             if max_component(share) <= 0.0 {
                 return false;
             }
@@ -414,7 +397,7 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
         }
 #endif
         photon.dir = out.dir;
-        photon.flux *= out.weight * factor * photon_shading_correction(surface, wi, photon.dir);
+        photon.flux *= out.weight;
 #ifdef GLOSSY
         photon.flux *= share;
         after_specular = out.sample.delta || params.mode == MODE_CAUSTIC;

@@ -33,7 +33,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
 /// Importable modules under `shaders/common/` that use the BSDFs' (the material dispatch among
 /// them), in dependency order.
 pub const PATH_MODULES: &[ShaderFile] = &[
-    shader_file!("shaders/common/scatter.wgsl"),
+    shader_file!("shaders/common/path_step.wgsl"),
     shader_file!("shaders/common/hit_points.wgsl"),
     shader_file!("shaders/common/gather.wgsl"),
     shader_file!("shaders/common/deposit_sums.wgsl"),

@@ -1,7 +1,7 @@
 #define_import_path bsdfs::dielectric
 
 // Mitsuba's smooth `dielectric`: Fresnel-weighted reflection or refraction, a delta lobe each.
-// The passes sample it in world space (common::scatter), where it makes the caustic paths'
+// The passes sample it in world space (common::path_step), where it makes the caustic paths'
 // specular vertices; the CPU reference is src/bsdfs/dielectric/mod.rs.
 
 #import common::bsdf::reflect_about

@@ -1,6 +1,6 @@
 //! Mitsuba's smooth `dielectric`: Fresnel-weighted reflection and refraction, both delta lobes,
 //! no absorption. The caustic paths' specular vertex: the passes sample it in world space
-//! (common::scatter imports `dielectric.wgsl`), so the dispatch has no entry for it.
+//! (common::path_step imports `dielectric.wgsl`), so the dispatch has no entry for it.
 
 use glam::{Vec2, Vec3};
 
