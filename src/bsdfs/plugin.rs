@@ -54,6 +54,9 @@ pub struct GpuKind {
     /// The least a textured roughness is taken to be (the untextured one is floored the same
     /// way when packed); 0 keeps it as looked up.
     pub alpha_floor: f32,
+    /// A scene with this kind needs its unit's WGSL, so its def is set; false for a kind the
+    /// passes handle with none of it (a perfect mirror, which the conductor unit reads).
+    pub needs_wgsl: bool,
 }
 
 impl GpuKind {
@@ -66,6 +69,7 @@ impl GpuKind {
             sample: None,
             glossy: Glossy::None,
             alpha_floor: 1e-4,
+            needs_wgsl: true,
         }
     }
 

@@ -97,6 +97,7 @@ impl BsdfRegistry {
         for (unit, kind) in self.kinds() {
             if let Some(def) = unit.def
                 && kinds.contains(&kind.name)
+                && kind.needs_wgsl
                 && !defs.contains(&def)
             {
                 defs.push(def);

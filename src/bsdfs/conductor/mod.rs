@@ -40,7 +40,10 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     read,
     objects: &[],
     kinds: &[
-        GpuKind::inline("mirror", LOBES),
+        GpuKind {
+            needs_wgsl: false,
+            ..GpuKind::inline("mirror", LOBES)
+        },
         GpuKind {
             sample: Some(WgslCall::new("bsdfs::conductor", "conductor_sample")),
             ..GpuKind::inline("conductor", LOBES)

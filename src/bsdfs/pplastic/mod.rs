@@ -49,15 +49,13 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     read,
     objects: &[],
     kinds: &[GpuKind {
-        name: "pplastic",
-        lobes: LOBES,
         eval: Some(WgslCall::new(MODULE, "pplastic_eval")),
         sample: Some(WgslCall::new(MODULE, "pplastic_sample")),
         glossy: Glossy::Split {
             eval: WgslCall::new(MODULE, "pplastic_coating"),
             share: WgslCall::new(MODULE, "pplastic_coating_share"),
         },
-        alpha_floor: 1e-4,
+        ..GpuKind::inline("pplastic", LOBES)
     }],
     def: Some("PLASTIC"),
     wgsl: Some(crate::shader_file!("src/bsdfs/pplastic/pplastic.wgsl")),

@@ -44,12 +44,10 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     read,
     objects: &[],
     kinds: &[GpuKind {
-        name: "roughconductor",
-        lobes: LOBES,
         eval: Some(WgslCall::new(MODULE, "roughconductor_eval")),
         sample: Some(WgslCall::new(MODULE, "roughconductor_sample")),
         glossy: Glossy::Whole,
-        alpha_floor: 1e-4,
+        ..GpuKind::inline("roughconductor", LOBES)
     }],
     def: Some("CONDUCTOR"),
     wgsl: Some(crate::shader_file!(

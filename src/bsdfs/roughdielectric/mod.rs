@@ -46,12 +46,10 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     read,
     objects: &[],
     kinds: &[GpuKind {
-        name: "roughdielectric",
-        lobes: LOBES,
         eval: Some(WgslCall::new(MODULE, "rough_dielectric_eval")),
         sample: Some(WgslCall::new(MODULE, "rough_dielectric_sample")),
         glossy: Glossy::Whole,
-        alpha_floor: 1e-4,
+        ..GpuKind::inline("roughdielectric", LOBES)
     }],
     def: Some("ROUGH_DIELECTRIC"),
     wgsl: Some(crate::shader_file!(

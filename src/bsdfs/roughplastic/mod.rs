@@ -47,15 +47,13 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     read,
     objects: &[],
     kinds: &[GpuKind {
-        name: "roughplastic",
-        lobes: LOBES,
         eval: Some(WgslCall::new(MODULE, "rough_plastic_eval")),
         sample: Some(WgslCall::new(MODULE, "rough_plastic_sample")),
         glossy: Glossy::Split {
             eval: WgslCall::new(MODULE, "rough_plastic_coating"),
             share: WgslCall::new(MODULE, "rough_plastic_coating_share"),
         },
-        alpha_floor: 1e-4,
+        ..GpuKind::inline("roughplastic", LOBES)
     }],
     def: Some("PLASTIC"),
     wgsl: Some(crate::shader_file!(
