@@ -220,21 +220,40 @@ impl BsdfRegistry {
         groups
     }
 
+    /// The kinds that share each call (pick picks it from a kind), in the order first met,
+    /// with the def they are compiled under: kinds whose units share a WGSL function (roughplastic
+    /// and pplastic) get one branch, so the function is inlined once.
+    fn branches(
+        &self,
+        pick: impl Fn(&GpuKind) -> Option<WgslCall>,
+    ) -> Vec<(Option<&'static str>, WgslCall, Vec<String>)> {
+        let mut branches: Vec<(Option<&'static str>, WgslCall, Vec<String>)> = Vec::new();
+        for (unit, kind) in self.kinds() {
+            let Some(call) = pick(kind) else { continue };
+            match branches
+                .iter_mut()
+                .find(|(def, c, _)| *def == unit.def && *c == call)
+            {
+                Some((_, _, kinds)) => kinds.push(kind.constant()),
+                None => branches.push((unit.def, call, vec![kind.constant()])),
+            }
+        }
+        branches
+    }
+
     fn write_eval(&self, out: &mut String) {
         out.push_str(
             "\n// f |cos wo| and pdf of the non-delta lobes (zero for delta-only kinds).\n\
              fn material_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> \
              BsdfEval {\n",
         );
-        for (unit, kind) in self.kinds() {
-            if let Some(call) = kind.eval {
-                let branch = format!(
-                    "    if m.kind == {} {{\n        return {}(m, wi, wo, radiance);\n    }}\n",
-                    kind.constant(),
-                    call.function
-                );
-                out.push_str(&guarded(unit.def, &branch));
-            }
+        for (def, call, kinds) in self.branches(|k| k.eval) {
+            let branch = format!(
+                "    if {} {{\n        return {}(m, wi, wo, radiance);\n    }}\n",
+                kind_test(&kinds),
+                call.function
+            );
+            out.push_str(&guarded(def, &branch));
         }
         out.push_str("    return BsdfEval(vec3<f32>(0.0), 0.0);\n}\n");
     }
@@ -263,16 +282,13 @@ impl BsdfRegistry {
             "\nfn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: \
              bool) -> BsdfSample {\n",
         );
-        for (unit, kind) in self.kinds() {
-            if let Some(call) = kind.sample {
-                let branch = format!(
-                    "    if m.kind == {} {{\n        return {}(m, wi, u1, u2, radiance);\n    \
-                     }}\n",
-                    kind.constant(),
-                    call.function
-                );
-                out.push_str(&guarded(unit.def, &branch));
-            }
+        for (def, call, kinds) in self.branches(|k| k.sample) {
+            let branch = format!(
+                "    if {} {{\n        return {}(m, wi, u1, u2, radiance);\n    }}\n",
+                kind_test(&kinds),
+                call.function
+            );
+            out.push_str(&guarded(def, &branch));
         }
         out.push_str("    return no_sample();\n}\n");
     }
@@ -291,13 +307,14 @@ impl BsdfRegistry {
             [one] => one.clone(),
             all => format!("({})", all.join(" || ")),
         };
-        let split: Vec<(Option<&str>, String, WgslCall, WgslCall)> = self
-            .kinds()
-            .filter_map(|(u, k)| match k.glossy {
-                Glossy::Split { eval, share } => Some((u.def, k.constant(), eval, share)),
-                _ => None,
-            })
-            .collect();
+        let split_eval = self.branches(|k| match k.glossy {
+            Glossy::Split { eval, .. } => Some(eval),
+            _ => None,
+        });
+        let split_share = self.branches(|k| match k.glossy {
+            Glossy::Split { share, .. } => Some(share),
+            _ => None,
+        });
         let _ = write!(
             out,
             "\n#ifdef GLOSSY\n\
@@ -310,10 +327,11 @@ impl BsdfRegistry {
              if {whole_test} && microfacet_is_specular(m, threshold) {{\n        \
              return full.value;\n    }}\n"
         );
-        for (def, constant, eval, _) in &split {
+        for (def, eval, kinds) in &split_eval {
             let branch = format!(
-                "    if m.kind == {constant} && microfacet_is_specular(m, threshold) {{\n        \
+                "    if ({}) && microfacet_is_specular(m, threshold) {{\n        \
                  return {}(m, wi, wo);\n    }}\n",
+                kind_test(kinds),
                 eval.function
             );
             out.push_str(&guarded(*def, &branch));
@@ -330,16 +348,26 @@ impl BsdfRegistry {
              if {whole_test} && microfacet_is_specular(m, threshold) {{\n        \
              return vec3<f32>(1.0);\n    }}\n"
         );
-        for (def, constant, _, share) in &split {
+        for (def, share, kinds) in &split_share {
             let branch = format!(
-                "    if m.kind == {constant} && microfacet_is_specular(m, threshold) {{\n        \
+                "    if ({}) && microfacet_is_specular(m, threshold) {{\n        \
                  return {}(m, wi, s.wo);\n    }}\n",
+                kind_test(kinds),
                 share.function
             );
             out.push_str(&guarded(*def, &branch));
         }
         out.push_str("    return vec3<f32>(0.0);\n}\n#endif\n");
     }
+}
+
+/// `m.kind` is one of `constants`.
+fn kind_test(constants: &[String]) -> String {
+    constants
+        .iter()
+        .map(|c| format!("m.kind == {c}"))
+        .collect::<Vec<_>>()
+        .join(" || ")
 }
 
 /// `text` compiled in only under `def` (always without one).

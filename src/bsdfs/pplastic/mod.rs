@@ -6,6 +6,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::bsdfs::plastic::Coated;
+use crate::bsdfs::roughplastic::NO_TABLE;
 use crate::bsdfs::roughplastic::{coating_or_base, coating_pdf, rough_reflection};
 use crate::bsdfs::shared::fresnel::fresnel;
 use crate::bsdfs::shared::microfacet::Microfacet;
@@ -23,7 +24,8 @@ const LOBES: Lobes = Lobes {
     pass_through: false,
 };
 
-const MODULE: &str = "bsdfs::pplastic";
+/// Its WGSL is roughplastic's, which takes a material without a transmittance table as this.
+const MODULE: &str = "bsdfs::roughplastic";
 
 pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     name: "pplastic",
@@ -49,16 +51,16 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     read,
     objects: &[],
     kinds: &[GpuKind {
-        eval: Some(WgslCall::new(MODULE, "pplastic_eval")),
-        sample: Some(WgslCall::new(MODULE, "pplastic_sample")),
+        eval: Some(WgslCall::new(MODULE, "rough_plastic_eval")),
+        sample: Some(WgslCall::new(MODULE, "rough_plastic_sample")),
         glossy: Glossy::Split {
-            eval: WgslCall::new(MODULE, "pplastic_coating"),
-            share: WgslCall::new(MODULE, "pplastic_coating_share"),
+            eval: WgslCall::new(MODULE, "rough_plastic_coating"),
+            share: WgslCall::new(MODULE, "rough_plastic_coating_share"),
         },
         ..GpuKind::inline("pplastic", LOBES)
     }],
     def: Some("PLASTIC"),
-    wgsl: Some(crate::shader_file!("src/bsdfs/pplastic/pplastic.wgsl")),
+    wgsl: None,
 };
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -125,8 +127,11 @@ impl BsdfModel for PolarizedPlastic {
         sample_from_eval(self, wi, wo, mode)
     }
 
+    /// As roughplastic's, without a transmittance table: roughplastic's WGSL then takes the
+    /// base through two smooth refractions, as this one.
     fn pack(&self, record: &mut GpuMaterial, _textures: &SideTextures, _tables: &mut Vec<f32>) {
         self.coated.pack(record);
         self.microfacet.pack(record);
+        record.table = NO_TABLE;
     }
 }

@@ -61,6 +61,10 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     )),
 };
 
+/// `GpuMaterial::table` of a rough coating without a transmittance table: roughplastic.wgsl then
+/// takes its base through two smooth refractions (pplastic).
+pub const NO_TABLE: u32 = u32::MAX;
+
 /// Entries of the rough plastic's external transmittance table (Mitsuba's
 /// `MI_ROUGH_TRANSMITTANCE_RES`), over cos(theta) from 0 to 1.
 pub const TRANSMITTANCE_RES: usize = 64;
