@@ -30,6 +30,10 @@
 #ifdef NORMAL_MAPS
 #import bsdfs::normalmap::shading_frame
 #endif
+#ifdef MEDIA
+#import common::scene::materials
+#import common::medium::{Medium, medium_after, phase_eval, transmittance_between}
+#endif
 
 // The surface as the chosen side sees it: a twosided material's back turns the normals over.
 fn seen_from(surface: Surface, back: bool) -> Surface {
@@ -198,12 +202,18 @@ fn bsdf_towards(v: Vertex, mapped: vec3<f32>, glossy_threshold: f32, dir: vec3<f
 #endif
 }
 
+// The surface's geometric normal on its front side, whichever side `v` sees.
+fn front_normal(v: Vertex) -> vec3<f32> {
+    return select(v.surface.normal, -v.surface.normal, v.back);
+}
+
 // Next-event estimation at a camera path's vertex: one light sample, MIS-weighted against
 // sampling the BSDF (see `bsdf_towards` for `mapped`). Light is added through `rays` shadow
 // rays. Every lobe that light sampling can reach comes through one call site in a pass:
 // lavapipe inlines each call of the shadow ray's traversal, and its compile time grows with
-// every copy.
-fn direct_light(v: Vertex, mapped: vec3<f32>, glossy_threshold: f32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+// every copy. With MEDIA the shadow ray leaves into the medium on the light's side (the path
+// was in `medium`) and carries the transmittance of the media and null boundaries it crosses.
+fn direct_light(v: Vertex, medium: u32, mapped: vec3<f32>, glossy_threshold: f32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let surface = v.surface;
     let u_pick = rng_next_f32(rng);
     let u = rng_next_vec2(rng);
@@ -216,12 +226,46 @@ fn direct_light(v: Vertex, mapped: vec3<f32>, glossy_threshold: f32, rng: ptr<fu
         return vec3<f32>(0.0);
     }
     *rays += 1u;
+#ifdef MEDIA
+    let leaving = medium_after(materials[surface.material], ls.dir, front_normal(v), medium);
+    let tr = transmittance_between(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal, leaving);
+    if max_component(tr) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+#else
     if !unoccluded(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal) {
         return vec3<f32>(0.0);
     }
+    let tr = vec3<f32>(1.0);
+#endif
     var weight = 1.0;
     if !ls.is_delta {
         weight = power_heuristic(ls.pdf, towards.pdf);
     }
-    return towards.value * ls.radiance * weight / ls.pdf;
+    return towards.value * ls.radiance * tr * weight / ls.pdf;
 }
+
+#ifdef MEDIA
+// Next-event estimation at a scattering point `position` in `medium` (its record `m`) of a
+// path travelling along `d_in`: one light sample with the phase function's value,
+// MIS-weighted against sampling the phase function.
+fn direct_light_in_medium(position: vec3<f32>, d_in: vec3<f32>, m: Medium, medium: u32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
+    let u_pick = rng_next_f32(rng);
+    let u = rng_next_vec2(rng);
+    let ls = sample_light(position, u_pick, u);
+    if !ls.valid {
+        return vec3<f32>(0.0);
+    }
+    *rays += 1u;
+    let tr = transmittance_between(position, vec3<f32>(0.0), vec3<f32>(0.0), ls.position, ls.error, ls.normal, medium);
+    if max_component(tr) <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let phase = phase_eval(m, d_in, ls.dir);
+    var weight = 1.0;
+    if !ls.is_delta {
+        weight = power_heuristic(ls.pdf, phase);
+    }
+    return ls.radiance * tr * (phase * weight / ls.pdf);
+}
+#endif

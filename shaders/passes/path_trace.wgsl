@@ -36,6 +36,15 @@
 #import common::path_step::{arrive, bounce, direct_light}
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
+#else
+#ifdef MEDIA
+#import common::scene::MATERIAL_NULL
+#endif
+#endif
+#ifdef MEDIA
+#import common::scene::NO_MEDIUM
+#import common::medium::{Medium, medium_at, medium_after, sample_free_flight, phase_sample, phase_eval}
+#import common::path_step::direct_light_in_medium
 #endif
 #ifdef GLOSSY
 #import common::material::material_specular_share
@@ -146,6 +155,11 @@ struct PathState {
     radiance: vec3<f32>,
     // The segment traced next, counting from 1 at the camera.
     depth: u32,
+    // The medium the path travels in (common::medium), or NO_MEDIUM.
+    medium: u32,
+    // Distance from the last scattering vertex to `origin` (null surfaces crossed since), for
+    // the light's density when the path reaches it.
+    since_scatter: f32,
 }
 
 // Where the camera pass hands a sample over to photon mapping.
@@ -296,7 +310,7 @@ fn primary_ray(pixel: vec2<u32>, splatted: bool, rng: ptr<function, vec4<u32>>) 
 
 // A camera path at the camera, along `ray`.
 fn start_path(ray: CameraRay) -> PathState {
-    return PathState(ray.origin, ray.dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, false, vec3<f32>(0.0), 1u);
+    return PathState(ray.origin, ray.dir, vec3<f32>(1.0), 0.0, true, false, 0u, 0.0, vec3<f32>(0.0), false, false, vec3<f32>(0.0), 1u, scene_info.camera_medium, 0.0);
 }
 
 // Emitting shapes a camera ray steps through under hide_emitters before it counts as hidden.
@@ -334,6 +348,16 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     // Mitsuba's hide_emitters: what the camera sees directly leaves out every emitter.
     let hidden = depth == 1u && scene_info.hide_emitters != 0u;
     let hit = next_hit(path, hidden, rays);
+#ifdef MEDIA
+    if (*path).medium != NO_MEDIUM {
+        let m = medium_at((*path).medium);
+        let flight = sample_free_flight(m, hit.t, rng_next_vec2(rng));
+        (*path).throughput *= flight.weight;
+        if flight.scattered {
+            return scatter_in_medium(path, m, flight.t, rng, rays);
+        }
+    }
+#endif
     if hit.prim == NO_HIT {
 #ifdef ENVIRONMENT
         if !hidden {
@@ -352,7 +376,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         // The rest keeps its MIS weight (after a glossy lobe, its pdf, not a delta's).
         var weight = 1.0;
         if !full_weight(*path) {
-            weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(arrived.light, hit.t, cos_o));
+            weight = power_heuristic((*path).bsdf_pdf, area_light_pdf(arrived.light, (*path).since_scatter + hit.t, cos_o));
         }
         (*path).radiance += (*path).throughput * kept * materials[arrived.material].emission * weight;
     }
@@ -360,6 +384,18 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     let v = arrive(arrived, hit.prim, wo, true, rng);
     let surface = v.surface;
     let material = v.material;
+#ifdef MEDIA
+    if material.kind == MATERIAL_NULL {
+        // A medium's boundary (or a mask's pass-through): as in Mitsuba's volpath, no vertex
+        // (max_depth does not count it) and nothing changes but the medium. Light sampled from
+        // the vertex before passed through a boundary (null) but not a mask (a blend's null).
+        (*path).medium = medium_after(materials[arrived.material], (*path).dir, arrived.normal, (*path).medium);
+        (*path).since_scatter += hit.t;
+        (*path).through_null = (*path).through_null || v.blended;
+        (*path).origin = spawn_origin(surface, (*path).dir);
+        return true;
+    }
+#endif
     if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
         return false;
     }
@@ -414,7 +450,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     }
     // One next-event estimate for every lobe light sampling can reach (see direct_light).
     if diffuse || material_has_continuous_lobe(material.kind) {
-        (*path).radiance += (*path).throughput * direct_light(v, (*path).mapped, params.glossy_threshold, rng, rays);
+        (*path).radiance += (*path).throughput * direct_light(v, (*path).medium, (*path).mapped, params.glossy_threshold, rng, rays);
     }
     let out = bounce(v, true, rng);
     if !out.sample.valid {
@@ -430,12 +466,61 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         keep_photon_share(path, material, wo * v.shading.frame, out.sample);
     }
     (*path).origin = spawn_origin(surface, (*path).dir);
+#ifdef MEDIA
+    (*path).medium = medium_after(materials[arrived.material], (*path).dir, arrived.normal, (*path).medium);
+    (*path).since_scatter = 0.0;
+#endif
     if max_component((*path).throughput) <= 0.0 {
         return false;
     }
     (*path).depth = depth + 1u;
     return true;
 }
+
+#ifdef MEDIA
+// A camera path scatters in its medium `m`, `t` along its segment: a vertex as a surface's is
+// (Mitsuba's volpath counts it towards max_depth, Russian roulette as at a surface), path
+// traced whole: next-event estimation with the phase function (MIS against sampling it), and
+// light the path reaches from here on is path tracing's, not the photons' (photons carry only
+// light that crossed media without scattering: docs/light-transport.md).
+fn scatter_in_medium(path: ptr<function, PathState>, m: Medium, t: f32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> bool {
+    let depth = (*path).depth;
+    let position = (*path).origin + (*path).dir * t;
+    (*path).travelled += t;
+    if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
+        return false;
+    }
+    if depth >= params.rr_depth {
+        let survive = min(max_component((*path).throughput), 0.95);
+        if rng_next_f32(rng) >= survive {
+            return false;
+        }
+        (*path).throughput /= survive;
+    }
+    (*path).after_merge = false;
+#ifdef GLOSSY
+    (*path).mapped = vec3<f32>(0.0);
+    (*path).after_specular = false;
+#endif
+    if m.sample_emitters {
+        (*path).radiance += (*path).throughput * direct_light_in_medium(position, (*path).dir, m, (*path).medium, rng, rays);
+    }
+    let d_in = (*path).dir;
+    let wo = phase_sample(m, d_in, rng_next_vec2(rng));
+    (*path).bsdf_pdf = phase_eval(m, d_in, wo);
+    // Without light sampling here, light the path reaches next takes full weight.
+    (*path).after_delta = !m.sample_emitters;
+    (*path).through_null = false;
+    (*path).dir = wo;
+    (*path).origin = position;
+    (*path).since_scatter = 0.0;
+    if max_component((*path).throughput) <= 0.0 {
+        return false;
+    }
+    (*path).depth = depth + 1u;
+    return true;
+}
+#endif
 
 // Clears (when recording) or refreshes the hit-point slots of `pixel_index` before its samples.
 fn prepare_hit_points(pixel_index: u32, recording: bool) {

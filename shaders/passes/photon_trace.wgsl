@@ -25,6 +25,10 @@
 #import common::traversal::intersect_photon
 #import common::surface::{surface_at, offset_ray_origin, spawn_origin}
 #import common::path_step::{arrive, bounce}
+#ifdef MEDIA
+#import common::scene::{materials, NO_MEDIUM}
+#import common::medium::{medium_at, medium_after, transmittance}
+#endif
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
 #import bsdfs::blendbsdf::diffuse_probability
@@ -150,6 +154,8 @@ struct Photon {
     dir: vec3<f32>,
     flux: vec3<f32>,
     valid: bool,
+    // The medium it travels in (common::medium; with MEDIA only), or NO_MEDIUM.
+    medium: u32,
 }
 
 // Flux per photon of this iteration; a photon with nothing (or not a number) to carry is invalid.
@@ -157,6 +163,13 @@ fn normalised(emitted: Photon) -> Photon {
     var photon = emitted;
     photon.flux *= params.flux_scale;
     photon.valid = !any_not_finite(photon.flux) && max_component(photon.flux) > 0.0;
+    return photon;
+}
+
+// A photon `light` sent, normalised, in the medium the light lies in.
+fn from_light(light: Light, emitted: Photon) -> Photon {
+    var photon = normalised(emitted);
+    photon.medium = light.medium;
     return photon;
 }
 
@@ -256,18 +269,18 @@ fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
     let u_direction = rng_next_vec2(rng);
 #ifdef POINT_LIGHTS
     if light.kind == LIGHT_POINT || light.kind == LIGHT_SPOT || light.kind == LIGHT_PROJECTOR {
-        return normalised(emit_point_photon(light, u_direction));
+        return from_light(light, emit_point_photon(light, u_direction));
     }
 #endif
 #ifdef DIRECTIONAL_LIGHTS
     if light.kind == LIGHT_DIRECTIONAL {
-        return normalised(emit_distant_photon(light, -light.axis, light.radiance, 1.0, u_position));
+        return from_light(light, emit_distant_photon(light, -light.axis, light.radiance, 1.0, u_position));
     }
 #endif
 #ifdef ENVIRONMENT
     if light.kind == LIGHT_CONSTANT || light.kind == LIGHT_ENVMAP {
         let s = sample_environment_light(light, u_direction);
-        return normalised(emit_distant_photon(light, s.dir, s.radiance, s.pdf, u_position));
+        return from_light(light, emit_distant_photon(light, s.dir, s.radiance, s.pdf, u_position));
     }
 #endif
     let point = sample_area_light_point(light, u_position);
@@ -284,7 +297,7 @@ fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
         photon.flux = light.radiance * (PI * light.area / light.emit_prob);
     }
     photon.origin = offset_ray_origin(point.position, point.error, point.normal, photon.dir);
-    return normalised(photon);
+    return from_light(light, photon);
 }
 
 // Stores a photon hit for the gather; one that does not fit is counted, never lost silently.
@@ -326,6 +339,13 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     let segments = (*path).segments;
     let initial = (*path).initial;
     let hit = intersect_photon(photon.origin, photon.dir);
+#ifdef MEDIA
+    // A caustic photon carries only light that crossed media without scattering (what
+    // scattered there is the camera paths' to trace): the transmittance, exactly.
+    if photon.medium != NO_MEDIUM {
+        photon.flux *= transmittance(medium_at(photon.medium), hit.t);
+    }
+#endif
     if hit.prim == NO_HIT {
         return false;
     }
@@ -335,7 +355,8 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     // depends on the viewer (taken as not flipped: exact wherever the camera direction sees
     // the perturbed normal from above). Its masking and shadow terminator belong to the
     // light's direction, here where the photon came from (`wi`).
-    let v = arrive(surface_at(hit, photon.origin, photon.dir), hit.prim, wi, false, rng);
+    let arrived = surface_at(hit, photon.origin, photon.dir);
+    let v = arrive(arrived, hit.prim, wi, false, rng);
     let surface = v.surface;
     let material = v.material;
     let cos_i = v.cos_back;
@@ -343,6 +364,11 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     if material.kind == MATERIAL_NULL {
         // A mask's pass-through: the photon goes on unchanged, its class with it.
         photon.origin = spawn_origin(surface, photon.dir);
+#ifdef MEDIA
+        // Or a medium's boundary; as in Mitsuba's volpath, neither counts towards max_depth.
+        photon.medium = medium_after(materials[arrived.material], photon.dir, arrived.normal, photon.medium);
+        (*path).segments -= 1u;
+#endif
         (*path).photon = photon;
         return true;
     }
@@ -406,6 +432,9 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
 #endif
     }
     photon.origin = spawn_origin(surface, photon.dir);
+#ifdef MEDIA
+    photon.medium = medium_after(materials[arrived.material], photon.dir, arrived.normal, photon.medium);
+#endif
     if segments >= params.rr_depth {
         let survive = min(max_component(photon.flux) / initial, 0.95);
         if rng_next_f32(rng) >= survive {

@@ -31,6 +31,7 @@ impl Sides {
 
     pub fn material(self, emission: Vec3) -> Material {
         Material {
+            media: Default::default(),
             bsdf: self.front,
             back: self.back,
             emission,

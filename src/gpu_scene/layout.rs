@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::media::{self, NO_MEDIUM};
 use crate::bsdfs::BsdfRegistry;
 pub use crate::scene::bsdf::GpuMaterial;
 use crate::scene::bsdf::mean;
@@ -132,7 +133,8 @@ pub struct GpuLight {
     pub aspect: f32,
     /// Spot lights and projectors: their unit local x and y in the world.
     pub frame_x: [f32; 3],
-    pub _pad_x: u32,
+    /// The medium its photons start in (the offset of its record), or `NO_MEDIUM`.
+    pub medium: u32,
     pub frame_y: [f32; 3],
     pub _pad_y: u32,
 }
@@ -153,7 +155,8 @@ pub struct GpuSceneUniform {
     pub camera_forward: [f32; 3],
     pub height: u32,
     pub bounds_min: [f32; 3],
-    pub _pad_bounds: u32,
+    /// The medium around the camera (the offset of its record), or `NO_MEDIUM`.
+    pub camera_medium: u32,
     pub bounds_max: [f32; 3],
     pub scene_radius: f32,
     pub num_triangles: u32,
@@ -223,6 +226,8 @@ pub struct GpuScene {
     /// Not uploaded: the smallest roughness of any microfacet lobe (0 when textured; infinite
     /// without one), which a `glossy_threshold` must exceed to matter.
     pub smoothest_microfacet: f32,
+    /// Not uploaded: the scene has participating media.
+    pub media: bool,
 }
 
 /// The GPU form of one side's BSDF: the layout's fields (kind, emission, frame, texture slots),
@@ -264,6 +269,9 @@ fn gpu_material(
         blend_weight_texture: textures.blend_weight.unwrap_or(NO_TEXTURE),
         field_textures: 0,
         field_texture_count: 0,
+        interior: NO_MEDIUM,
+        exterior: NO_MEDIUM,
+        _pad_media: [0; 2],
     };
     if let Some(frame) = textures.frame {
         (m.frame_kind, m.frame_scale) = match frame.kind {
@@ -611,8 +619,20 @@ impl GpuScene {
         for r in &mut bvh.indices {
             *r = refs.prims[*r as usize];
         }
-        let (materials, mut bsdf_tables) = gpu_materials(scene, bsdfs)?;
-        let (lights, light_cdf) = normalise_lights(collect_lights(scene, &mut bsdf_tables));
+        let (mut materials, mut bsdf_tables) = gpu_materials(scene, bsdfs)?;
+        let (mut lights, light_cdf) = normalise_lights(collect_lights(scene, &mut bsdf_tables));
+        let medium_offsets = media::append_records(scene, &mut bsdf_tables);
+        for (gpu, m) in materials.iter_mut().zip(&scene.materials) {
+            gpu.interior = media::offset_of(m.media.interior, &medium_offsets);
+            gpu.exterior = media::offset_of(m.media.exterior, &medium_offsets);
+        }
+        for light in &mut lights {
+            light.medium = if scene.media.is_empty() {
+                NO_MEDIUM
+            } else {
+                media::offset_of(media::medium_at(scene, light_origin(scene, light)), &medium_offsets)
+            };
+        }
         let mut light_of_prim = vec![NO_LIGHT; scene.triangles.len() + scene.spheres.len()];
         for (i, l) in lights.iter().enumerate() {
             let prim = match l.kind {
@@ -684,6 +704,7 @@ impl GpuScene {
         let mut uniform = camera_uniform(scene, width, height);
         uniform.bounds_min = lo.to_array();
         uniform.bounds_max = hi.to_array();
+        uniform.camera_medium = media::offset_of(scene.media.camera, &medium_offsets);
         uniform.scene_radius = scene_radius;
         uniform.num_triangles = triangles.len() as u32;
         uniform.num_spheres = spheres.len() as u32;
@@ -721,6 +742,7 @@ impl GpuScene {
             textures,
             glossy_sphere,
             smoothest_microfacet,
+            media: !scene.media.is_empty(),
         })
     }
 }
@@ -776,4 +798,25 @@ fn non_empty<T: Zeroable>(mut v: Vec<T>) -> Vec<T> {
         v.push(T::zeroed());
     }
     v
+}
+
+/// A point photons of `light` leave from, just off its emitting side: where its medium is.
+fn light_origin(scene: &Scene, light: &GpuLight) -> Vec3 {
+    let (lo, hi) = scene.bounds();
+    let centre = 0.5 * (lo + hi);
+    let reach = (hi - lo).length().max(1.0);
+    let nudge = 1e-4 * reach;
+    match light.kind {
+        LIGHT_TRIANGLE => scene.triangles.get(light.prim as usize).map_or(centre, |t| {
+            let normal = (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).normalize_or_zero();
+            (t.v[0] + t.v[1] + t.v[2]) / 3.0 + normal * nudge
+        }),
+        LIGHT_SPHERE => scene.spheres.get(light.prim as usize).map_or(centre, |s| {
+            let out = if s.flip_normals { -1.0 } else { 1.0 };
+            s.center + Vec3::Y * (s.radius + out * nudge)
+        }),
+        LIGHT_DIRECTIONAL => centre - Vec3::from_array(light.axis) * reach,
+        LIGHT_CONSTANT | LIGHT_ENVMAP => centre + Vec3::Y * reach,
+        _ => Vec3::from_array(light.position),
+    }
 }

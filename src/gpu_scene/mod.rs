@@ -6,6 +6,7 @@
 //! [`Scene`]: crate::scene::Scene
 
 pub mod layout;
+pub mod media;
 pub mod resources;
 pub mod tables;
 

@@ -456,6 +456,8 @@ pub struct SceneResources {
     /// Some shape's BSDF has a microfacet lobe.
     /// The smallest roughness of any microfacet lobe (`GpuScene::smoothest_microfacet`).
     pub smoothest_microfacet: f32,
+    /// The scene has participating media (`GpuScene::media`).
+    pub media: bool,
     /// Which tables are uniform buffers (the shader library must be composed with its defs).
     pub placement: TablePlacement,
     /// The bound buffers (the uniform first) with their binding and access: a band of the
@@ -541,6 +543,7 @@ impl SceneResources {
             uniform: scene.uniform,
             glossy_sphere: scene.glossy_sphere,
             smoothest_microfacet: scene.smoothest_microfacet,
+            media: scene.media,
             placement: placement.clone(),
             bound,
         })
@@ -573,6 +576,7 @@ impl SceneResources {
             uniform: *uniform,
             glossy_sphere: self.glossy_sphere,
             smoothest_microfacet: self.smoothest_microfacet,
+            media: self.media,
             placement: self.placement.clone(),
             bound,
         })

@@ -23,7 +23,8 @@ struct SceneUniform {
     camera_forward: vec3<f32>,
     height: u32,
     bounds_min: vec3<f32>,
-    pad_d: u32,
+    // The medium around the camera (offset of its record in bsdf_tables), or NO_MEDIUM.
+    camera_medium: u32,
     bounds_max: vec3<f32>,
     scene_radius: f32,
     num_triangles: u32,
@@ -153,6 +154,11 @@ struct Material {
     // from field_textures (common::texture).
     field_textures: u32,
     field_texture_count: u32,
+    // The media inside and outside the shape (offsets of their records in bsdf_tables,
+    // common::medium), or NO_MEDIUM.
+    interior: u32,
+    exterior: u32,
+    pad_media: vec2<u32>,
 }
 
 struct Light {
@@ -185,7 +191,8 @@ struct Light {
     aspect: f32,
     // Spot, projector: unit local x and y (the texture's axes).
     frame_x: vec3<f32>,
-    pad_x: u32,
+    // The medium its photons start in (offset of its record in bsdf_tables), or NO_MEDIUM.
+    medium: u32,
     frame_y: vec3<f32>,
     pad_y: u32,
 }
@@ -203,6 +210,7 @@ const NO_LIGHT: u32 = 0xffffffffu;
 const NO_HIT: u32 = 0xffffffffu;
 const NO_NORMALS: u32 = 0xffffffffu;
 const NO_TEXTURE: u32 = 0xffffffffu;
+const NO_MEDIUM: u32 = 0xffffffffu;
 const UNBOUNDED: u32 = 0xffffffffu;
 const T_INFINITE: f32 = 3.0e38;
 const BVH_STACK_SIZE: u32 = 64u;
@@ -244,7 +252,8 @@ const BVH_STACK_SIZE: u32 = 64u;
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 #endif
 @group(0) @binding(7) var<storage, read> light_cdf: array<f32>;
-// Tables BSDFs look up (rough plastic's transmittance per cos theta).
+// Tables BSDFs look up (rough plastic's transmittance per cos theta), lights' (environment maps)
+// and the media's records (common::medium).
 @group(0) @binding(8) var<storage, read> bsdf_tables: array<f32>;
 #ifdef TRIANGLE_NORMALS_UNIFORM
 @group(0) @binding(9) var<uniform> triangle_normals: array<TriangleNormals, #{TRIANGLE_NORMALS_UNIFORM}>;

@@ -303,6 +303,7 @@ pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, Sce
     let origin = center + Vec3::Z * distance;
     let light = origin + Vec3::new(0.0, radius, radius);
     let scene = Scene {
+        media: Default::default(),
         source: path.to_path_buf(),
         camera: Camera {
             origin,
@@ -319,6 +320,7 @@ pub fn framed_scene(path: &Path, triangles: Vec<[Vec3; 3]>) -> Result<Scene, Sce
         integrator: Integrator::default(),
         spp_hint: None,
         materials: vec![Material {
+            media: Default::default(),
             bsdf: crate::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.8)),
             back: None,
             emission: Vec3::ZERO,

@@ -240,6 +240,42 @@ pub const BEFORE_BSDFS: &[Plugin] = &[
 /// lists them.
 pub const AFTER_BSDFS: &[Plugin] = &[
     Plugin {
+        object: "medium",
+        kinds: &["homogeneous"],
+        properties: &[
+            p("albedo", "0.75"),
+            p("sigma_t", "1"),
+            p("scale", "1"),
+            p("sample_emitters", "true"),
+            p("has_spectral_extinction", "true"),
+        ],
+        notes: "A shape's `interior` / `exterior` (nested or `<ref>`), or the sensor's medium. \
+                Coefficients as numbers, colours or a `constvolume`; one phase function \
+                (isotropic when none). Rendered as Mitsuba's `volpath` renders it (null \
+                surfaces do not count towards max_depth); path tracing renders every path \
+                that scatters in a medium, photons carry what crosses one unscattered. \
+                `has_spectral_extinction` only changes Mitsuba's sampling. `heterogeneous` \
+                (grid volumes) is refused with its place.",
+    },
+    Plugin {
+        object: "phase",
+        kinds: &["isotropic", "rayleigh"],
+        properties: &[],
+        notes: "",
+    },
+    Plugin {
+        object: "phase",
+        kinds: &["hg"],
+        properties: &[p("g", "0.8")],
+        notes: "Henyey-Greenstein, `g` in (-1, 1).",
+    },
+    Plugin {
+        object: "volume",
+        kinds: &["constvolume"],
+        properties: &[p("value", "1"), p("to_world", "identity")],
+        notes: "As a homogeneous medium's `albedo` or `sigma_t`; `gridvolume` is refused.",
+    },
+    Plugin {
         object: "texture",
         kinds: &["checkerboard"],
         properties: &[

@@ -295,6 +295,7 @@ impl<'a> Builder<'a> {
     fn build(&self, file: SceneFile) -> Result<Scene, SceneError> {
         self.check_materials(&file.materials)?;
         let mut scene = Scene {
+            media: Default::default(),
             source: self.path.to_path_buf(),
             camera: self.camera(&file.camera)?,
             integrator: self.integrator(&file.integrator)?,
@@ -589,6 +590,7 @@ mod tests {
         assert_eq!(built_in.source, Path::new(DEFAULT_SCENE.0));
         assert_eq!(
             Scene {
+                media: Default::default(),
                 source: from_file.source.clone(),
                 ..built_in
             },

@@ -216,6 +216,14 @@ impl Pass for PhotonTrace {
     fn prepare(&mut self, ctx: PrepareCtx<'_>) -> Result<(), Error> {
         let gpu = ctx.gpu;
         let scene = ctx.shared.get::<SceneResources>()?;
+        if scene.media && self.params.mode == PhotonMode::All {
+            return Err(Error::Other(
+                "photon_trace mode All (photon mapping alone) cannot render participating \
+                 media: its photons would have to deposit in media too; render the scene with \
+                 the hybrid or pt"
+                    .into(),
+            ));
+        }
         let photon_hits = ctx.output("photon_hits")?;
         let photons = self.photons(&ctx);
         let params = gpu.create_buffer(

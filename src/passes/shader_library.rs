@@ -28,6 +28,7 @@ pub const COMMON_MODULES: &[ShaderFile] = &[
     // Before lights: a spot's or projector's texture.
     shader_file!("shaders/common/texture.wgsl"),
     shader_file!("shaders/common/lights.wgsl"),
+    shader_file!("shaders/common/medium.wgsl"),
 ];
 
 /// Importable modules under `shaders/common/` that use the BSDFs' (the material dispatch among
@@ -65,6 +66,7 @@ pub const SCENE_DEFS: &[&str] = &[
     "TEXTURES",
     "FLOAT_TEXELS",
     "NORMAL_MAPS",
+    "MEDIA",
 ];
 
 /// Every scene def there is with `bsdfs`: [`SCENE_DEFS`] and the BSDF units' defs.
@@ -78,7 +80,7 @@ pub fn scene_def_names(bsdfs: &BsdfRegistry) -> Vec<&'static str> {
 /// projector, `SPOT_LIGHTS` a spot light, `PROJECTORS` a projector, `DIRECTIONAL_LIGHTS` a
 /// directional light, `ENVIRONMENT` a constant or map light, `TEXTURES` when a material or a
 /// light has a texture (the scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap
-/// (with `TEXTURES`).
+/// (with `TEXTURES`), `MEDIA` participating media (common::medium and the medium step).
 pub fn scene_defs(
     features: &SceneFeatures,
     bsdfs: &BsdfRegistry,
@@ -92,6 +94,7 @@ pub fn scene_defs(
         ("ENVIRONMENT", features.environment),
         ("TEXTURES", features.textures),
         ("NORMAL_MAPS", features.normal_maps),
+        ("MEDIA", features.media),
     ];
     let scene = present.iter().filter(|(_, on)| *on).map(|(name, _)| *name);
     defs_of(scene.chain(bsdfs.defs_for(&features.bsdfs)))

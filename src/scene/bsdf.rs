@@ -240,6 +240,11 @@ pub struct GpuMaterial {
     /// texture, as floats (exact below 2^24; shaders/common/texture.wgsl).
     pub field_textures: u32,
     pub field_texture_count: u32,
+    /// The media inside and outside the shape (offsets of their records in the scene's float
+    /// tables), or `NO_MEDIUM`; set by the scene's layout, not by a BSDF.
+    pub interior: u32,
+    pub exterior: u32,
+    pub _pad_media: [u32; 2],
 }
 
 impl GpuMaterial {

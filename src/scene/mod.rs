@@ -8,6 +8,7 @@ pub mod bvh;
 pub mod emitter;
 pub mod filter;
 
+pub mod medium;
 pub mod mesh;
 pub mod plugin;
 
@@ -95,6 +96,8 @@ pub struct Material {
     pub emission: Vec3,
     /// Textures in place of the sides' colour parameters (indices into `Scene::textures`).
     pub textures: MaterialTextures,
+    /// The media inside and outside the shapes that use it.
+    pub media: medium::MediumInterface,
 }
 
 /// How Mitsuba's `normalmap` or `bumpmap` turns the shading frame of the BSDF it wraps.
@@ -178,6 +181,7 @@ impl Material {
     /// A one-sided material.
     pub fn new(bsdf: Bsdf, emission: Vec3) -> Self {
         Material {
+            media: Default::default(),
             bsdf,
             back: None,
             emission,
@@ -272,6 +276,8 @@ pub struct SceneFeatures {
     pub normal_maps: bool,
     /// Some shape's material is a blend or mask, or lets light through (`null`).
     pub blends: bool,
+    /// Participating media: some shape or the camera has one.
+    pub media: bool,
 }
 
 impl SceneFeatures {
@@ -349,6 +355,8 @@ pub struct Scene {
     pub emitters: emitter::Emitters,
     /// Textures the materials use (`Material::textures` indexes them).
     pub textures: Vec<texture::Texture>,
+    /// Participating media (`Material::media` and the camera refer to them).
+    pub media: medium::Media,
 }
 
 impl Scene {
@@ -514,6 +522,7 @@ impl Scene {
                 || self.emitters.projectors.iter().any(|p| p.texture.is_some()),
             directional_lights: !self.emitters.directionals.is_empty(),
             environment: self.emitters.environment.is_some(),
+            media: !self.media.is_empty(),
             ..SceneFeatures::default()
         };
         let shape_materials = self

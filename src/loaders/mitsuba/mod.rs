@@ -34,6 +34,7 @@ use crate::scene::{
 
 mod bsdfs;
 mod emitters;
+mod media;
 mod sensors;
 mod shapes;
 mod textures;
@@ -140,6 +141,8 @@ pub fn check_text_with(
         meshes: RefCell::new(HashMap::new()),
         in_group: false,
         named_textures: HashMap::new(),
+        named_media: HashMap::new(),
+        media: RefCell::new(Vec::new()),
         textures: RefCell::new(Vec::new()),
         materials: RefCell::new(Vec::new()),
         scene: empty_scene(path),
@@ -156,6 +159,7 @@ pub fn check_text_with(
     reader.keep(unused);
     reader.scene.textures = reader.textures.take();
     reader.scene.materials = reader.materials.take();
+    reader.scene.media.list = reader.media.take();
     if !reader.has_sensor {
         reader.report(reader.error(doc.root_element(), "the scene has no <sensor>"));
     }
@@ -223,6 +227,7 @@ fn relative_to(from: &Path, file: &str) -> PathBuf {
 /// What a scene is before its elements are read: Mitsuba's defaults where it has them.
 fn empty_scene(path: &Path) -> Scene {
     Scene {
+        media: Default::default(),
         source: path.to_path_buf(),
         camera: Camera {
             origin: Vec3::ZERO,
@@ -318,6 +323,10 @@ struct Reader<'a, 'input> {
     named_bsdfs: HashMap<String, crate::bsdfs::Sides>,
     /// Textures declared at top level with an `id`, and their index in `textures` once used.
     named_textures: HashMap<String, (Texture, RefCell<Option<u32>>)>,
+    /// Media declared at top level with an `id`: their index in `media`.
+    named_media: HashMap<String, u32>,
+    /// The scene's media, in the order read (top level and nested).
+    media: RefCell<Vec<crate::scene::medium::Medium>>,
     /// The textures the scene's materials use, in the order first used.
     textures: RefCell<Vec<Texture>>,
     /// The scene's materials: each shape's, and the ones blends and masks choose among
@@ -667,10 +676,11 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "emitter" => self.read_emitter(child),
                 "bsdf" => self.read_named_bsdf(child),
                 "texture" => self.read_named_texture(child),
-                "medium" | "phase" | "volume" => Err(self.error(
+                "medium" => self.read_named_medium(child),
+                "phase" | "volume" => Err(self.error(
                     child,
                     format!(
-                        "<{}>: participating media are not supported",
+                        "<{}> at top level: give it inside the <medium> that uses it",
                         child.tag_name().name()
                     ),
                 )),

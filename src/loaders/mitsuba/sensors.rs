@@ -111,7 +111,8 @@ impl<'a, 'input> Reader<'a, 'input> {
             let read = self.read_film(f);
             self.keep(read);
         }
-        let mut props = self.props(node, &["sampler", "film"])?;
+        let mut props = self.props(node, &["sampler", "film", "ref", "medium"])?;
+        self.read_sensor_medium(node)?;
         let view = self.view_angle(&mut props, node)?;
         // Checked as Mitsuba checks them, not applied: camera rays are not cut at the clip
         // planes (only what lies within near_clip of the camera or beyond far_clip would show
@@ -612,5 +613,24 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         Ok(v)
+    }
+
+    /// The medium around the sensor (a nested `<medium>` or a `<ref>` to one, any name, as
+    /// Mitsuba's endpoints take it): where camera paths start.
+    fn read_sensor_medium(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
+        let mut media = node
+            .children()
+            .filter(|c| c.has_tag_name("medium") || c.has_tag_name("ref"));
+        let Some(first) = media.next() else {
+            return Ok(());
+        };
+        if let Some(second) = media.next() {
+            return Err(self.error(
+                second,
+                "a second medium in <sensor>: a sensor has one (as Mitsuba requires)",
+            ));
+        }
+        self.scene.media.camera = Some(self.nested_medium(first)?);
+        Ok(())
     }
 }

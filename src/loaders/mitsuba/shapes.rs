@@ -2,32 +2,46 @@
 //! rectangles, cubes, disks and cylinders, shape groups and instances.
 
 use super::*;
+use crate::scene::medium::MediumInterface;
 
 impl<'a, 'input> Reader<'a, 'input> {
-    /// The shape's BSDF (inline or `<ref>`) and area emission, at most one of each.
+    /// The shape's BSDF (inline or `<ref>`), area emission and media (`interior`,
+    /// `exterior`: nested or `<ref>`), at most one of each.
     pub(super) fn read_shape_material(
         &self,
         node: Node<'a, 'input>,
     ) -> Result<Material, SceneError> {
         let mut bsdf = None;
         let mut emission = None;
+        let mut media = MediumInterface::default();
         for child in node.children().filter(Node::is_element) {
             let tag = child.tag_name().name();
+            let side = match self.attr(child, "name")?.as_deref() {
+                Some("interior") if matches!(tag, "ref" | "medium") => Some(&mut media.interior),
+                Some("exterior") if matches!(tag, "ref" | "medium") => Some(&mut media.exterior),
+                _ if tag == "medium" => {
+                    return Err(self.error(
+                        child,
+                        "a shape's <medium> needs name=\"interior\" or name=\"exterior\"",
+                    ));
+                }
+                _ => None,
+            };
+            if let Some(side) = side {
+                if side.is_some() {
+                    return Err(self.error(
+                        child,
+                        format!("{}: given twice", describe(child)),
+                    ));
+                }
+                *side = Some(self.nested_medium(child)?);
+                continue;
+            }
             let is_bsdf = matches!(tag, "bsdf" | "ref");
             if (is_bsdf && bsdf.is_some()) || (tag == "emitter" && emission.is_some()) {
                 return Err(self.error(
                     child,
                     format!("{}: a shape has at most one {tag}", describe_object(child)),
-                ));
-            }
-            let medium = matches!(
-                self.attr(child, "name")?.as_deref(),
-                Some("interior" | "exterior")
-            ) || tag == "medium";
-            if medium {
-                return Err(self.error(
-                    child,
-                    "a shape's interior or exterior medium: participating media are not supported",
                 ));
             }
             match tag {
@@ -38,7 +52,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
         }
         let sides = bsdf.unwrap_or_else(default_bsdf);
-        Ok(sides.material(emission.unwrap_or(Vec3::ZERO)))
+        let mut material = sides.material(emission.unwrap_or(Vec3::ZERO));
+        material.media = media;
+        Ok(material)
     }
 
     pub(super) fn bsdf_ref(&self, node: Node) -> Result<crate::bsdfs::Sides, SceneError> {
@@ -170,7 +186,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         let material = self.read_shape_material(node)?;
-        let mut props = self.props(node, &["bsdf", "ref", "emitter"])?;
+        let mut props = self.props(node, &["bsdf", "ref", "emitter", "medium"])?;
         let to_world = props.take("to_world");
         let common = ShapeCommon {
             to_world: outer
