@@ -51,6 +51,7 @@ fn white_furnace_cube_from_ron_scene() {
 
 fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
     Scene {
+        media: Default::default(),
         source: "sphere furnace (built in the test)".into(),
         camera: Camera {
             origin: Vec3::new(0.1, -0.2, 0.3),
@@ -71,6 +72,7 @@ fn sphere_furnace(albedo: f32, emission: f32) -> Scene {
         },
         spp_hint: None,
         materials: vec![Material {
+            media: Default::default(),
             bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(albedo)),
             back: None,
             emission: Vec3::splat(emission),

@@ -309,12 +309,14 @@ fn primitive_intersections() {
 
 fn random_scene(rng: &mut Rng, triangles: usize, spheres: usize) -> Scene {
     let material = Material {
+        media: Default::default(),
         bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.5)),
         back: None,
         emission: Vec3::ZERO,
         textures: Default::default(),
     };
     Scene {
+        media: Default::default(),
         source: "random".into(),
         camera: Camera {
             origin: Vec3::Z * 10.0,

@@ -400,6 +400,7 @@ fn obj_meshes_and_bare_obj_scenes() {
     assert_eq!(
         s.materials,
         vec![scene::Material {
+            media: Default::default(),
             bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.8)),
             back: None,
             emission: Vec3::ZERO,

@@ -69,6 +69,7 @@ fn camera(origin: Vec3, target: Vec3, fov: f32, size: u32) -> Camera {
 /// as an analytic sphere, or as `mesh` (smooth- or flat-shaded).
 fn lit_sphere(mesh: Option<MeshData>) -> Scene {
     let mut scene = Scene {
+        media: Default::default(),
         source: "lit sphere (built in the test)".into(),
         camera: camera(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 36.0, 48),
         // Direct light only: with a point light the image then has no noise but the pixel
@@ -80,6 +81,7 @@ fn lit_sphere(mesh: Option<MeshData>) -> Scene {
         },
         spp_hint: None,
         materials: vec![Material {
+            media: Default::default(),
             bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.7)),
             emission: Vec3::ZERO,
             back: None,
@@ -193,6 +195,7 @@ fn shading_normals_create_no_energy_in_a_furnace() {
         }
     }
     let mut scene = Scene {
+        media: Default::default(),
         source: "shading-normal furnace (built in the test)".into(),
         camera: camera(
             Vec3::new(0.1, -0.1, 0.2),
@@ -207,6 +210,7 @@ fn shading_normals_create_no_energy_in_a_furnace() {
         },
         spp_hint: None,
         materials: vec![Material {
+            media: Default::default(),
             bsdf: hppm::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.8)),
             emission: Vec3::splat(0.5),
             back: None,
