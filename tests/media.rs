@@ -1,0 +1,204 @@
+//! Participating media: the phase functions against their closed forms (CPU), light through an
+//! absorbing medium against Beer-Lambert's law (GPU, `pt`), the shader defs that leave medium
+//! code out of scenes without media, and photon mapping alone refused on a scene with media.
+//! The renders against Mitsuba's `volpath` references are tests/media_refs.rs.
+
+mod common;
+
+use std::path::Path;
+
+use common::*;
+use glam::{Vec2, Vec3};
+use hppm::scene::medium::Phase;
+
+const PHASES: [Phase; 5] = [
+    Phase::Isotropic,
+    Phase::HenyeyGreenstein { g: 0.9 },
+    Phase::HenyeyGreenstein { g: -0.4 },
+    Phase::HenyeyGreenstein { g: 0.0 },
+    Phase::Rayleigh,
+];
+
+/// Each phase function integrates to 1 over the sphere (midpoint rule in cos theta, which is all
+/// they depend on), and HG's mean cosine is its g: a missing 1/(4 pi), a squared term off or
+/// the asymmetry's sign turned fails.
+#[test]
+fn phase_functions_are_normalised_with_their_mean_cosine() {
+    let d_in = Vec3::new(0.3, -0.5, 0.8).normalize();
+    let (b1, _) = d_in.any_orthonormal_pair();
+    let steps = 200_000;
+    for phase in PHASES {
+        let (mut total, mut mean_cos) = (0.0f64, 0.0f64);
+        for i in 0..steps {
+            let cos = -1.0 + 2.0 * (i as f32 + 0.5) / steps as f32;
+            let wo = d_in * cos + b1 * (1.0 - cos * cos).max(0.0).sqrt();
+            // The ring of directions at this cosine has solid angle 2 pi d(cos).
+            let p = phase.eval(d_in, wo) as f64 * 2.0 * std::f64::consts::PI * 2.0 / steps as f64;
+            total += p;
+            mean_cos += p * cos as f64;
+        }
+        assert!((total - 1.0).abs() < 1e-4, "{phase:?} integrates to {total}");
+        let expected = match phase {
+            Phase::HenyeyGreenstein { g } => g as f64,
+            _ => 0.0,
+        };
+        assert!(
+            (mean_cos - expected).abs() < 2e-3,
+            "{phase:?}: mean cosine {mean_cos}, expected {expected}"
+        );
+    }
+}
+
+/// Sampling draws the density eval gives: a chi-square test of the sampled cosines in 40 bins
+/// against eval's integral over each (2 pi times it in cos), 200,000 samples each, and the
+/// samples' azimuth uniform about the travel direction. An inverted CDF off by a term, or a
+/// sample about the wrong axis, fails by hundreds of standard deviations.
+#[test]
+fn phase_sampling_draws_the_phase_functions_density() {
+    let d_in = Vec3::new(-0.2, 0.9, 0.1).normalize();
+    let (b1, b2) = d_in.any_orthonormal_pair();
+    let mut rng = common::rng::Rng(0x9e37_79b9_7f4a_7c15);
+    let (bins, n) = (40usize, 200_000usize);
+    for phase in PHASES {
+        let mut counts = vec![0usize; bins];
+        let mut quadrants = [0usize; 4];
+        for _ in 0..n {
+            let wo = phase.sample(d_in, Vec2::new(rng.unit(), rng.unit()));
+            assert!((wo.length() - 1.0).abs() < 1e-4);
+            let cos = d_in.dot(wo).clamp(-1.0, 1.0);
+            counts[(((cos + 1.0) / 2.0 * bins as f32) as usize).min(bins - 1)] += 1;
+            let (x, y) = (wo.dot(b1), wo.dot(b2));
+            quadrants[(x >= 0.0) as usize * 2 + (y >= 0.0) as usize] += 1;
+        }
+        let mut chi2 = 0.0f64;
+        for (b, &count) in counts.iter().enumerate() {
+            let fine = 200;
+            let mut p = 0.0f64;
+            for k in 0..fine {
+                let cos = -1.0 + 2.0 * (b as f32 + (k as f32 + 0.5) / fine as f32) / bins as f32;
+                let wo = d_in * cos + b1 * (1.0 - cos * cos).max(0.0).sqrt();
+                p += phase.eval(d_in, wo) as f64 * 2.0 * std::f64::consts::PI * 2.0
+                    / (bins * fine) as f64;
+            }
+            let expected = p * n as f64;
+            if expected > 0.0 {
+                chi2 += (count as f64 - expected).powi(2) / expected;
+            }
+        }
+        // 39 degrees of freedom: mean 39, standard deviation 8.8; 5 standard deviations.
+        assert!(chi2 < 39.0 + 5.0 * 8.8, "{phase:?}: chi-square {chi2:.1}");
+        for q in quadrants {
+            let share = q as f64 / n as f64;
+            assert!((share - 0.25).abs() < 0.006, "{phase:?}: azimuth quadrants {quadrants:?}");
+        }
+    }
+}
+
+/// A scene for the Beer-Lambert checks: a camera with a 2 degree view looking down -z at an
+/// emitting rectangle (radiance 1) at z = -3, behind `between` (shapes, media).
+fn beer_lambert_scene(sensor_medium: &str, between: &str) -> hppm::scene::Scene {
+    let text = format!(
+        r#"<scene version="3.0.0">
+    <integrator type="volpath"><integer name="max_depth" value="8"/></integrator>
+    <sensor type="perspective"><float name="fov" value="2"/>
+        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
+        {sensor_medium}
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="5"/><translate z="-3"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter>
+    </shape>
+    {between}
+</scene>"#
+    );
+    hppm::loaders::mitsuba::parse(Path::new("beer_lambert.xml"), &text)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The image's mean per channel against `expected`, within 4.5 standard errors of the mean
+/// (from the pixels' spread: each pixel is an independent estimate) plus 0.1%, and that bound
+/// tighter than a 5% error.
+fn assert_mean_is(label: &str, image: &hppm::image::Image, expected: Vec3) {
+    let n = image.pixels.len() as f64;
+    let mean = image.mean();
+    for c in 0..3 {
+        let var = image
+            .pixels
+            .iter()
+            .map(|p| (p[c] as f64 - mean[c]).powi(2))
+            .sum::<f64>()
+            / (n - 1.0);
+        let se = (var / n).sqrt();
+        let tolerance = 4.5 * se + 1e-3 * expected[c] as f64;
+        eprintln!(
+            "{label}, channel {c}: {:.5} expected {:.5} (tolerance {tolerance:.5})",
+            mean[c], expected[c]
+        );
+        assert!(tolerance < 0.05 * expected[c] as f64, "{label}: too noisy to judge");
+        assert!(
+            (mean[c] - expected[c] as f64).abs() <= tolerance,
+            "{label}, channel {c}: {} against Beer-Lambert's {}",
+            mean[c],
+            expected[c]
+        );
+    }
+}
+
+/// Light crossing a purely absorbing medium (albedo 0) arrives dimmed by exp(-sigma_t d), per
+/// colour: through a null-bounded cube 2 units deep (sigma_t 0.25, 0.5, 1: extinction that
+/// differs per channel, which the free-flight sampler's MIS over channels must weigh right),
+/// and with the camera inside an unbounded medium 13 units from the light. The view is 2
+/// degrees wide, so the path lengths differ from the axis' by under 0.02%. A missing
+/// transmittance, one channel's extinction used for all, a medium entered on the wrong side of
+/// its boundary, or the sensor's medium ignored fails.
+#[test]
+fn light_through_an_absorbing_medium_obeys_beer_lambert() {
+    let gpu = gpu();
+    let sigma = Vec3::new(0.25, 0.5, 1.0);
+    let absorber = r#"<medium type="homogeneous" id="ink"><rgb name="albedo" value="0"/><rgb name="sigma_t" value="0.25, 0.5, 1"/></medium>"#;
+    let cube = format!(
+        r#"{absorber}<shape type="cube"><bsdf type="null"/><ref name="interior" id="ink"/></shape>"#
+    );
+    let slab = beer_lambert_scene("", &cube);
+    let mut r = renderer(&gpu, &slab, load_graph("graphs/pt.ron"), 1);
+    assert_mean_is("cube", &render_to(&mut r, 256), (-sigma * 2.0).exp());
+
+    let around = beer_lambert_scene(
+        r#"<medium type="homogeneous"><rgb name="albedo" value="0"/><rgb name="sigma_t" value="0.025, 0.05, 0.1"/></medium>"#,
+        "",
+    );
+    let mut r = renderer(&gpu, &around, load_graph("graphs/pt.ron"), 2);
+    assert_mean_is("sensor medium", &render_to(&mut r, 256), (-sigma * 0.1 * 13.0).exp());
+}
+
+/// Medium code is compiled only into scenes that have media: the MEDIA def is set exactly
+/// when some shape or the sensor has a medium.
+#[test]
+fn only_scenes_with_media_compile_medium_code() {
+    let bsdfs = hppm::bsdfs::BsdfRegistry::builtin();
+    let defs = |scene: &hppm::scene::Scene| {
+        hppm::passes::scene_defs(&scene.features(), &bsdfs)
+    };
+    let plain = load_scene("tests/refs/scenes/cornell_glass_sphere/scene.xml");
+    assert!(!defs(&plain).contains_key("MEDIA"));
+    let foggy = load_scene("tests/refs/media/scenes/absorbing_glass/scene.xml");
+    assert!(defs(&foggy).contains_key("MEDIA"));
+    let camera = beer_lambert_scene(r#"<medium type="homogeneous"/>"#, "");
+    assert!(defs(&camera).contains_key("MEDIA"));
+}
+
+/// Photon mapping alone (photons deposited at every diffuse vertex) would miss the light that
+/// scatters in media; it refuses such a scene rather than render it dark.
+#[test]
+fn photon_mapping_alone_refuses_media() {
+    let gpu = gpu();
+    let scene = load_scene("tests/refs/media/scenes/absorbing_glass/scene.xml");
+    let graph = load_graph("graphs/ppm_only.ron");
+    let error = match hppm::render::Renderer::new(&gpu, &scene, graph, 16, 16, 0) {
+        Ok(_) => panic!("photon mapping alone rendered a scene with media"),
+        Err(e) => e.to_string(),
+    };
+    assert!(error.contains("participating media"), "{error}");
+}
