@@ -106,7 +106,7 @@ fn photon(position: Vec3, wi: Vec3) -> GpuPhotonHit {
         position: position.to_array(),
         remaining: UNBOUNDED,
         wi: wi.to_array(),
-        _pad_a: 0,
+        in_medium: 0,
         flux: [1.0; 3],
         _pad_b: 0,
     }

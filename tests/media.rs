@@ -202,3 +202,55 @@ fn photon_mapping_alone_refuses_media() {
     };
     assert!(error.contains("participating media"), "{error}");
 }
+
+/// Single scattering from a point light in a medium all around the camera (max_depth 2:
+/// one scattering vertex), against the line integral along the view axis, computed here:
+/// L = integral over t of sigma_s p(cos) I Tr(t) Tr(d) / d^2, d the distance from the point at
+/// t to the light, p Henyey-Greenstein with g 0.5 (forward scattering: the light behind the
+/// scattering point, towards the camera, dominates). The view is half a degree wide, so
+/// across it the integral changes only to second order. A phase function turned around
+/// (g taken as -g), a transmittance left out on either leg, sigma_s taken as sigma_t or the
+/// light's falloff lost fails by far more than the tolerance.
+#[test]
+fn single_scattering_from_a_point_light_matches_its_line_integral() {
+    let sigma_t = [0.2f64, 0.4, 0.6];
+    let albedo = 0.8f64;
+    let g = 0.5f64;
+    let intensity = 5.0f64;
+    let light = [0.0f64, 1.0, -2.0];
+    let text = format!(
+        r#"<scene version="3.0.0">
+    <integrator type="volpath"><integer name="max_depth" value="2"/></integrator>
+    <sensor type="perspective"><float name="fov" value="0.5"/>
+        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, -1" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
+        <medium type="homogeneous"><rgb name="sigma_t" value="0.2, 0.4, 0.6"/><float name="albedo" value="{albedo}"/>
+            <phase type="hg"><float name="g" value="{g}"/></phase></medium>
+    </sensor>
+    <emitter type="point"><point name="position" x="0" y="1" z="-2"/><rgb name="intensity" value="{intensity}"/></emitter>
+</scene>"#
+    );
+    let scene = hppm::loaders::mitsuba::parse(Path::new("single_scattering.xml"), &text)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut expected = Vec3::ZERO;
+    let (steps, far) = (400_000, 80.0f64);
+    for c in 0..3 {
+        let mut sum = 0.0f64;
+        for i in 0..steps {
+            let t = (i as f64 + 0.5) * far / steps as f64;
+            let to_light = [light[0], light[1], light[2] + t];
+            let d = (to_light[0].powi(2) + to_light[1].powi(2) + to_light[2].powi(2)).sqrt();
+            // The light travels from the light to the point (-to_light / d) and leaves
+            // towards the camera (+z): the cosine between them.
+            let cos = -to_light[2] / d;
+            let hg = (1.0 - g * g)
+                / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
+            let tr = (-sigma_t[c] * (t + d)).exp();
+            sum += albedo * sigma_t[c] * hg * intensity * tr / (d * d) * far / steps as f64;
+        }
+        expected[c] = sum as f32;
+    }
+    let gpu = gpu();
+    let mut r = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 3);
+    assert_mean_is("single scattering", &render_to(&mut r, 1024), expected);
+}

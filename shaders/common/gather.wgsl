@@ -59,8 +59,9 @@ fn gather_at(index: u32, hit: PhotonHit) -> bool {
     if !(dot(d, d) <= hp.radius * hp.radius) {
         return false;
     }
-    // One-sided diffuse: light arriving from behind the hit point's surface adds nothing.
-    if dot(hp.normal, hit.wi) <= 0.0 {
+    // One-sided diffuse: light arriving from behind the hit point's surface adds nothing. A
+    // photon that scattered in a medium is no surface's.
+    if dot(hp.normal, hit.wi) <= 0.0 || hit.in_medium != 0u {
         return false;
     }
     // The whole path (camera part + photon part) obeys max_depth, as in path tracing.

@@ -64,7 +64,9 @@ struct PhotonHit {
     remaining: u32,
     // Unit direction towards where the photon came from.
     wi: vec3<f32>,
-    pad_a: u32,
+    // 1: deposited where the photon scattered in a medium (a volumetric caustic), gathered by
+    // camera paths' medium vertices only; 0: on a surface.
+    in_medium: u32,
     // Flux per photon of this iteration.
     flux: vec3<f32>,
     pad_b: u32,

@@ -192,10 +192,38 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
 // within the grid's radius whose whole path (`depth` camera segments + theirs) obeys max_depth:
 // their flux sum over the disc's area (Knaus & Zwicker's estimate, with a constant kernel).
 fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
+    let r = photon_grid.info.radius;
+    return nearby_photons(surface.position, surface.normal, depth, false, vec3<f32>(0.0), 0u) / (PI * (r * r));
+}
+
+#ifdef MEDIA
+// Light scattered towards `towards` at `position` in the medium at offset `medium` by the
+// volumetric caustic photons of this iteration within the grid's radius (of paths that obey
+// max_depth, as above): each photon's flux times the phase function from its direction, over
+// the ball's volume (Jensen and Christensen 1998's volume radiance estimate, with its
+// extinction already in the stored flux, photon_trace.wgsl). Times the camera path's throughput
+// after scattering (sigma_s over the distance's density), the radiance the vertex sends.
+fn volumetric_caustic(position: vec3<f32>, towards: vec3<f32>, depth: u32, medium: u32) -> vec3<f32> {
+    let r = photon_grid.info.radius;
+    return nearby_photons(position, vec3<f32>(0.0), depth, true, towards, medium) / (4.0 / 3.0 * PI * r * r * r);
+}
+#endif
+
+// The flux of this iteration's photons within the grid's radius of `position` whose whole path
+// obeys max_depth: surface photons arriving from the front of `normal`, or (`in_medium`, with
+// MEDIA) photons that scattered in a medium, each weighted by the phase function of the medium
+// at offset `medium` towards `towards`.
+fn nearby_photons(position: vec3<f32>, normal: vec3<f32>, depth: u32, in_medium: bool, towards: vec3<f32>, medium: u32) -> vec3<f32> {
     let info = photon_grid.info;
+#ifdef MEDIA
+    var m: Medium;
+    if in_medium {
+        m = medium_at(medium);
+    }
+#endif
     let r2 = info.radius * info.radius;
-    let lo = photon_cell(info, surface.position - vec3<f32>(info.radius));
-    let hi = min(photon_cell(info, surface.position + vec3<f32>(info.radius)), lo + vec3<i32>(1));
+    let lo = photon_cell(info, position - vec3<f32>(info.radius));
+    let hi = min(photon_cell(info, position + vec3<f32>(info.radius)), lo + vec3<i32>(1));
     let links = info.bucket_mask + 1u;
     let words = arrayLength(&photon_grid.words);
     // The cells and their lists walked in one loop: a SIMD group then runs for its lanes'
@@ -226,16 +254,28 @@ fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
         if any(photon_cell(info, hit.position) != cell) {
             continue;
         }
-        let d = hit.position - surface.position;
-        if !(dot(d, d) <= r2) || dot(hit.wi, surface.normal) <= 0.0 {
+        let d = hit.position - position;
+        if !(dot(d, d) <= r2) {
             continue;
         }
         if hit.remaining != UNBOUNDED && depth > hit.remaining {
             continue;
         }
+#ifdef MEDIA
+        if (hit.in_medium != 0u) != in_medium {
+            continue;
+        }
+        if in_medium {
+            flux += hit.flux * phase_eval(m, -hit.wi, towards);
+            continue;
+        }
+#endif
+        if dot(hit.wi, normal) <= 0.0 {
+            continue;
+        }
         flux += hit.flux;
     }
-    return flux / (PI * r2);
+    return flux;
 }
 
 // Emission the path reaches now takes full weight, not MIS's: light sampling could not have
@@ -479,10 +519,10 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
 
 #ifdef MEDIA
 // A camera path scatters in its medium `m`, `t` along its segment: a vertex as a surface's is
-// (Mitsuba's volpath counts it towards max_depth, Russian roulette as at a surface), path
-// traced whole: next-event estimation with the phase function (MIS against sampling it), and
-// light the path reaches from here on is path tracing's, not the photons' (photons carry only
-// light that crossed media without scattering: docs/light-transport.md).
+// (Mitsuba's volpath counts it towards max_depth, Russian roulette as at a surface), with
+// next-event estimation with the phase function (MIS against sampling it) and the phase
+// function's sample; the light reaching it through specular vertices is the volumetric
+// caustic photons' where the graph looks photons up (docs/light-transport.md).
 fn scatter_in_medium(path: ptr<function, PathState>, m: Medium, t: f32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> bool {
     let depth = (*path).depth;
     let position = (*path).origin + (*path).dir * t;
@@ -497,11 +537,18 @@ fn scatter_in_medium(path: ptr<function, PathState>, m: Medium, t: f32, rng: ptr
         }
         (*path).throughput /= survive;
     }
-    (*path).after_merge = false;
+    // With photon-grid lookups the vertex takes the volumetric caustic (L S+ M) from photons
+    // and drops it from what the path reaches next, as a diffuse vertex past the hit points
+    // takes the surface caustic; without, it is path traced whole.
+    let looked_up = params.lookups != 0u;
+    (*path).after_merge = looked_up;
 #ifdef GLOSSY
-    (*path).mapped = vec3<f32>(0.0);
+    (*path).mapped = select(vec3<f32>(0.0), vec3<f32>(1.0), looked_up);
     (*path).after_specular = false;
 #endif
+    if looked_up {
+        (*path).radiance += (*path).throughput * volumetric_caustic(position, -(*path).dir, depth, (*path).medium);
+    }
     if m.sample_emitters {
         (*path).radiance += (*path).throughput * direct_light_in_medium(position, (*path).dir, m, (*path).medium, rng, rays);
     }

@@ -27,7 +27,7 @@
 #import common::path_step::{arrive, bounce}
 #ifdef MEDIA
 #import common::scene::{materials, NO_MEDIUM}
-#import common::medium::{medium_at, medium_after, transmittance}
+#import common::medium::{medium_at, medium_after, transmittance, sample_free_flight}
 #endif
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
@@ -302,6 +302,11 @@ fn emit_photon(rng: ptr<function, vec4<u32>>) -> Photon {
 
 // Stores a photon hit for the gather; one that does not fit is counted, never lost silently.
 fn deposit(position: vec3<f32>, wi: vec3<f32>, flux: vec3<f32>, segments: u32) {
+    store_hit(position, wi, flux, segments, 0u);
+}
+
+// The same for a photon that scattered in a medium (`in_medium` 1) or reached a surface (0).
+fn store_hit(position: vec3<f32>, wi: vec3<f32>, flux: vec3<f32>, segments: u32, in_medium: u32) {
     let slot = atomicAdd(&photon_hits.count, 1u);
     if slot >= arrayLength(&photon_hits.hits) {
         atomicAdd(&photon_hits.dropped, 1u);
@@ -312,7 +317,7 @@ fn deposit(position: vec3<f32>, wi: vec3<f32>, flux: vec3<f32>, segments: u32) {
     if params.max_depth != UNBOUNDED {
         remaining = params.max_depth - segments;
     }
-    photon_hits.hits[slot] = PhotonHit(position, remaining, wi, 0u, flux, 0u);
+    photon_hits.hits[slot] = PhotonHit(position, remaining, wi, in_medium, flux, 0u);
 }
 
 // A photon in flight: where it is, what it carries, and how far it has come.
@@ -328,6 +333,35 @@ fn start_photon(emitted: Photon) -> PhotonPath {
     return PhotonPath(emitted, false, max_component(emitted.flux), 0u);
 }
 
+#ifdef MEDIA
+// A photon crossing its medium up to the next surface `t_max` away; false once it has ended.
+// Before any specular vertex it carries the transmittance, exactly: where it would scatter is
+// light the camera paths trace (L M ...). After one it is a caustic photon: it scatters at a
+// distance drawn as the camera paths draw theirs, and there it is stored as a volumetric
+// caustic (L S+ M) and ends; the camera paths' medium vertices gather it. The stored flux is
+// what arrives there over the distance's density per unit extinction, so that the photons per
+// unit volume estimate the fluence (Jensen and Christensen 1998's volume photon map).
+fn cross_medium(photon: ptr<function, Photon>, segments: u32, t_max: f32, after_specular: bool, rng: ptr<function, vec4<u32>>) -> bool {
+    let m = medium_at((*photon).medium);
+    if !after_specular {
+        (*photon).flux *= transmittance(m, t_max);
+        return true;
+    }
+    let flight = sample_free_flight(m, t_max, rng_next_vec2(rng));
+    if !flight.scattered {
+        (*photon).flux *= flight.weight;
+        return true;
+    }
+    let tr = transmittance(m, flight.t);
+    let density = dot(m.sigma_t * tr, vec3<f32>(1.0 / 3.0));
+    if density > 0.0 {
+        let position = (*photon).origin + (*photon).dir * flight.t;
+        store_hit(position, -(*photon).dir, (*photon).flux * tr / density, segments, 1u);
+    }
+    return false;
+}
+#endif
+
 // Traces one segment of `path` and scatters it; false once the photon has ended.
 fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>) -> bool {
     if (*path).segments >= min(params.max_depth, SAFETY_MAX_DEPTH) {
@@ -340,10 +374,8 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     let initial = (*path).initial;
     let hit = intersect_photon(photon.origin, photon.dir);
 #ifdef MEDIA
-    // A caustic photon carries only light that crossed media without scattering (what
-    // scattered there is the camera paths' to trace): the transmittance, exactly.
-    if photon.medium != NO_MEDIUM {
-        photon.flux *= transmittance(medium_at(photon.medium), hit.t);
+    if photon.medium != NO_MEDIUM && !cross_medium(&photon, segments, hit.t, after_specular, rng) {
+        return false;
     }
 #endif
     if hit.prim == NO_HIT {

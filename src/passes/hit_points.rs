@@ -83,7 +83,9 @@ pub struct GpuPhotonHit {
     pub remaining: u32,
     /// Unit direction towards where the photon came from.
     pub wi: [f32; 3],
-    pub _pad_a: u32,
+    /// 1: deposited where the photon scattered in a medium (a volumetric caustic, gathered by
+    /// camera paths' medium vertices only); 0: on a surface.
+    pub in_medium: u32,
     /// Flux per photon of this iteration.
     pub flux: [f32; 3],
     pub _pad_b: u32,
