@@ -846,6 +846,9 @@ fn host(object: &str, kind: &str, property: &str) -> String {
                 "phase" => format!(
                     r#"<medium type="homogeneous" id="m"><phase type="{kind}">{property}</phase></medium>"#
                 ),
+                _ if kind == "gridvolume" => format!(
+                    r#"<medium type="heterogeneous" id="m"><volume type="{kind}" name="sigma_t"><string name="filename" value="tests/data/volumes/ramp.vol"/>{property}</volume></medium>"#
+                ),
                 _ => format!(
                     r#"<medium type="homogeneous" id="m"><volume type="{kind}" name="sigma_t">{property}</volume></medium>"#
                 ),
@@ -1132,21 +1135,23 @@ fn media_are_read_as_mitsuba_defines_them() {
         albedo: Vec3::new(0.9, 0.8, 0.7),
         phase: Phase::HenyeyGreenstein { g: 0.3 },
         sample_emitters: true,
+        density: None,
     };
     let plain = Medium {
         sigma_t: Vec3::ONE,
         albedo: Vec3::splat(0.75),
         phase: Phase::Isotropic,
         sample_emitters: true,
+        density: None,
     };
     let default_hg = Medium {
         phase: Phase::HenyeyGreenstein { g: 0.8 },
-        ..plain
+        ..plain.clone()
     };
     let nested = Medium {
         sigma_t: Vec3::new(1.0, 2.0, 3.0),
         phase: Phase::Rayleigh,
-        ..plain
+        ..plain.clone()
     };
     assert_eq!(media, &vec![fog, plain, default_hg, nested]);
     assert_eq!(scene.media.camera, Some(1));
@@ -1172,7 +1177,7 @@ fn broken_media_are_refused_where_they_are_written() {
         (r#"<phase type="isotropic"/><phase type="isotropic"/>"#, "a second <phase>"),
         (
             r#"<volume type="gridvolume" name="albedo"><string name="filename" value="a.vol"/></volume>"#,
-            "grid volumes are not supported yet",
+            "grids of albedo",
         ),
         (r#"<float name="scale" value="-1"/>"#, "scale -1"),
     ] {
@@ -1183,10 +1188,30 @@ fn broken_media_are_refused_where_they_are_written() {
         );
     }
     assert_error_at(
-        &format!(r#"<medium type="heterogeneous" id="m"/>{LIGHT}"#),
+        &format!(r#"<medium type="inhomogeneous" id="m"/>{LIGHT}"#),
         3,
-        "heterogeneous media (grid volumes) are not supported yet",
+        "medium type \"inhomogeneous\" is not supported",
     );
+    for (volume, expected) in [
+        (r#"<string name="filename" value="nowhere.vol"/>"#, "nowhere.vol"),
+        (r#""#, "needs a \"filename\""),
+        (
+            r#"<string name="filename" value="tests/data/volumes/ramp.vol"/><string name="filter_type" value="cubic"/>"#,
+            "filter_type \"cubic\"",
+        ),
+        (
+            r#"<string name="filename" value="tests/data/volumes/ramp.vol"/><float name="sigma" value="1"/>"#,
+            "unknown property \"sigma\"",
+        ),
+    ] {
+        assert_error_at(
+            &format!(
+                r#"<medium type="heterogeneous" id="m"><volume type="gridvolume" name="sigma_t">{volume}</volume></medium>{LIGHT}"#
+            ),
+            3,
+            expected,
+        );
+    }
     assert_error_at(
         &format!(r#"<shape type="sphere"><ref name="interior" id="nowhere"/></shape>{LIGHT}"#),
         3,

@@ -10,6 +10,7 @@
 
 #import common::scene::{bsdf_tables, materials, Material, NO_HIT, NO_MEDIUM, T_INFINITE, MATERIAL_NULL}
 #import common::sampling::{PI, basis_from_normal}
+#import common::rng::{rng_next_f32, rng_next_vec2}
 #import common::traversal::traverse
 #import common::surface::{surface_at, spawn_origin, offset_ray_origin, SHADOW_EPSILON}
 
@@ -18,6 +19,13 @@ const PHASE_HG: u32 = 1u;
 const PHASE_RAYLEIGH: u32 = 2u;
 // Null surfaces a shadow ray crosses before it counts as blocked.
 const MAX_CROSSINGS: u32 = 32u;
+const NO_GRID: u32 = 0xffffffffu;
+// Tentative collisions a ray takes through a grid medium before it gives up (counted as
+// absorbed): a majorant this far above a ray's densities wastes the work anyway.
+const MAX_TRACKING_STEPS: u32 = 4096u;
+const WRAP_CLAMP: u32 = 0u;
+const WRAP_REPEAT: u32 = 1u;
+const WRAP_MIRROR: u32 = 2u;
 
 struct Medium {
     sigma_t: vec3<f32>,
@@ -27,13 +35,79 @@ struct Medium {
     g: f32,
     // Next-event estimation at its scattering points (Mitsuba's sample_emitters).
     sample_emitters: bool,
+    // A heterogeneous medium: where its grid's values start in bsdf_tables (NO_GRID: none),
+    // sigma_t is then `sigma_t` times the grid's value at each point; the majorant bounds it.
+    grid: u32,
+    majorant: f32,
+    channels: u32,
+    res: vec3<u32>,
+    nearest: bool,
+    wrap: u32,
+    // World to the grid's unit cube: three rows of an affine map.
+    to_local: mat3x4<f32>,
 }
 
 // The record at `offset` (src/scene/medium.rs, Medium::gpu_record).
 fn medium_at(offset: u32) -> Medium {
     let sigma_t = vec3<f32>(bsdf_tables[offset], bsdf_tables[offset + 1u], bsdf_tables[offset + 2u]);
     let albedo = vec3<f32>(bsdf_tables[offset + 4u], bsdf_tables[offset + 5u], bsdf_tables[offset + 6u]);
-    return Medium(sigma_t, albedo, u32(bsdf_tables[offset + 3u]), bsdf_tables[offset + 7u], bsdf_tables[offset + 8u] != 0.0);
+    let flags = u32(bsdf_tables[offset + 8u]);
+    let res = vec3<u32>(u32(bsdf_tables[offset + 12u]), u32(bsdf_tables[offset + 13u]), u32(bsdf_tables[offset + 14u]));
+    var rows: mat3x4<f32>;
+    for (var r = 0u; r < 3u; r++) {
+        let o = offset + 16u + 4u * r;
+        rows[r] = vec4<f32>(bsdf_tables[o], bsdf_tables[o + 1u], bsdf_tables[o + 2u], bsdf_tables[o + 3u]);
+    }
+    return Medium(sigma_t, albedo, u32(bsdf_tables[offset + 3u]), bsdf_tables[offset + 7u], (flags & 1u) != 0u, bitcast<u32>(bsdf_tables[offset + 9u]), bsdf_tables[offset + 10u], u32(bsdf_tables[offset + 11u]), res, (flags & 2u) != 0u, u32(bsdf_tables[offset + 15u]), rows);
+}
+
+// The grid's cell index `i` along an axis of `n` cells as its wrap mode reads it.
+fn wrap_cell(i: i32, n: i32, wrap: u32) -> u32 {
+    if wrap == WRAP_REPEAT {
+        return u32(((i % n) + n) % n);
+    }
+    if wrap == WRAP_MIRROR {
+        let period = select(i / n, (i + 1) / n - 1, i < 0);
+        let m = i - period * n;
+        return u32(select(n - 1 - m, m, (period & 1) == 0));
+    }
+    return u32(clamp(i, 0, n - 1));
+}
+
+fn grid_cell(m: Medium, cell: vec3<i32>) -> vec3<f32> {
+    let n = vec3<i32>(m.res);
+    let x = wrap_cell(cell.x, n.x, m.wrap);
+    let y = wrap_cell(cell.y, n.y, m.wrap);
+    let z = wrap_cell(cell.z, n.z, m.wrap);
+    let index = m.grid + ((z * m.res.y + y) * m.res.x + x) * m.channels;
+    if m.channels == 1u {
+        return vec3<f32>(bsdf_tables[index]);
+    }
+    return vec3<f32>(bsdf_tables[index], bsdf_tables[index + 1u], bsdf_tables[index + 2u]);
+}
+
+// Extinction at world point `p` (a grid medium's grid looked up as Mitsuba's gridvolume does,
+// src/scene/grid.rs: cell-centred samples, trilinear or nearest, the wrap mode past the faces).
+fn extinction_at(m: Medium, p: vec3<f32>) -> vec3<f32> {
+    if m.grid == NO_GRID {
+        return m.sigma_t;
+    }
+    let local = vec4<f32>(p, 1.0) * m.to_local;
+    let res = vec3<f32>(m.res);
+    if m.nearest {
+        return m.sigma_t * grid_cell(m, vec3<i32>(floor(local * res)));
+    }
+    let pos = local * res - 0.5;
+    let lower = floor(pos);
+    let f = pos - lower;
+    let base = vec3<i32>(lower);
+    var value = vec3<f32>(0.0);
+    for (var corner = 0u; corner < 8u; corner++) {
+        let bit = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u);
+        let w = select(vec3<f32>(1.0) - f, f, bit == vec3<u32>(1u));
+        value += w.x * w.y * w.z * grid_cell(m, base + vec3<i32>(bit));
+    }
+    return m.sigma_t * value;
 }
 
 fn transmittance(m: Medium, distance: f32) -> vec3<f32> {
@@ -47,13 +121,16 @@ struct FreeFlight {
     scattered: bool,
     // Transmittance (times sigma_s where it scattered) over the density of what was sampled.
     weight: vec3<f32>,
+    // Where it scattered: the transmittance over the density per unit extinction, what a
+    // photon stores there (so that stored flux per unit volume estimates the fluence).
+    fluence: vec3<f32>,
 }
 
 // Samples the distance to the next interaction by one colour channel's extinction chosen
 // uniformly, weighted by the mean of the three channels' densities (one-sample MIS, balance
 // heuristic, over the channels): chromatic media stay unbiased and bounded in weight. Mitsuba
 // draws one channel per path instead; both converge to the same image.
-fn sample_free_flight(m: Medium, t_max: f32, u: vec2<f32>) -> FreeFlight {
+fn sample_homogeneous_flight(m: Medium, t_max: f32, u: vec2<f32>) -> FreeFlight {
     let channel = min(u32(u.x * 3.0), 2u);
     let sigma = m.sigma_t[channel];
     var t = T_INFINITE;
@@ -63,13 +140,74 @@ fn sample_free_flight(m: Medium, t_max: f32, u: vec2<f32>) -> FreeFlight {
     if t < t_max {
         let tr = transmittance(m, t);
         let density = dot(m.sigma_t * tr, vec3<f32>(1.0 / 3.0));
-        let weight = select(vec3<f32>(0.0), m.albedo * m.sigma_t * tr / density, density > 0.0);
-        return FreeFlight(t, true, weight);
+        let fluence = select(vec3<f32>(0.0), tr / density, density > 0.0);
+        return FreeFlight(t, true, m.albedo * m.sigma_t * fluence, fluence);
     }
     let tr = transmittance(m, t_max);
     let density = dot(tr, vec3<f32>(1.0 / 3.0));
-    return FreeFlight(t_max, false, select(vec3<f32>(0.0), tr / density, density > 0.0));
+    return FreeFlight(t_max, false, select(vec3<f32>(0.0), tr / density, density > 0.0), vec3<f32>(0.0));
 }
+
+// Where a ray from `origin` along `dir` first interacts in medium `m`, up to `t_max`.
+fn sample_free_flight(m: Medium, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, rng: ptr<function, vec4<u32>>) -> FreeFlight {
+#ifdef GRID_MEDIA
+    if m.grid != NO_GRID {
+        return track_collision(m, origin, dir, t_max, rng);
+    }
+#endif
+    return sample_homogeneous_flight(m, t_max, rng_next_vec2(rng));
+}
+
+// The fraction of light that crosses `distance` from `origin` along `dir` in `m` without
+// interacting: exact in a homogeneous medium, an unbiased estimate in a grid medium (ratio
+// tracking, Novak et al. 2014).
+fn transmittance_along(m: Medium, origin: vec3<f32>, dir: vec3<f32>, distance: f32, rng: ptr<function, vec4<u32>>) -> vec3<f32> {
+#ifdef GRID_MEDIA
+    if m.grid != NO_GRID {
+        var tr = vec3<f32>(1.0);
+        var t = 0.0;
+        for (var step = 0u; step < MAX_TRACKING_STEPS; step++) {
+            t -= log(1.0 - rng_next_f32(rng)) / m.majorant;
+            if !(t < distance) {
+                return tr;
+            }
+            tr *= max(vec3<f32>(0.0), vec3<f32>(1.0) - extinction_at(m, origin + t * dir) / m.majorant);
+            if max(tr.x, max(tr.y, tr.z)) <= 0.0 {
+                return tr;
+            }
+        }
+        return vec3<f32>(0.0);
+    }
+#endif
+    return transmittance(m, distance);
+}
+
+#ifdef GRID_MEDIA
+// Delta tracking against the majorant with null collisions for colour (Mitsuba's volpath's
+// scheme, Kutz et al. 2017): at a tentative collision the ray scatters with probability the
+// mean extinction over the majorant, else goes on. Weights per channel keep every channel
+// unbiased: sigma_s over the mean extinction at a real collision (as a homogeneous medium's
+// albedo sigma_t tr / density), the null part over its mean at a null one.
+fn track_collision(m: Medium, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, rng: ptr<function, vec4<u32>>) -> FreeFlight {
+    var weight = vec3<f32>(1.0);
+    var t = 0.0;
+    for (var step = 0u; step < MAX_TRACKING_STEPS; step++) {
+        t -= log(1.0 - rng_next_f32(rng)) / m.majorant;
+        if !(t < t_max) {
+            return FreeFlight(t_max, false, weight, vec3<f32>(0.0));
+        }
+        let sigma = extinction_at(m, origin + t * dir);
+        let real = (sigma.x + sigma.y + sigma.z) / (3.0 * m.majorant);
+        if rng_next_f32(rng) < real {
+            let fluence = weight / (real * m.majorant);
+            return FreeFlight(t, true, m.albedo * sigma * fluence, fluence);
+        }
+        let null_part = max(vec3<f32>(0.0), vec3<f32>(m.majorant) - sigma);
+        weight *= null_part / (m.majorant * (1.0 - real));
+    }
+    return FreeFlight(t_max, false, vec3<f32>(0.0), vec3<f32>(0.0));
+}
+#endif
 
 fn henyey_greenstein(g: f32, cos_theta: f32) -> f32 {
     let denom = 1.0 + g * g - 2.0 * g * cos_theta;
@@ -125,7 +263,7 @@ fn medium_after(material: Material, dir: vec3<f32>, normal: vec3<f32>, current: 
 // first in `medium`: the media's transmittance along the way, through null surfaces (the
 // boundaries of media, which change the medium), 0 if any other surface lies between. Both
 // ends are offset as common::surface's unoccluded offsets them.
-fn transmittance_between(from_point: vec3<f32>, from_error: vec3<f32>, from_normal: vec3<f32>, to_point: vec3<f32>, to_error: vec3<f32>, to_normal: vec3<f32>, medium: u32) -> vec3<f32> {
+fn transmittance_between(from_point: vec3<f32>, from_error: vec3<f32>, from_normal: vec3<f32>, to_point: vec3<f32>, to_error: vec3<f32>, to_normal: vec3<f32>, medium: u32, rng: ptr<function, vec4<u32>>) -> vec3<f32> {
     var origin = offset_ray_origin(from_point, from_error, from_normal, to_point - from_point);
     let end = offset_ray_origin(to_point, to_error, to_normal, origin - to_point);
     var current = medium;
@@ -141,7 +279,7 @@ fn transmittance_between(from_point: vec3<f32>, from_error: vec3<f32>, from_norm
         let hit = traverse(origin, dir, reach, false, false);
         if hit.prim == NO_HIT {
             if current != NO_MEDIUM {
-                tr *= transmittance(medium_at(current), distance);
+                tr *= transmittance_along(medium_at(current), origin, dir, distance, rng);
             }
             return tr;
         }
@@ -151,7 +289,7 @@ fn transmittance_between(from_point: vec3<f32>, from_error: vec3<f32>, from_norm
             return vec3<f32>(0.0);
         }
         if current != NO_MEDIUM {
-            tr *= transmittance(medium_at(current), hit.t);
+            tr *= transmittance_along(medium_at(current), origin, dir, hit.t, rng);
         }
         current = medium_after(material, dir, surface.normal, current);
         origin = spawn_origin(surface, dir);

@@ -228,7 +228,7 @@ fn direct_light(v: Vertex, medium: u32, mapped: vec3<f32>, glossy_threshold: f32
     *rays += 1u;
 #ifdef MEDIA
     let leaving = medium_after(materials[surface.material], ls.dir, front_normal(v), medium);
-    let tr = transmittance_between(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal, leaving);
+    let tr = transmittance_between(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal, leaving, rng);
     if max_component(tr) <= 0.0 {
         return vec3<f32>(0.0);
     }
@@ -257,7 +257,7 @@ fn direct_light_in_medium(position: vec3<f32>, d_in: vec3<f32>, m: Medium, mediu
         return vec3<f32>(0.0);
     }
     *rays += 1u;
-    let tr = transmittance_between(position, vec3<f32>(0.0), vec3<f32>(0.0), ls.position, ls.error, ls.normal, medium);
+    let tr = transmittance_between(position, vec3<f32>(0.0), vec3<f32>(0.0), ls.position, ls.error, ls.normal, medium, rng);
     if max_component(tr) <= 0.0 {
         return vec3<f32>(0.0);
     }

@@ -391,7 +391,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
 #ifdef MEDIA
     if (*path).medium != NO_MEDIUM {
         let m = medium_at((*path).medium);
-        let flight = sample_free_flight(m, hit.t, rng_next_vec2(rng));
+        let flight = sample_free_flight(m, (*path).origin, (*path).dir, hit.t, rng);
         (*path).throughput *= flight.weight;
         if flight.scattered {
             return scatter_in_medium(path, m, flight.t, rng, rays);

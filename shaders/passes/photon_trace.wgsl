@@ -27,7 +27,7 @@
 #import common::path_step::{arrive, bounce}
 #ifdef MEDIA
 #import common::scene::{materials, NO_MEDIUM}
-#import common::medium::{medium_at, medium_after, transmittance, sample_free_flight}
+#import common::medium::{medium_at, medium_after, transmittance_along, sample_free_flight}
 #endif
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
@@ -335,7 +335,8 @@ fn start_photon(emitted: Photon) -> PhotonPath {
 
 #ifdef MEDIA
 // A photon crossing its medium up to the next surface `t_max` away; false once it has ended.
-// Before any specular vertex it carries the transmittance, exactly: where it would scatter is
+// Before any specular vertex it carries the transmittance (exactly, or ratio tracking's
+// estimate in a grid medium): where it would scatter is
 // light the camera paths trace (L M ...). After one it is a caustic photon: it scatters at a
 // distance drawn as the camera paths draw theirs, and there it is stored as a volumetric
 // caustic (L S+ M) and ends; the camera paths' medium vertices gather it. The stored flux is
@@ -343,21 +344,18 @@ fn start_photon(emitted: Photon) -> PhotonPath {
 // unit volume estimate the fluence (Jensen and Christensen 1998's volume photon map).
 fn cross_medium(photon: ptr<function, Photon>, segments: u32, t_max: f32, after_specular: bool, rng: ptr<function, vec4<u32>>) -> bool {
     let m = medium_at((*photon).medium);
+    let origin = (*photon).origin;
+    let dir = (*photon).dir;
     if !after_specular {
-        (*photon).flux *= transmittance(m, t_max);
+        (*photon).flux *= transmittance_along(m, origin, dir, t_max, rng);
         return true;
     }
-    let flight = sample_free_flight(m, t_max, rng_next_vec2(rng));
+    let flight = sample_free_flight(m, origin, dir, t_max, rng);
     if !flight.scattered {
         (*photon).flux *= flight.weight;
         return true;
     }
-    let tr = transmittance(m, flight.t);
-    let density = dot(m.sigma_t * tr, vec3<f32>(1.0 / 3.0));
-    if density > 0.0 {
-        let position = (*photon).origin + (*photon).dir * flight.t;
-        store_hit(position, -(*photon).dir, (*photon).flux * tr / density, segments, 1u);
-    }
+    store_hit(origin + dir * flight.t, -dir, (*photon).flux * flight.fluence, segments, 1u);
     return false;
 }
 #endif

@@ -11,7 +11,8 @@ use crate::scene::Scene;
 /// A medium reference the WGSL reads as "vacuum" (common::medium's NO_MEDIUM).
 pub const NO_MEDIUM: u32 = u32::MAX;
 
-/// Appends every medium's record to `tables`: the offset of each, by medium index.
+/// Appends every medium's record (and its grid's values after it) to `tables`: the offset of
+/// each record, by medium index.
 pub fn append_records(scene: &Scene, tables: &mut Vec<f32>) -> Vec<u32> {
     scene
         .media
@@ -19,8 +20,11 @@ pub fn append_records(scene: &Scene, tables: &mut Vec<f32>) -> Vec<u32> {
         .iter()
         .map(|m| {
             let offset = tables.len() as u32;
-            tables.extend(m.gpu_record());
-            debug_assert_eq!(tables.len() - offset as usize, MEDIUM_RECORD_FLOATS);
+            let grid = offset + MEDIUM_RECORD_FLOATS as u32;
+            tables.extend(m.gpu_record(grid));
+            if let Some(d) = &m.density {
+                tables.extend_from_slice(&d.grid.data);
+            }
             offset
         })
         .collect()

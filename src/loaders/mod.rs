@@ -9,6 +9,7 @@ pub mod ply;
 pub mod ron_format;
 pub mod serialized;
 pub mod spectrum;
+pub mod vol;
 
 use std::path::Path;
 

@@ -241,7 +241,7 @@ pub const BEFORE_BSDFS: &[Plugin] = &[
 pub const AFTER_BSDFS: &[Plugin] = &[
     Plugin {
         object: "medium",
-        kinds: &["homogeneous"],
+        kinds: &["homogeneous", "heterogeneous"],
         properties: &[
             p("albedo", "0.75"),
             p("sigma_t", "1"),
@@ -254,8 +254,9 @@ pub const AFTER_BSDFS: &[Plugin] = &[
                 (isotropic when none). Rendered as Mitsuba's `volpath` renders it (null \
                 surfaces do not count towards max_depth); path tracing renders every path \
                 that scatters in a medium, photons carry what crosses one unscattered. \
-                `has_spectral_extinction` only changes Mitsuba's sampling. `heterogeneous` \
-                (grid volumes) is refused with its place.",
+                `has_spectral_extinction` only changes Mitsuba's sampling. `heterogeneous`: \
+                `sigma_t` a `gridvolume` (times `scale`), tracked against the grid's largest \
+                value (delta and ratio tracking); a grid of albedo is refused with its place.",
     },
     Plugin {
         object: "phase",
@@ -273,7 +274,23 @@ pub const AFTER_BSDFS: &[Plugin] = &[
         object: "volume",
         kinds: &["constvolume"],
         properties: &[p("value", "1"), p("to_world", "identity")],
-        notes: "As a homogeneous medium's `albedo` or `sigma_t`; `gridvolume` is refused.",
+        notes: "As a medium's `albedo` or `sigma_t`.",
+    },
+    Plugin {
+        object: "volume",
+        kinds: &["gridvolume"],
+        properties: &[
+            p("filename", ""),
+            p("to_world", "identity"),
+            p("filter_type", "trilinear"),
+            p("wrap_mode", "clamp"),
+            p("use_grid_bbox", "false"),
+            p("raw", "false"),
+            p("accel", "true"),
+        ],
+        notes: "Mitsuba's binary `.vol` (float32, 1 or 3 channels), filling the unit cube that \
+                `to_world` places (the file's box with `use_grid_bbox`), cell-centred samples; \
+                as a heterogeneous medium's `sigma_t`. `raw` and `accel` change nothing in RGB.",
     },
     Plugin {
         object: "texture",

@@ -67,6 +67,7 @@ pub const SCENE_DEFS: &[&str] = &[
     "FLOAT_TEXELS",
     "NORMAL_MAPS",
     "MEDIA",
+    "GRID_MEDIA",
 ];
 
 /// Every scene def there is with `bsdfs`: [`SCENE_DEFS`] and the BSDF units' defs.
@@ -80,7 +81,7 @@ pub fn scene_def_names(bsdfs: &BsdfRegistry) -> Vec<&'static str> {
 /// projector, `SPOT_LIGHTS` a spot light, `PROJECTORS` a projector, `DIRECTIONAL_LIGHTS` a
 /// directional light, `ENVIRONMENT` a constant or map light, `TEXTURES` when a material or a
 /// light has a texture (the scene then has binding 11), `NORMAL_MAPS` a normalmap or bumpmap
-/// (with `TEXTURES`), `MEDIA` participating media (common::medium and the medium step).
+/// (with `TEXTURES`), `MEDIA` participating media (common::medium and the medium step), `GRID_MEDIA` one with a grid.
 pub fn scene_defs(
     features: &SceneFeatures,
     bsdfs: &BsdfRegistry,
@@ -95,6 +96,7 @@ pub fn scene_defs(
         ("TEXTURES", features.textures),
         ("NORMAL_MAPS", features.normal_maps),
         ("MEDIA", features.media),
+        ("GRID_MEDIA", features.grid_media),
     ];
     let scene = present.iter().filter(|(_, on)| *on).map(|(name, _)| *name);
     defs_of(scene.chain(bsdfs.defs_for(&features.bsdfs)))

@@ -6,8 +6,11 @@
 //! (shaders/common/medium.wgsl) against.
 
 use std::f32::consts::PI;
+use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::{Mat4, Vec2, Vec3};
+
+use crate::scene::grid::{FilterType, Grid, WrapMode};
 
 /// How a medium scatters light: the density over directions of leaving along `wo` having
 /// travelled along `d_in` (both unit, world space). Each integrates to 1 over the sphere and is
@@ -80,40 +83,97 @@ fn rayleigh_cos(u: f32) -> f32 {
     (a + b).clamp(-1.0, 1.0)
 }
 
-/// A homogeneous medium (Mitsuba's `homogeneous`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A medium: Mitsuba's `homogeneous`, or its `heterogeneous` with a grid of extinction.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Medium {
-    /// Extinction per unit length, `scale` applied.
+    /// Extinction per unit length, `scale` applied; with `density`, what the grid's value
+    /// multiplies.
     pub sigma_t: Vec3,
     /// Single-scattering albedo: sigma_s = albedo sigma_t.
     pub albedo: Vec3,
     pub phase: Phase,
     /// Mitsuba's `sample_emitters`: next-event estimation at its scattering points.
     pub sample_emitters: bool,
+    /// A heterogeneous medium's grid (Mitsuba's `gridvolume` as its `sigma_t`).
+    pub density: Option<Density>,
+}
+
+/// A grid of extinction placed in the world (Mitsuba's `gridvolume`: the grid fills the unit
+/// cube of its local space, src/scene/grid.rs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Density {
+    pub grid: Arc<Grid>,
+    /// World to the grid's unit cube (`to_world`'s inverse, and the file's box with
+    /// `use_grid_bbox`).
+    pub to_local: Mat4,
+    pub filter: FilterType,
+    pub wrap: WrapMode,
 }
 
 impl Medium {
-    /// The fraction of light that crosses `distance` without interacting.
+    /// The fraction of light that crosses `distance` without interacting (a homogeneous
+    /// medium's).
     pub fn transmittance(&self, distance: f32) -> Vec3 {
         (-self.sigma_t * distance).exp()
+    }
+
+    /// Extinction at world point `p`.
+    pub fn extinction_at(&self, p: Vec3) -> Vec3 {
+        match &self.density {
+            None => self.sigma_t,
+            Some(d) => {
+                self.sigma_t * d.grid.eval_with(d.to_local.transform_point3(p), d.filter, d.wrap)
+            }
+        }
+    }
+
+    /// The largest extinction anywhere (a grid medium's majorant, as Mitsuba's: `scale` times
+    /// the grid's largest value, here times the largest channel of `sigma_t`).
+    pub fn majorant(&self) -> f32 {
+        let grid = self.density.as_ref().map_or(1.0, |d| d.grid.max().max(0.0));
+        self.sigma_t.max_element() * grid
     }
 
     pub fn sigma_s(&self) -> Vec3 {
         self.sigma_t * self.albedo
     }
 
-    /// The record the WGSL reads (common::medium), `MEDIUM_RECORD_FLOATS` floats.
-    pub fn gpu_record(&self) -> [f32; MEDIUM_RECORD_FLOATS] {
+    /// The record the WGSL reads (common::medium), `MEDIUM_RECORD_FLOATS` floats; `grid` is
+    /// where its grid's values start in the same tables (ignored without a grid).
+    pub fn gpu_record(&self, grid: u32) -> [f32; MEDIUM_RECORD_FLOATS] {
         let (kind, g) = self.phase.gpu();
         let s = self.sigma_t;
         let a = self.albedo;
-        let flags = if self.sample_emitters { 1.0 } else { 0.0 };
-        [s.x, s.y, s.z, kind as f32, a.x, a.y, a.z, g, flags]
+        let mut r = [0.0f32; MEDIUM_RECORD_FLOATS];
+        r[..8].copy_from_slice(&[s.x, s.y, s.z, kind as f32, a.x, a.y, a.z, g]);
+        let nearest = matches!(&self.density, Some(d) if d.filter == FilterType::Nearest);
+        r[8] = (self.sample_emitters as u32 | (nearest as u32) << 1) as f32;
+        // An offset as its bits: exact beyond 2^24 floats of tables.
+        r[9] = f32::from_bits(if self.density.is_some() { grid } else { NO_GRID });
+        r[10] = self.majorant();
+        if let Some(d) = &self.density {
+            r[11] = d.grid.channels as f32;
+            r[12..15].copy_from_slice(&d.grid.size.map(|n| n as f32));
+            r[15] = match d.wrap {
+                WrapMode::Clamp => 0.0,
+                WrapMode::Repeat => 1.0,
+                WrapMode::Mirror => 2.0,
+            };
+            let m = d.to_local.to_cols_array_2d();
+            for row in 0..3 {
+                for col in 0..4 {
+                    r[16 + 4 * row + col] = m[col][row];
+                }
+            }
+        }
+        r
     }
 }
 
 /// Floats per medium in the scene's float tables.
-pub const MEDIUM_RECORD_FLOATS: usize = 9;
+pub const MEDIUM_RECORD_FLOATS: usize = 28;
+/// A record's grid offset for a medium without one (common::medium's NO_GRID).
+pub const NO_GRID: u32 = u32::MAX;
 
 /// The media on the two sides of a shape (Mitsuba's `interior` and `exterior`, indices of
 /// [`Media::list`]). A shape that names neither leaves a path's medium as it was.

@@ -8,6 +8,7 @@ pub mod bvh;
 pub mod emitter;
 pub mod filter;
 
+pub mod grid;
 pub mod medium;
 pub mod mesh;
 pub mod plugin;
@@ -278,6 +279,8 @@ pub struct SceneFeatures {
     pub blends: bool,
     /// Participating media: some shape or the camera has one.
     pub media: bool,
+    /// Some medium has a grid of extinction (heterogeneous).
+    pub grid_media: bool,
 }
 
 impl SceneFeatures {
@@ -523,6 +526,7 @@ impl Scene {
             directional_lights: !self.emitters.directionals.is_empty(),
             environment: self.emitters.environment.is_some(),
             media: !self.media.is_empty(),
+            grid_media: self.media.list.iter().any(|m| m.density.is_some()),
             ..SceneFeatures::default()
         };
         let shape_materials = self

@@ -1,10 +1,14 @@
-//! Participating media as Mitsuba 3's src/media and src/phase read them: `homogeneous` media
-//! (their coefficients as numbers, colours or a `constvolume`), phase functions `isotropic`,
+//! Participating media as Mitsuba 3's src/media, src/volumes and src/phase read them:
+//! `homogeneous` media (their coefficients as numbers, colours or a `constvolume`),
+//! `heterogeneous` ones with a `gridvolume` (a `.vol` file) of extinction, phase functions `isotropic`,
 //! `hg` and `rayleigh`, declared at top level with an id or nested where they are used (a
 //! shape's `interior` / `exterior`, the sensor's medium).
 
+use std::sync::Arc;
+
 use super::*;
-use crate::scene::medium::{Medium, Phase};
+use crate::scene::grid::{FilterType, WrapMode};
+use crate::scene::medium::{Density, Medium, Phase};
 
 /// What a homogeneous medium's coefficient may be given as.
 const COEFFICIENT_TAGS: &[&str] = &["float", "rgb", "spectrum"];
@@ -36,16 +40,14 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// A `<medium>` element: its index in the scene's media.
     pub(super) fn read_medium(&self, node: Node<'a, 'input>) -> Result<u32, SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if kind != "homogeneous" {
-            let why = if kind == "heterogeneous" {
-                "heterogeneous media (grid volumes) are not supported yet"
-            } else {
-                "unknown medium type"
-            };
+        if !matches!(kind.as_str(), "homogeneous" | "heterogeneous") {
             return Err(self.attr_error(
                 node,
                 "type",
-                format!("medium type \"{kind}\": {why} (hppm reads \"homogeneous\")"),
+                format!(
+                    "medium type \"{kind}\" is not supported (hppm reads \"homogeneous\" and \
+                     \"heterogeneous\")"
+                ),
             ));
         }
         let phase_nodes: Vec<Node> = node
@@ -68,7 +70,23 @@ impl<'a, 'input> Reader<'a, 'input> {
             .filter(|c| c.has_tag_name("volume"))
             .collect();
         let albedo = self.medium_coefficient(&mut props, &volumes, "albedo", 0.75)?;
-        let sigma_t = self.medium_coefficient(&mut props, &volumes, "sigma_t", 1.0)?;
+        // A heterogeneous medium's extinction may be a grid: sigma_t is then 1 times it.
+        let grid_node = volumes.iter().copied().find(|v| {
+            v.attribute("name") == Some("sigma_t") && v.attribute("type") == Some("gridvolume")
+        });
+        let density = match grid_node {
+            Some(v) if kind == "heterogeneous" => {
+                // Taken off the list of props as the coefficient would be.
+                props.take("sigma_t");
+                Some(self.grid_volume(v)?)
+            }
+            _ => None,
+        };
+        let sigma_t = if density.is_some() {
+            Vec3::ONE
+        } else {
+            self.medium_coefficient(&mut props, &volumes, "sigma_t", 1.0)?
+        };
         let scale = match props.take("scale") {
             Some(n) => {
                 let s = self.float(n)?;
@@ -109,6 +127,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             albedo,
             phase,
             sample_emitters,
+            density,
         };
         let mut media = self.media.borrow_mut();
         media.push(medium);
@@ -168,14 +187,15 @@ impl<'a, 'input> Reader<'a, 'input> {
         let kind = self.required_attr(node, "type")?;
         if kind != "constvolume" {
             let why = if kind == "gridvolume" {
-                "grid volumes are not supported yet"
+                "a grid is read as a heterogeneous medium's sigma_t only (grids of albedo, and \
+                 grids in a homogeneous medium, are not supported yet)"
             } else {
                 "unknown volume type"
             };
             return Err(self.attr_error(
                 node,
                 "type",
-                format!("volume type \"{kind}\": {why} (hppm reads \"constvolume\")"),
+                format!("volume type \"{kind}\": {why}"),
             ));
         }
         let mut props = self.props(node, &[])?;
@@ -189,6 +209,73 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
             None => Ok((Vec3::ONE, node)),
         }
+    }
+
+    /// `<volume type="gridvolume">`: its `.vol` file (relative to the scene's folder), placed by
+    /// `to_world` (and the file's box with `use_grid_bbox`), filtered and wrapped as Mitsuba's
+    /// gridvolume does (src/scene/grid.rs).
+    fn grid_volume(&self, node: Node<'a, 'input>) -> Result<Density, SceneError> {
+        let mut props = self.props(node, &[])?;
+        let file_node = props.take("filename").ok_or_else(|| {
+            self.error(node, "<volume type=\"gridvolume\"> needs a \"filename\" (a .vol file)")
+        })?;
+        let filename = self.string(file_node)?;
+        let to_world = props
+            .take("to_world")
+            .map(|n| self.transform(n))
+            .transpose()?
+            .unwrap_or(Mat4::IDENTITY);
+        let mut choice = |name: &str, options: &[&str]| -> Result<usize, SceneError> {
+            let Some(n) = props.take(name) else {
+                return Ok(0);
+            };
+            let value = self.string(n)?;
+            options.iter().position(|o| *o == value).ok_or_else(|| {
+                self.attr_error(
+                    n,
+                    "value",
+                    format!("{name} \"{value}\": expected {}", options.join(" or ")),
+                )
+            })
+        };
+        let filter = match choice("filter_type", &["trilinear", "nearest"])? {
+            1 => FilterType::Nearest,
+            _ => FilterType::Trilinear,
+        };
+        let wrap = match choice("wrap_mode", &["clamp", "repeat", "mirror"])? {
+            1 => WrapMode::Repeat,
+            2 => WrapMode::Mirror,
+            _ => WrapMode::Clamp,
+        };
+        let use_bbox = props
+            .take("use_grid_bbox")
+            .map(|n| self.boolean(n))
+            .transpose()?
+            .unwrap_or(false);
+        // `raw` changes only spectral variants' colours; `accel` only Mitsuba's GPU lookups.
+        self.ignore(&mut props, &["raw", "accel"], |r, n| r.boolean(n).map(drop))?;
+        self.finish(props, node)?;
+        if to_world.determinant().abs() < 1e-30 || !to_world.is_finite() {
+            return Err(self.error(node, "the gridvolume's to_world is not invertible"));
+        }
+        let grid = crate::loaders::vol::read_vol(&self.relative(&filename))
+            .map_err(|why| self.attr_error(file_node, "value", format!("{filename}: {why}")))?;
+        let mut to_local = to_world.inverse();
+        if use_bbox {
+            let bbox = grid.bbox_transform().ok_or_else(|| {
+                self.error(
+                    node,
+                    format!("{filename}: use_grid_bbox with a box that is not one (a side not positive)"),
+                )
+            })?;
+            to_local = bbox * to_local;
+        }
+        Ok(Density {
+            grid: Arc::new(grid),
+            to_local,
+            filter,
+            wrap,
+        })
     }
 
     /// `<phase type=...>`: isotropic, hg (`g`, default 0.8, in (-1, 1)) or rayleigh.
