@@ -473,6 +473,16 @@ fn integrators_and_samplers_are_advice() {
         sensor("", 8, 8)
     ));
     assert!(typed.scene.is_none(), "a float max_depth was accepted");
+    // The volumetric path tracers are what hppm renders media as: no warning.
+    for kind in ["volpath", "volpathmis"] {
+        let report = check(&format!(
+            r#"<integrator type="{kind}"><integer name="max_depth" value="5"/><integer name="rr_depth" value="3"/></integrator>{}{LIGHT}"#,
+            sensor("", 8, 8)
+        ));
+        assert!(warnings(&report).is_empty(), "{kind}: {:?}", warnings(&report));
+        let integrator = scene_of(report).integrator;
+        assert_eq!((integrator.max_depth, integrator.rr_depth), (Some(5), Some(3)));
+    }
 }
 
 /// A file written for Mitsuba 0.5 loads as Mitsuba 3 upgrades it: camelCase property names

@@ -19,13 +19,14 @@ const MESH_FILE: &[Property] = &[
 pub const BEFORE_BSDFS: &[Plugin] = &[
     Plugin {
         object: "integrator",
-        kinds: &["path", "any other"],
+        kinds: &["path", "volpath", "volpathmis", "any other"],
         properties: &[
             p("max_depth", "-1"),
             p("rr_depth", "5"),
             p("hide_emitters", "false"),
         ],
-        notes: "The render graph chooses the algorithm: another integrator (`volpath`, `bdpt`, \
+        notes: "The render graph chooses the algorithm; `path`, `volpath` and `volpathmis` are \
+                what hppm renders (media as `volpath` renders them). Another integrator (`bdpt`, \
                 `direct`: max_depth 2, a plugin of a research project) is rendered with its path \
                 depths and a warning naming it and what it leaves out; one that wraps another \
                 (`aov`) gives the wrapped one's. `hide_emitters`: camera rays pass through \

@@ -338,7 +338,12 @@ impl std::fmt::Display for SceneFeatures {
                 ("environment", self.environment),
             ]),
             list(&[("triangles", self.triangles), ("spheres", self.spheres)]),
-        )
+        )?;
+        if self.media {
+            let kind = if self.grid_media { " (grids)" } else { "" };
+            write!(f, ", media{kind}")?;
+        }
+        Ok(())
     }
 }
 

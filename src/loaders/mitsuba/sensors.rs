@@ -47,7 +47,9 @@ impl<'a, 'input> Reader<'a, 'input> {
         if let Some(n) = props.take("hide_emitters") {
             self.scene.integrator.hide_emitters = self.boolean(n)?;
         }
-        if kind == "path" {
+        // Media are rendered as `volpath` renders them (and its depth rule): its settings are
+        // hppm's whatever the scene holds.
+        if matches!(kind.as_str(), "path" | "volpath" | "volpathmis") {
             return self.finish(props, node);
         }
         self.note_read(&props, node);
