@@ -37,7 +37,10 @@ fn phase_functions_are_normalised_with_their_mean_cosine() {
             total += p;
             mean_cos += p * cos as f64;
         }
-        assert!((total - 1.0).abs() < 1e-4, "{phase:?} integrates to {total}");
+        assert!(
+            (total - 1.0).abs() < 1e-4,
+            "{phase:?} integrates to {total}"
+        );
         let expected = match phase {
             Phase::HenyeyGreenstein { g } => g as f64,
             _ => 0.0,
@@ -89,7 +92,10 @@ fn phase_sampling_draws_the_phase_functions_density() {
         assert!(chi2 < 39.0 + 5.0 * 8.8, "{phase:?}: chi-square {chi2:.1}");
         for q in quadrants {
             let share = q as f64 / n as f64;
-            assert!((share - 0.25).abs() < 0.006, "{phase:?}: azimuth quadrants {quadrants:?}");
+            assert!(
+                (share - 0.25).abs() < 0.006,
+                "{phase:?}: azimuth quadrants {quadrants:?}"
+            );
         }
     }
 }
@@ -136,7 +142,10 @@ fn assert_mean_is(label: &str, image: &hppm::image::Image, expected: Vec3) {
             "{label}, channel {c}: {:.5} expected {:.5} (tolerance {tolerance:.5})",
             mean[c], expected[c]
         );
-        assert!(tolerance < 0.05 * expected[c] as f64, "{label}: too noisy to judge");
+        assert!(
+            tolerance < 0.05 * expected[c] as f64,
+            "{label}: too noisy to judge"
+        );
         assert!(
             (mean[c] - expected[c] as f64).abs() <= tolerance,
             "{label}, channel {c}: {} against Beer-Lambert's {}",
@@ -170,7 +179,11 @@ fn light_through_an_absorbing_medium_obeys_beer_lambert() {
         "",
     );
     let mut r = renderer(&gpu, &around, load_graph("graphs/pt.ron"), 2);
-    assert_mean_is("sensor medium", &render_to(&mut r, 256), (-sigma * 0.1 * 13.0).exp());
+    assert_mean_is(
+        "sensor medium",
+        &render_to(&mut r, 256),
+        (-sigma * 0.1 * 13.0).exp(),
+    );
 }
 
 /// Medium code is compiled only into scenes that have media: the MEDIA def is set exactly
@@ -178,9 +191,7 @@ fn light_through_an_absorbing_medium_obeys_beer_lambert() {
 #[test]
 fn only_scenes_with_media_compile_medium_code() {
     let bsdfs = hppm::bsdfs::BsdfRegistry::builtin();
-    let defs = |scene: &hppm::scene::Scene| {
-        hppm::passes::scene_defs(&scene.features(), &bsdfs)
-    };
+    let defs = |scene: &hppm::scene::Scene| hppm::passes::scene_defs(&scene.features(), &bsdfs);
     let plain = load_scene("tests/refs/scenes/cornell_glass_sphere/scene.xml");
     assert!(!defs(&plain).contains_key("MEDIA"));
     let foggy = load_scene("tests/refs/media/scenes/absorbing_glass/scene.xml");
@@ -311,17 +322,20 @@ fn photons_render_the_volumetric_caustic_of_a_point_light_over_a_mirror() {
     }
     let runs = common::convergence::paired_means("graphs/hybrid.ron", &scene, 512, 12);
     let n = runs.len() as f64;
-    for c in 0..3 {
-        let shares: Vec<f64> = runs.iter().map(|r| (r.1[c] - r.0[c]) / expected[c]).collect();
+    for (c, &integral) in expected.iter().enumerate() {
+        let shares: Vec<f64> = runs.iter().map(|r| (r.1[c] - r.0[c]) / integral).collect();
         let mean = shares.iter().sum::<f64>() / n;
         let se = (shares.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (n - 1.0) / n).sqrt();
         let tolerance = 4.0 * se + 0.03;
         eprintln!(
             "channel {c}: hybrid - pt over the integral {mean:.4} +- {se:.4} (expected {:.5}, \
              tolerance {tolerance:.4}), per seed {shares:.3?}",
-            expected[c]
+            integral
         );
-        assert!(tolerance < 0.25, "too noisy to tell a missing or doubled caustic");
+        assert!(
+            tolerance < 0.25,
+            "too noisy to tell a missing or doubled caustic"
+        );
         assert!(
             (mean - 1.0).abs() <= tolerance,
             "channel {c}: the photons' volumetric caustic is {mean:.3} of its integral"
@@ -380,8 +394,7 @@ fn light_through_an_absorbing_grid_obeys_beer_lambert_per_column() {
     for block in 0..width / columns_per_block {
         let values: Vec<f64> = (0..image.height)
             .flat_map(|y| {
-                (block * columns_per_block..(block + 1) * columns_per_block)
-                    .map(move |x| (x, y))
+                (block * columns_per_block..(block + 1) * columns_per_block).map(move |x| (x, y))
             })
             .map(|(x, y)| image.pixels[(y * width + x) as usize][0] as f64)
             .collect();
@@ -396,13 +409,17 @@ fn light_through_an_absorbing_grid_obeys_beer_lambert_per_column() {
         let expected = (0..steps)
             .map(|i| {
                 let x = lo + (hi - lo) * (i as f64 + 0.5) / steps as f64;
-                let sigma = grid.eval(glam::Vec3::new(((x + 1.0) / 2.0) as f32, 0.5, 0.5)).x;
+                let sigma = grid
+                    .eval(glam::Vec3::new(((x + 1.0) / 2.0) as f32, 0.5, 0.5))
+                    .x;
                 (-2.0 * sigma as f64).exp()
             })
             .sum::<f64>()
             / steps as f64;
         let tolerance = 4.5 * se + 0.005 * expected;
-        eprintln!("x in [{lo:.3}, {hi:.3}]: {mean:.5} expected {expected:.5} (tolerance {tolerance:.5})");
+        eprintln!(
+            "x in [{lo:.3}, {hi:.3}]: {mean:.5} expected {expected:.5} (tolerance {tolerance:.5})"
+        );
         assert!(
             (mean - expected).abs() <= tolerance,
             "x in [{lo}, {hi}]: {mean} through the grid, Beer-Lambert {expected}"
@@ -435,13 +452,23 @@ fn a_constant_grid_renders_as_the_homogeneous_medium() {
         let image = render_to(&mut r, 512);
         let n = image.pixels.len() as f64;
         let mean = image.mean()[1];
-        let var = image.pixels.iter().map(|p| (p[1] as f64 - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let var = image
+            .pixels
+            .iter()
+            .map(|p| (p[1] as f64 - mean).powi(2))
+            .sum::<f64>()
+            / (n - 1.0);
         eprintln!("{label}: mean {mean:.5} +- {:.5}", (var / n).sqrt());
         means.push((mean, var / n));
     }
     let diff = means[0].0 - means[1].0;
     let se = (means[0].1 + means[1].1).sqrt();
     assert!(4.5 * se < 0.05 * means[1].0, "too noisy to tell");
-    assert!(diff.abs() <= 4.5 * se, "grid {} against homogeneous {}", means[0].0, means[1].0);
+    assert!(
+        diff.abs() <= 4.5 * se,
+        "grid {} against homogeneous {}",
+        means[0].0,
+        means[1].0
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -479,9 +479,16 @@ fn integrators_and_samplers_are_advice() {
             r#"<integrator type="{kind}"><integer name="max_depth" value="5"/><integer name="rr_depth" value="3"/></integrator>{}{LIGHT}"#,
             sensor("", 8, 8)
         ));
-        assert!(warnings(&report).is_empty(), "{kind}: {:?}", warnings(&report));
+        assert!(
+            warnings(&report).is_empty(),
+            "{kind}: {:?}",
+            warnings(&report)
+        );
         let integrator = scene_of(report).integrator;
-        assert_eq!((integrator.max_depth, integrator.rr_depth), (Some(5), Some(3)));
+        assert_eq!(
+            (integrator.max_depth, integrator.rr_depth),
+            (Some(5), Some(3))
+        );
     }
 }
 
@@ -1166,7 +1173,10 @@ fn media_are_read_as_mitsuba_defines_them() {
     assert_eq!(media, &vec![fog, plain, default_hg, nested]);
     assert_eq!(scene.media.camera, Some(1));
     let sphere = &scene.materials[scene.spheres[0].material as usize];
-    assert_eq!((sphere.media.interior, sphere.media.exterior), (Some(0), None));
+    assert_eq!(
+        (sphere.media.interior, sphere.media.exterior),
+        (Some(0), None)
+    );
     let cube = &scene.materials[scene.triangles[0].material as usize];
     assert_eq!((cube.media.interior, cube.media.exterior), (None, Some(3)));
     assert!(scene.features().media);
@@ -1179,12 +1189,24 @@ fn media_are_read_as_mitsuba_defines_them() {
 #[test]
 fn broken_media_are_refused_where_they_are_written() {
     for (medium, expected) in [
-        (r#"<float name="sigma_tt" value="1"/>"#, "did you mean \"sigma_t\""),
-        (r#"<rgb name="sigma_t" value="1, -2, 1"/>"#, "expected finite numbers of 0 or more"),
+        (
+            r#"<float name="sigma_tt" value="1"/>"#,
+            "did you mean \"sigma_t\"",
+        ),
+        (
+            r#"<rgb name="sigma_t" value="1, -2, 1"/>"#,
+            "expected finite numbers of 0 or more",
+        ),
         (r#"<float name="albedo" value="inf"/>"#, "albedo"),
-        (r#"<phase type="hg"><float name="g" value="1"/></phase>"#, "between -1 and 1"),
+        (
+            r#"<phase type="hg"><float name="g" value="1"/></phase>"#,
+            "between -1 and 1",
+        ),
         (r#"<phase type="sggx"/>"#, "\"sggx\" is not supported"),
-        (r#"<phase type="isotropic"/><phase type="isotropic"/>"#, "a second <phase>"),
+        (
+            r#"<phase type="isotropic"/><phase type="isotropic"/>"#,
+            "a second <phase>",
+        ),
         (
             r#"<volume type="gridvolume" name="albedo"><string name="filename" value="a.vol"/></volume>"#,
             "grids of albedo",
@@ -1203,7 +1225,10 @@ fn broken_media_are_refused_where_they_are_written() {
         "medium type \"inhomogeneous\" is not supported",
     );
     for (volume, expected) in [
-        (r#"<string name="filename" value="nowhere.vol"/>"#, "nowhere.vol"),
+        (
+            r#"<string name="filename" value="nowhere.vol"/>"#,
+            "nowhere.vol",
+        ),
         (r#""#, "needs a \"filename\""),
         (
             r#"<string name="filename" value="tests/data/volumes/ramp.vol"/><string name="filter_type" value="cubic"/>"#,

@@ -630,7 +630,10 @@ impl GpuScene {
             light.medium = if scene.media.is_empty() {
                 NO_MEDIUM
             } else {
-                media::offset_of(media::medium_at(scene, light_origin(scene, light)), &medium_offsets)
+                media::offset_of(
+                    media::medium_at(scene, light_origin(scene, light)),
+                    &medium_offsets,
+                )
             };
         }
         let mut light_of_prim = vec![NO_LIGHT; scene.triangles.len() + scene.spheres.len()];
@@ -807,10 +810,13 @@ fn light_origin(scene: &Scene, light: &GpuLight) -> Vec3 {
     let reach = (hi - lo).length().max(1.0);
     let nudge = 1e-4 * reach;
     match light.kind {
-        LIGHT_TRIANGLE => scene.triangles.get(light.prim as usize).map_or(centre, |t| {
-            let normal = (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).normalize_or_zero();
-            (t.v[0] + t.v[1] + t.v[2]) / 3.0 + normal * nudge
-        }),
+        LIGHT_TRIANGLE => scene
+            .triangles
+            .get(light.prim as usize)
+            .map_or(centre, |t| {
+                let normal = (t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).normalize_or_zero();
+                (t.v[0] + t.v[1] + t.v[2]) / 3.0 + normal * nudge
+            }),
         LIGHT_SPHERE => scene.spheres.get(light.prim as usize).map_or(centre, |s| {
             let out = if s.flip_normals { -1.0 } else { 1.0 };
             s.center + Vec3::Y * (s.radius + out * nudge)

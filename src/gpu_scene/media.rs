@@ -5,8 +5,8 @@
 
 use glam::Vec3;
 
-use crate::scene::medium::{MEDIUM_RECORD_FLOATS, MediumInterface};
 use crate::scene::Scene;
+use crate::scene::medium::{MEDIUM_RECORD_FLOATS, MediumInterface};
 
 /// A medium reference the WGSL reads as "vacuum" (common::medium's NO_MEDIUM).
 pub const NO_MEDIUM: u32 = u32::MAX;
@@ -92,7 +92,11 @@ pub fn medium_at(scene: &Scene, point: Vec3) -> Option<u32> {
         let root = disc.sqrt();
         for t in [-b - root, -b + root] {
             let outward = point + dir * t - sphere.center;
-            let normal = if sphere.flip_normals { -outward } else { outward };
+            let normal = if sphere.flip_normals {
+                -outward
+            } else {
+                outward
+            };
             consider(t, normal, media);
         }
     }

@@ -19,7 +19,9 @@ use crate::scene::grid::{FilterType, Grid, WrapMode};
 pub enum Phase {
     Isotropic,
     /// Henyey-Greenstein with mean cosine `g` in (-1, 1): forward scattering for g > 0.
-    HenyeyGreenstein { g: f32 },
+    HenyeyGreenstein {
+        g: f32,
+    },
     /// Rayleigh's 3 / (16 pi) (1 + cos^2).
     Rayleigh,
 }
@@ -122,7 +124,9 @@ impl Medium {
         match &self.density {
             None => self.sigma_t,
             Some(d) => {
-                self.sigma_t * d.grid.eval_with(d.to_local.transform_point3(p), d.filter, d.wrap)
+                self.sigma_t
+                    * d.grid
+                        .eval_with(d.to_local.transform_point3(p), d.filter, d.wrap)
             }
         }
     }
@@ -149,7 +153,11 @@ impl Medium {
         let nearest = matches!(&self.density, Some(d) if d.filter == FilterType::Nearest);
         r[8] = (self.sample_emitters as u32 | (nearest as u32) << 1) as f32;
         // An offset as its bits: exact beyond 2^24 floats of tables.
-        r[9] = f32::from_bits(if self.density.is_some() { grid } else { NO_GRID });
+        r[9] = f32::from_bits(if self.density.is_some() {
+            grid
+        } else {
+            NO_GRID
+        });
         r[10] = self.majorant();
         if let Some(d) = &self.density {
             r[11] = d.grid.channels as f32;

@@ -111,9 +111,10 @@ impl<'a, 'input> Reader<'a, 'input> {
             r.boolean(n).map(drop)
         })?;
         self.finish(props, node)?;
-        if let Some(v) = volumes.iter().find(|v| {
-            !matches!(v.attribute("name"), Some("albedo" | "sigma_t"))
-        }) {
+        if let Some(v) = volumes
+            .iter()
+            .find(|v| !matches!(v.attribute("name"), Some("albedo" | "sigma_t")))
+        {
             return Err(self.error(
                 *v,
                 format!(
@@ -143,9 +144,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         name: &str,
         default: f32,
     ) -> Result<Vec3, SceneError> {
-        let volume = volumes
-            .iter()
-            .find(|v| v.attribute("name") == Some(name));
+        let volume = volumes.iter().find(|v| v.attribute("name") == Some(name));
         let node = props.take(name);
         let value = match (node, volume) {
             (Some(n), Some(v)) => {
@@ -183,7 +182,10 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     /// `<volume type="constvolume">` and its `value` (and the node that gave it).
-    fn constant_volume(&self, node: Node<'a, 'input>) -> Result<(Vec3, Node<'a, 'input>), SceneError> {
+    fn constant_volume(
+        &self,
+        node: Node<'a, 'input>,
+    ) -> Result<(Vec3, Node<'a, 'input>), SceneError> {
         let kind = self.required_attr(node, "type")?;
         if kind != "constvolume" {
             let why = if kind == "gridvolume" {
@@ -192,11 +194,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             } else {
                 "unknown volume type"
             };
-            return Err(self.attr_error(
-                node,
-                "type",
-                format!("volume type \"{kind}\": {why}"),
-            ));
+            return Err(self.attr_error(node, "type", format!("volume type \"{kind}\": {why}")));
         }
         let mut props = self.props(node, &[])?;
         let value = props.take("value");
@@ -217,7 +215,10 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn grid_volume(&self, node: Node<'a, 'input>) -> Result<Density, SceneError> {
         let mut props = self.props(node, &[])?;
         let file_node = props.take("filename").ok_or_else(|| {
-            self.error(node, "<volume type=\"gridvolume\"> needs a \"filename\" (a .vol file)")
+            self.error(
+                node,
+                "<volume type=\"gridvolume\"> needs a \"filename\" (a .vol file)",
+            )
         })?;
         let filename = self.string(file_node)?;
         let to_world = props
@@ -265,7 +266,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             let bbox = grid.bbox_transform().ok_or_else(|| {
                 self.error(
                     node,
-                    format!("{filename}: use_grid_bbox with a box that is not one (a side not positive)"),
+                    format!(
+                        "{filename}: use_grid_bbox with a box that is not one (a side not positive)"
+                    ),
                 )
             })?;
             to_local = bbox * to_local;
@@ -319,9 +322,10 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// `<ref id=...>` to a medium declared before.
     pub(super) fn medium_ref(&self, node: Node) -> Result<u32, SceneError> {
         let id = self.required_attr(node, "id")?;
-        self.named_media.get(&id).copied().ok_or_else(|| {
-            self.missing_ref(node, &id, "medium", &format!("<ref id=\"{id}\">"))
-        })
+        self.named_media
+            .get(&id)
+            .copied()
+            .ok_or_else(|| self.missing_ref(node, &id, "medium", &format!("<ref id=\"{id}\">")))
     }
 
     /// A medium given inside an object: a nested `<medium>` or a `<ref>` to one.

@@ -29,10 +29,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             };
             if let Some(side) = side {
                 if side.is_some() {
-                    return Err(self.error(
-                        child,
-                        format!("{}: given twice", describe(child)),
-                    ));
+                    return Err(self.error(child, format!("{}: given twice", describe(child))));
                 }
                 *side = Some(self.nested_medium(child)?);
                 continue;
