@@ -168,3 +168,23 @@ fn absorbing_glass_through_pt() {
 fn absorbing_glass_through_the_hybrid() {
     ABSORBING_GLASS.check("graphs/hybrid.ron", 256, 0);
 }
+
+/// A glass sphere focusing a small light into fog: the volumetric caustic (L S+ M) is the
+/// photons' in the hybrid (gathered at the camera paths' medium vertices), path traced in `pt`.
+const VOLUMETRIC_CAUSTIC: Figures = Figures {
+    scene: "volumetric_caustic",
+    pixels_256: 0.2175,
+    blocks_256: 3.47e-3,
+    noise_pixels: 2.22e-3,
+    noise_blocks: 3.62e-5,
+};
+
+#[test]
+fn a_volumetric_caustic_through_pt() {
+    VOLUMETRIC_CAUSTIC.check("graphs/pt.ron", 512, 0);
+}
+
+#[test]
+fn a_volumetric_caustic_through_the_hybrid() {
+    VOLUMETRIC_CAUSTIC.check("graphs/hybrid.ron", 256, 0);
+}
