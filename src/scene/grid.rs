@@ -1,7 +1,7 @@
 //! Voxel grids as Mitsuba 3's `gridvolume` plugin reads and looks them up (src/volumes/grid.cpp,
 //! src/render/volumegrid.cpp, and Dr.Jit's texture lookup, drjit/texture_impl.h's `tex_eval`
 //! and `tex_wrap`, which the plugin's `Texture3f` evaluates with). A [`Grid`] is the CPU copy of
-//! a `.vol` file ([`crate::loaders::vol`]) that the renderer uploads; its lookups here are what
+//! a `.vol` file (read by the loaders' `vol` module) that the renderer uploads; its lookups here are what
 //! the GPU's are checked against.
 //!
 //! Conventions, as Mitsuba 3 has them:
