@@ -244,22 +244,8 @@ fn single_scattering_from_a_point_light_matches_its_line_integral() {
     let scene = hppm::loaders::mitsuba::parse(Path::new("single_scattering.xml"), &text)
         .unwrap_or_else(|e| panic!("{e}"));
     let mut expected = Vec3::ZERO;
-    let (steps, far) = (400_000, 80.0f64);
     for c in 0..3 {
-        let mut sum = 0.0f64;
-        for i in 0..steps {
-            let t = (i as f64 + 0.5) * far / steps as f64;
-            let to_light = [light[0], light[1], light[2] + t];
-            let d = (to_light[0].powi(2) + to_light[1].powi(2) + to_light[2].powi(2)).sqrt();
-            // The light travels from the light to the point (-to_light / d) and leaves
-            // towards the camera (+z): the cosine between them.
-            let cos = -to_light[2] / d;
-            let hg = (1.0 - g * g)
-                / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
-            let tr = (-sigma_t[c] * (t + d)).exp();
-            sum += albedo * sigma_t[c] * hg * intensity * tr / (d * d) * far / steps as f64;
-        }
-        expected[c] = sum as f32;
+        expected[c] = line_integral(0.0, light, sigma_t[c], albedo, g, intensity, None) as f32;
     }
     let gpu = gpu();
     let mut r = renderer(&gpu, &scene, load_graph("graphs/pt.ron"), 3);
@@ -297,29 +283,10 @@ fn photons_render_the_volumetric_caustic_of_a_point_light_over_a_mirror() {
     );
     let scene = hppm::loaders::mitsuba::parse(Path::new("mirror_in_fog.xml"), &text)
         .unwrap_or_else(|e| panic!("{e}"));
-    // The light's mirror image below the plane y = 0.
+    // The light's mirror image below the plane y = 0, seen through the 20 x 20 mirror.
     let image = [0.0f64, -1.0, -3.0];
-    let (steps, far) = (200_000, 100.0f64);
-    let mut expected = [0.0f64; 3];
-    for (c, e) in expected.iter_mut().enumerate() {
-        for i in 0..steps {
-            let t = (i as f64 + 0.5) * far / steps as f64;
-            let x = [0.0, 0.5, -t];
-            let v = [x[0] - image[0], x[1] - image[1], x[2] - image[2]];
-            let d = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            // Where the line from the image to x crosses the mirror's plane.
-            let a = -image[1] / v[1];
-            let (px, pz) = (image[0] + a * v[0], image[2] + a * v[2]);
-            if px.abs() > 10.0 || pz.abs() > 10.0 {
-                continue;
-            }
-            let cos = v[2] / d;
-            let hg = (1.0 - g * g)
-                / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
-            let tr = (-sigma_t[c] * (t + d)).exp();
-            *e += albedo * sigma_t[c] * hg * intensity * tr / (d * d) * far / steps as f64;
-        }
-    }
+    let expected =
+        sigma_t.map(|sigma| line_integral(0.5, image, sigma, albedo, g, intensity, Some(10.0)));
     let runs = common::convergence::paired_means("graphs/hybrid.ron", &scene, 512, 12);
     let n = runs.len() as f64;
     for (c, &integral) in expected.iter().enumerate() {
@@ -471,4 +438,40 @@ fn a_constant_grid_renders_as_the_homogeneous_medium() {
         means[1].0
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Light a point source of `intensity` at `light` scatters once towards the camera along the ray
+/// from (0, `camera_y`, 0) down -z, in a medium of extinction `sigma` and `albedo` with
+/// Henyey-Greenstein's `g`: the integral over t of sigma_s p(cos) I Tr(t + d) / d^2, d the
+/// distance from the point at t to the light (midpoint rule to 100 units). With `mirror`, the
+/// light is a mirror image below the plane y = 0 and only points whose line to it crosses the
+/// plane within `mirror` of the origin (in x and z) see it.
+fn line_integral(
+    camera_y: f64,
+    light: [f64; 3],
+    sigma: f64,
+    albedo: f64,
+    g: f64,
+    intensity: f64,
+    mirror: Option<f64>,
+) -> f64 {
+    let (steps, far) = (200_000, 100.0f64);
+    let mut sum = 0.0;
+    for i in 0..steps {
+        let t = (i as f64 + 0.5) * far / steps as f64;
+        let v = [-light[0], camera_y - light[1], -t - light[2]];
+        let d = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        if let Some(half) = mirror {
+            let a = -light[1] / v[1];
+            if (light[0] + a * v[0]).abs() > half || (light[2] + a * v[2]).abs() > half {
+                continue;
+            }
+        }
+        // The light travels along v / d and leaves towards the camera (+z).
+        let cos = v[2] / d;
+        let hg =
+            (1.0 - g * g) / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
+        sum += albedo * sigma * hg * intensity * (-sigma * (t + d)).exp() / (d * d);
+    }
+    sum * far / steps as f64
 }

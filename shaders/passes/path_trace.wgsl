@@ -377,6 +377,22 @@ fn next_hit(path: ptr<function, PathState>, hidden: bool, rays: ptr<function, u3
     return hit;
 }
 
+// Whether a path goes on from its vertex at the end of segment `depth`: not at max_depth, and
+// past rr_depth only if it survives Russian roulette (its throughput then divided by the odds).
+fn goes_on(path: ptr<function, PathState>, depth: u32, rng: ptr<function, vec4<u32>>) -> bool {
+    if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
+        return false;
+    }
+    if depth >= params.rr_depth {
+        let survive = min(max_component((*path).throughput), 0.95);
+        if rng_next_f32(rng) >= survive {
+            return false;
+        }
+        (*path).throughput /= survive;
+    }
+    return true;
+}
+
 // Traces the next segment of `path`, adds the light it reaches to its radiance and samples the
 // direction after it. Returns whether the path goes on.
 fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> bool {
@@ -436,15 +452,8 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         return true;
     }
 #endif
-    if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
+    if !goes_on(path, depth, rng) {
         return false;
-    }
-    if depth >= params.rr_depth {
-        let survive = min(max_component((*path).throughput), 0.95);
-        if rng_next_f32(rng) >= survive {
-            return false;
-        }
-        (*path).throughput /= survive;
     }
 #ifdef BLENDS
     if material.kind == MATERIAL_NULL {
@@ -527,15 +536,8 @@ fn scatter_in_medium(path: ptr<function, PathState>, m: Medium, t: f32, rng: ptr
     let depth = (*path).depth;
     let position = (*path).origin + (*path).dir * t;
     (*path).travelled += t;
-    if depth == min(params.max_depth, SAFETY_MAX_DEPTH) {
+    if !goes_on(path, depth, rng) {
         return false;
-    }
-    if depth >= params.rr_depth {
-        let survive = min(max_component((*path).throughput), 0.95);
-        if rng_next_f32(rng) >= survive {
-            return false;
-        }
-        (*path).throughput /= survive;
     }
     // With photon-grid lookups the vertex takes the volumetric caustic (L S+ M) from photons
     // and drops it from what the path reaches next, as a diffuse vertex past the hit points
