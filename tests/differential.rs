@@ -5,8 +5,8 @@
 //! direction, one material, one emitter kind or one region of one scene fails it; the faults
 //! shown caught are in tests/differential_faults.rs.
 //!
-//! The corpus (40 scenes at 32x32, references rendered by Mitsuba 3.9.1 `llvm_ad_rgb` at 32,768
-//! spp) runs in four shards so the test harness runs them side by side. A longer run over any
+//! The corpus (51 scenes at 32x32, 11 of them with participating media from `generate.py
+//! --media`; references rendered by Mitsuba 3.9.1 `llvm_ad_rgb` at 32,768 spp) runs in four shards so the test harness runs them side by side. A longer run over any
 //! corpus the generator writes (a thousand scenes, say):
 //!
 //! ```text
