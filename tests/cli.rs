@@ -511,7 +511,7 @@ fn check_lists_every_problem_and_render_prints_warnings() {
     let good = dir.join("good.xml");
     std::fs::write(
         &good,
-        format!(r#"<scene version="3.0.0"><integrator type="volpath"/>{sensor}{light}</scene>"#),
+        format!(r#"<scene version="3.0.0"><integrator type="ptracer"/>{sensor}{light}</scene>"#),
     )
     .expect("write");
     let bad = dir.join("bad.xml");
@@ -526,7 +526,7 @@ fn check_lists_every_problem_and_render_prints_warnings() {
     let out = hppm(&["check", good.to_str().expect("path")]);
     let text = String::from_utf8_lossy(&out.stdout).to_string();
     assert!(out.status.success(), "{text}{}", stderr(&out));
-    assert!(text.contains("warning:") && text.contains("volpath") && text.contains("renders"));
+    assert!(text.contains("warning:") && text.contains("ptracer") && text.contains("renders"));
 
     let out = hppm(&["check", bad.to_str().expect("path")]);
     let text = String::from_utf8_lossy(&out.stdout).to_string();
@@ -557,7 +557,7 @@ fn check_lists_every_problem_and_render_prints_warnings() {
     std::fs::remove_dir_all(&dir).ok();
     assert!(out.status.success(), "{printed}");
     assert!(
-        printed.contains("warning:") && printed.contains("volpath"),
+        printed.contains("warning:") && printed.contains("ptracer"),
         "{printed}"
     );
 }
