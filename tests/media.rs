@@ -214,6 +214,45 @@ fn photon_mapping_alone_refuses_media() {
     assert!(error.contains("participating media"), "{error}");
 }
 
+/// Where the fog scenes' camera stands: its max_depth, height above the origin (it looks down
+/// -z with a half-degree view) and film width.
+struct FogView {
+    max_depth: u32,
+    eye_height: f64,
+    width: u32,
+}
+
+/// A homogeneous HG medium around the camera, lit by a point light, with `more` (shapes) in it.
+fn fog_around_the_camera(
+    name: &str,
+    view: FogView,
+    (sigma_t, albedo, g): ([f64; 3], f64, f64),
+    (light, intensity): ([f64; 3], f64),
+    more: &str,
+) -> hppm::scene::Scene {
+    let FogView {
+        max_depth,
+        eye_height: y,
+        width,
+    } = view;
+    let [s0, s1, s2] = sigma_t;
+    let [lx, ly, lz] = light;
+    let text = format!(
+        r#"<scene version="3.0.0">
+    <integrator type="volpath"><integer name="max_depth" value="{max_depth}"/></integrator>
+    <sensor type="perspective"><float name="fov" value="0.5"/>
+        <transform name="to_world"><lookat origin="0, {y}, 0" target="0, {y}, -1" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{width}"/><rfilter type="box"/></film>
+        <medium type="homogeneous"><rgb name="sigma_t" value="{s0}, {s1}, {s2}"/><float name="albedo" value="{albedo}"/>
+            <phase type="hg"><float name="g" value="{g}"/></phase></medium>
+    </sensor>
+    <emitter type="point"><point name="position" x="{lx}" y="{ly}" z="{lz}"/><rgb name="intensity" value="{intensity}"/></emitter>
+    {more}
+</scene>"#
+    );
+    hppm::loaders::mitsuba::parse(Path::new(name), &text).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// Single scattering from a point light in a medium all around the camera (max_depth 2:
 /// one scattering vertex), against the line integral along the view axis, computed here:
 /// L = integral over t of sigma_s p(cos) I Tr(t) Tr(d) / d^2, d the distance from the point at
@@ -229,20 +268,17 @@ fn single_scattering_from_a_point_light_matches_its_line_integral() {
     let g = 0.5f64;
     let intensity = 5.0f64;
     let light = [0.0f64, 1.0, -2.0];
-    let text = format!(
-        r#"<scene version="3.0.0">
-    <integrator type="volpath"><integer name="max_depth" value="2"/></integrator>
-    <sensor type="perspective"><float name="fov" value="0.5"/>
-        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, -1" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
-        <medium type="homogeneous"><rgb name="sigma_t" value="0.2, 0.4, 0.6"/><float name="albedo" value="{albedo}"/>
-            <phase type="hg"><float name="g" value="{g}"/></phase></medium>
-    </sensor>
-    <emitter type="point"><point name="position" x="0" y="1" z="-2"/><rgb name="intensity" value="{intensity}"/></emitter>
-</scene>"#
+    let scene = fog_around_the_camera(
+        "single_scattering.xml",
+        FogView {
+            max_depth: 2,
+            eye_height: 0.0,
+            width: 8,
+        },
+        (sigma_t, albedo, g),
+        (light, intensity),
+        "",
     );
-    let scene = hppm::loaders::mitsuba::parse(Path::new("single_scattering.xml"), &text)
-        .unwrap_or_else(|e| panic!("{e}"));
     let mut expected = Vec3::ZERO;
     for c in 0..3 {
         expected[c] = line_integral(0.0, light, sigma_t[c], albedo, g, intensity, None) as f32;
@@ -265,24 +301,21 @@ fn single_scattering_from_a_point_light_matches_its_line_integral() {
 fn photons_render_the_volumetric_caustic_of_a_point_light_over_a_mirror() {
     let sigma_t = [0.2f64, 0.3, 0.4];
     let (albedo, g, intensity) = (0.8f64, 0.3f64, 5.0f64);
-    let text = format!(
-        r#"<scene version="3.0.0">
-    <integrator type="volpath"><integer name="max_depth" value="3"/></integrator>
-    <sensor type="perspective"><float name="fov" value="0.5"/>
-        <transform name="to_world"><lookat origin="0, 0.5, 0" target="0, 0.5, -1" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/><rfilter type="box"/></film>
-        <medium type="homogeneous"><rgb name="sigma_t" value="0.2, 0.3, 0.4"/><float name="albedo" value="{albedo}"/>
-            <phase type="hg"><float name="g" value="{g}"/></phase></medium>
-    </sensor>
-    <emitter type="point"><point name="position" x="0" y="1" z="-3"/><rgb name="intensity" value="{intensity}"/></emitter>
-    <shape type="rectangle">
+    let mirror = r#"<shape type="rectangle">
         <transform name="to_world"><scale value="10"/><rotate x="1" angle="-90"/></transform>
         <bsdf type="conductor"><string name="material" value="none"/></bsdf>
-    </shape>
-</scene>"#
+    </shape>"#;
+    let scene = fog_around_the_camera(
+        "mirror_in_fog.xml",
+        FogView {
+            max_depth: 3,
+            eye_height: 0.5,
+            width: 32,
+        },
+        (sigma_t, albedo, g),
+        ([0.0, 1.0, -3.0], intensity),
+        mirror,
     );
-    let scene = hppm::loaders::mitsuba::parse(Path::new("mirror_in_fog.xml"), &text)
-        .unwrap_or_else(|e| panic!("{e}"));
     // The light's mirror image below the plane y = 0, seen through the 20 x 20 mirror.
     let image = [0.0f64, -1.0, -3.0];
     let expected =

@@ -242,20 +242,37 @@ impl BsdfRegistry {
     }
 
     fn write_eval(&self, out: &mut String) {
-        out.push_str(
+        self.write_dispatch(
+            out,
             "\n// f |cos wo| and pdf of the non-delta lobes (zero for delta-only kinds).\n\
              fn material_eval(m: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> \
              BsdfEval {\n",
+            |k| k.eval,
+            "m, wi, wo, radiance",
+            "BsdfEval(vec3<f32>(0.0), 0.0)",
         );
-        for (def, call, kinds) in self.branches(|k| k.eval) {
+    }
+
+    /// One function that calls, per kind, the function `pick` names with `args`, and returns
+    /// `fallback` for a kind none handles (each branch under its unit's def).
+    fn write_dispatch(
+        &self,
+        out: &mut String,
+        header: &str,
+        pick: impl Fn(&GpuKind) -> Option<WgslCall>,
+        args: &str,
+        fallback: &str,
+    ) {
+        out.push_str(header);
+        for (def, call, kinds) in self.branches(pick) {
             let branch = format!(
-                "    if {} {{\n        return {}(m, wi, wo, radiance);\n    }}\n",
+                "    if {} {{\n        return {}({args});\n    }}\n",
                 kind_test(&kinds),
                 call.function
             );
             out.push_str(&guarded(def, &branch));
         }
-        out.push_str("    return BsdfEval(vec3<f32>(0.0), 0.0);\n}\n");
+        let _ = writeln!(out, "    return {fallback};\n}}");
     }
 
     fn write_continuous(&self, out: &mut String) {
@@ -278,19 +295,14 @@ impl BsdfRegistry {
     }
 
     fn write_sample(&self, out: &mut String) {
-        out.push_str(
+        self.write_dispatch(
+            out,
             "\nfn material_sample(m: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: \
              bool) -> BsdfSample {\n",
+            |k| k.sample,
+            "m, wi, u1, u2, radiance",
+            "no_sample()",
         );
-        for (def, call, kinds) in self.branches(|k| k.sample) {
-            let branch = format!(
-                "    if {} {{\n        return {}(m, wi, u1, u2, radiance);\n    }}\n",
-                kind_test(&kinds),
-                call.function
-            );
-            out.push_str(&guarded(def, &branch));
-        }
-        out.push_str("    return no_sample();\n}\n");
     }
 
     /// With `GLOSSY`: the light-transport partition's specular lobes (docs/design.md section 1):
