@@ -32,7 +32,7 @@
 #endif
 #ifdef MEDIA
 #import common::scene::materials
-#import common::medium::{Medium, medium_after, phase_eval, transmittance_between}
+#import common::medium::{medium_at, medium_after, phase_eval, transmittance_between}
 #endif
 
 // The surface as the chosen side sees it: a twosided material's back turns the normals over.
@@ -106,6 +106,9 @@ struct Vertex {
     back: bool,
     // A blend chose among children (random numbers were drawn).
     blended: bool,
+    // A scattering point in a medium (MEDIA only): `surface` holds its position alone, and
+    // the medium's phase function stands for the BSDF.
+    in_medium: bool,
 }
 
 // Arrives at `surface` (of primitive `prim`) from `back_dir`: the side and blend child chosen
@@ -129,8 +132,20 @@ fn arrive(surface_hit: Surface, prim: u32, back_dir: vec3<f32>, radiance: bool, 
     surface.shading_normal = shading.frame[2];
 #endif
     let cos_back = select(facing, -facing, chosen.back);
-    return Vertex(surface, material, shading, back_dir, cos_back, facing, chosen.back, chosen.blended);
+    return Vertex(surface, material, shading, back_dir, cos_back, facing, chosen.back, chosen.blended, false);
 }
+
+#ifdef MEDIA
+// A scattering point at `position` in a medium, arrived at from `back_dir`: no normal and no
+// error bound (a shadow ray leaves it as it is), the medium's phase function its BSDF.
+fn medium_vertex(position: vec3<f32>, back_dir: vec3<f32>) -> Vertex {
+    var v: Vertex;
+    v.surface.position = position;
+    v.back_dir = back_dir;
+    v.in_medium = true;
+    return v;
+}
+#endif
 
 // How a path leaves a vertex.
 struct Bounce {
@@ -207,12 +222,26 @@ fn front_normal(v: Vertex) -> vec3<f32> {
     return select(v.surface.normal, -v.surface.normal, v.back);
 }
 
+// What vertex `v` sends back along its `back_dir` of light arriving from world direction `dir`,
+// and its pdf of sampling `dir`: its BSDF's (see `bsdf_towards`), or in a medium (`medium`)
+// the phase function's.
+fn towards_light(v: Vertex, medium: u32, mapped: vec3<f32>, glossy_threshold: f32, dir: vec3<f32>) -> BsdfTowards {
+#ifdef MEDIA
+    if v.in_medium {
+        let phase = phase_eval(medium_at(medium), -v.back_dir, dir);
+        return BsdfTowards(vec3<f32>(phase), phase);
+    }
+#endif
+    return bsdf_towards(v, mapped, glossy_threshold, dir);
+}
+
 // Next-event estimation at a camera path's vertex: one light sample, MIS-weighted against
-// sampling the BSDF (see `bsdf_towards` for `mapped`). Light is added through `rays` shadow
-// rays. Every lobe that light sampling can reach comes through one call site in a pass:
-// lavapipe inlines each call of the shadow ray's traversal, and its compile time grows with
-// every copy. With MEDIA the shadow ray leaves into the medium on the light's side (the path
-// was in `medium`) and carries the transmittance of the media and null boundaries it crosses.
+// sampling the BSDF or phase function (see `bsdf_towards` for `mapped`). Light is added
+// through `rays` shadow rays. Every vertex and lobe that light sampling can reach comes
+// through one call site in a pass: lavapipe inlines each call of the shadow ray's traversal,
+// its compile time grows with every copy, and a SIMD group runs each copy its lanes reach.
+// With MEDIA the shadow ray leaves into the medium on the light's side (the path was in
+// `medium`) and carries the transmittance of the media and null boundaries it crosses.
 fn direct_light(v: Vertex, medium: u32, mapped: vec3<f32>, glossy_threshold: f32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
     let surface = v.surface;
     let u_pick = rng_next_f32(rng);
@@ -221,13 +250,16 @@ fn direct_light(v: Vertex, medium: u32, mapped: vec3<f32>, glossy_threshold: f32
     if !ls.valid {
         return vec3<f32>(0.0);
     }
-    let towards = bsdf_towards(v, mapped, glossy_threshold, ls.dir);
+    let towards = towards_light(v, medium, mapped, glossy_threshold, ls.dir);
     if max_component(towards.value) <= 0.0 {
         return vec3<f32>(0.0);
     }
     *rays += 1u;
 #ifdef MEDIA
-    let leaving = medium_after(materials[surface.material], ls.dir, front_normal(v), medium);
+    var leaving = medium;
+    if !v.in_medium {
+        leaving = medium_after(materials[surface.material], ls.dir, front_normal(v), medium);
+    }
     let tr = transmittance_between(surface.position, surface.error, surface.normal, ls.position, ls.error, ls.normal, leaving, rng);
     if max_component(tr) <= 0.0 {
         return vec3<f32>(0.0);
@@ -244,28 +276,3 @@ fn direct_light(v: Vertex, medium: u32, mapped: vec3<f32>, glossy_threshold: f32
     }
     return towards.value * ls.radiance * tr * weight / ls.pdf;
 }
-
-#ifdef MEDIA
-// Next-event estimation at a scattering point `position` in `medium` (its record `m`) of a
-// path travelling along `d_in`: one light sample with the phase function's value,
-// MIS-weighted against sampling the phase function.
-fn direct_light_in_medium(position: vec3<f32>, d_in: vec3<f32>, m: Medium, medium: u32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> vec3<f32> {
-    let u_pick = rng_next_f32(rng);
-    let u = rng_next_vec2(rng);
-    let ls = sample_light(position, u_pick, u);
-    if !ls.valid {
-        return vec3<f32>(0.0);
-    }
-    *rays += 1u;
-    let tr = transmittance_between(position, vec3<f32>(0.0), vec3<f32>(0.0), ls.position, ls.error, ls.normal, medium, rng);
-    if max_component(tr) <= 0.0 {
-        return vec3<f32>(0.0);
-    }
-    let phase = phase_eval(m, d_in, ls.dir);
-    var weight = 1.0;
-    if !ls.is_delta {
-        weight = power_heuristic(ls.pdf, phase);
-    }
-    return ls.radiance * tr * (phase * weight / ls.pdf);
-}
-#endif

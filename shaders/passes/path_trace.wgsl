@@ -33,7 +33,7 @@
 #import common::traversal::intersect_scene
 #import common::surface::{Surface, surface_at, spawn_origin}
 #import common::material::material_has_continuous_lobe
-#import common::path_step::{arrive, bounce, direct_light}
+#import common::path_step::{Vertex, arrive, bounce, direct_light}
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
 #else
@@ -43,8 +43,8 @@
 #endif
 #ifdef MEDIA
 #import common::scene::NO_MEDIUM
-#import common::medium::{Medium, medium_at, medium_after, sample_free_flight, phase_sample, phase_eval}
-#import common::path_step::direct_light_in_medium
+#import common::medium::{MAX_CROSSINGS, Medium, medium_at, medium_after, sample_free_flight, phase_sample, phase_eval}
+#import common::path_step::{medium_vertex, front_normal}
 #endif
 #ifdef GLOSSY
 #import common::material::material_specular_share
@@ -393,8 +393,48 @@ fn goes_on(path: ptr<function, PathState>, depth: u32, rng: ptr<function, vec4<u
     return true;
 }
 
+#ifdef MEDIA
+// Crosses `arrived`, `t` along the path's ray, where it is a plain medium boundary: a null
+// BSDF (not a blend's) that emits nothing. As in Mitsuba's volpath no vertex (max_depth does
+// not count it) and nothing changes but the medium. Crossed inside extend_path's segment loop,
+// not by a turn of the path loop: a SIMD group's lanes then wait on a traversal, not on
+// a whole vertex's work (BENCHMARKS.md, media). Any other null surface goes the long way.
+fn crosses_plain_boundary(path: ptr<function, PathState>, arrived: Surface, t: f32) -> bool {
+    let material = materials[arrived.material];
+    if material.kind != MATERIAL_NULL || arrived.light != NO_LIGHT {
+        return false;
+    }
+    (*path).medium = medium_after(material, (*path).dir, arrived.normal, (*path).medium);
+    (*path).since_scatter += t;
+    (*path).travelled += t;
+    (*path).origin = spawn_origin(arrived, (*path).dir);
+    return true;
+}
+#endif
+
+// What a path meets at the end of its segment: `ENDS` there, `PASSES` through it with no vertex
+// of its own (a medium's boundary, a mask), or `SCATTERS` from vertex `v`, sampling light there
+// or not.
+const ENDS: u32 = 0u;
+const PASSES: u32 = 1u;
+const SCATTERS: u32 = 2u;
+
+struct Arrival {
+    what: u32,
+    v: Vertex,
+    samples_light: bool,
+}
+
+fn arrival_of(what: u32) -> Arrival {
+    var a: Arrival;
+    a.what = what;
+    return a;
+}
+
 // Traces the next segment of `path`, adds the light it reaches to its radiance and samples the
-// direction after it. Returns whether the path goes on.
+// direction after it. Returns whether the path goes on. A vertex in a medium and one on a
+// surface share the light sample, so that a SIMD group whose lanes meet both runs the shadow
+// ray's code once, not once for each (BENCHMARKS.md, media).
 fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> bool {
     // `depth` counts segments traced so far, this one included (Mitsuba's rule).
     let depth = (*path).depth;
@@ -403,26 +443,79 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     }
     // Mitsuba's hide_emitters: what the camera sees directly leaves out every emitter.
     let hidden = depth == 1u && scene_info.hide_emitters != 0u;
-    let hit = next_hit(path, hidden, rays);
+    var hit: Hit;
+    var arrived: Surface;
+    // Without MEDIA one pass; with it, the segments of the ray between plain medium boundaries,
+    // up to a scattering in a medium (`scattered_at` along the last one).
+    var crossings = 0u;
+    var scattered_at = -1.0;
+    loop {
+        hit = next_hit(path, hidden, rays);
 #ifdef MEDIA
-    if (*path).medium != NO_MEDIUM {
-        let m = medium_at((*path).medium);
-        let flight = sample_free_flight(m, (*path).origin, (*path).dir, hit.t, rng);
-        (*path).throughput *= flight.weight;
-        if flight.scattered {
-            return scatter_in_medium(path, m, flight.t, rng, rays);
+        if (*path).medium != NO_MEDIUM {
+            let flight = sample_free_flight(medium_at((*path).medium), (*path).origin, (*path).dir, hit.t, rng);
+            (*path).throughput *= flight.weight;
+            if flight.scattered {
+                scattered_at = flight.t;
+                break;
+            }
         }
-    }
 #endif
-    if hit.prim == NO_HIT {
+        if hit.prim == NO_HIT {
 #ifdef ENVIRONMENT
-        if !hidden {
-            (*path).radiance += (*path).throughput * environment_emission(*path);
+            if !hidden {
+                (*path).radiance += (*path).throughput * environment_emission(*path);
+            }
+#endif
+            return false;
+        }
+        arrived = surface_at(hit, (*path).origin, (*path).dir);
+#ifdef MEDIA
+        if crossings < MAX_CROSSINGS && crosses_plain_boundary(path, arrived, hit.t) {
+            crossings += 1u;
+            continue;
         }
 #endif
+        break;
+    }
+    var arrival: Arrival;
+    if scattered_at >= 0.0 {
+#ifdef MEDIA
+        arrival = arrive_in_medium(path, scattered_at, depth, rng);
+#endif
+    } else {
+        arrival = arrive_at_surface(path, hit, arrived, hidden, depth, sink, rng);
+    }
+    if arrival.what != SCATTERS {
+        return arrival.what == PASSES;
+    }
+    let v = arrival.v;
+    // One next-event estimate for every vertex and lobe light sampling can reach (see
+    // direct_light).
+    if arrival.samples_light {
+        (*path).radiance += (*path).throughput * direct_light(v, (*path).medium, (*path).mapped, params.glossy_threshold, rng, rays);
+    }
+#ifdef MEDIA
+    if v.in_medium {
+        leave_medium_vertex(path, v, rng);
+    } else if !leave_surface(path, v, rng) {
         return false;
     }
-    let arrived = surface_at(hit, (*path).origin, (*path).dir);
+#else
+    if !leave_surface(path, v, rng) {
+        return false;
+    }
+#endif
+    if max_component((*path).throughput) <= 0.0 {
+        return false;
+    }
+    (*path).depth = depth + 1u;
+    return true;
+}
+
+// The path arrives at surface `arrived` (`hit` along its segment): the emission it sees there,
+// a medium's boundary or a mask passed through, a diffuse vertex's hit point or photon lookup.
+fn arrive_at_surface(path: ptr<function, PathState>, hit: Hit, arrived: Surface, hidden: bool, depth: u32, sink: HitPointSink, rng: ptr<function, vec4<u32>>) -> Arrival {
     let wo = -(*path).dir;
     let cos_o = dot(wo, arrived.normal);
     (*path).travelled += hit.t;
@@ -449,11 +542,11 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         (*path).since_scatter += hit.t;
         (*path).through_null = (*path).through_null || v.blended;
         (*path).origin = spawn_origin(surface, (*path).dir);
-        return true;
+        return arrival_of(PASSES);
     }
 #endif
     if !goes_on(path, depth, rng) {
-        return false;
+        return arrival_of(ENDS);
     }
 #ifdef BLENDS
     if material.kind == MATERIAL_NULL {
@@ -463,7 +556,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         (*path).origin = spawn_origin(surface, (*path).dir);
         (*path).through_null = true;
         (*path).depth = depth + 1u;
-        return true;
+        return arrival_of(PASSES);
     }
     (*path).through_null = false;
 #endif
@@ -473,7 +566,7 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         // One-sided, as Mitsuba's diffuse: black from behind, and where the shading normal
         // turns away from the viewer.
         if v.cos_back <= 0.0 || dot(surface.shading_normal, wo) <= 0.0 {
-            return false;
+            return arrival_of(ENDS);
         }
         (*path).diffuse_vertices += 1u;
         let at_hit_point = (*path).diffuse_vertices <= params.merge_depth;
@@ -493,14 +586,15 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
                 record_hit_point(sink, (*path).diffuse_vertices - 1u, surface, wo, depth, weight, (*path).travelled);
             }
             if params.trace_beyond == 0u {
-                return false;
+                return arrival_of(ENDS);
             }
         }
     }
-    // One next-event estimate for every lobe light sampling can reach (see direct_light).
-    if diffuse || material_has_continuous_lobe(material.kind) {
-        (*path).radiance += (*path).throughput * direct_light(v, (*path).medium, (*path).mapped, params.glossy_threshold, rng, rays);
-    }
+    return Arrival(SCATTERS, v, diffuse || material_has_continuous_lobe(material.kind));
+}
+
+// Leaves surface vertex `v` by its BSDF's sample; false where it has none.
+fn leave_surface(path: ptr<function, PathState>, v: Vertex, rng: ptr<function, vec4<u32>>) -> bool {
     let out = bounce(v, true, rng);
     if !out.sample.valid {
         return false;
@@ -511,33 +605,28 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     if !out.sample.delta {
         (*path).bsdf_pdf = out.sample.pdf;
     }
-    if !diffuse {
-        keep_photon_share(path, material, wo * v.shading.frame, out.sample);
+    if v.material.kind != MATERIAL_DIFFUSE {
+        keep_photon_share(path, v.material, v.back_dir * v.shading.frame, out.sample);
     }
-    (*path).origin = spawn_origin(surface, (*path).dir);
+    (*path).origin = spawn_origin(v.surface, (*path).dir);
 #ifdef MEDIA
-    (*path).medium = medium_after(materials[arrived.material], (*path).dir, arrived.normal, (*path).medium);
+    (*path).medium = medium_after(materials[v.surface.material], (*path).dir, front_normal(v), (*path).medium);
     (*path).since_scatter = 0.0;
 #endif
-    if max_component((*path).throughput) <= 0.0 {
-        return false;
-    }
-    (*path).depth = depth + 1u;
     return true;
 }
 
 #ifdef MEDIA
-// A camera path scatters in its medium `m`, `t` along its segment: a vertex as a surface's is
+// A camera path scatters in its medium, `t` along its segment: a vertex as a surface's is
 // (Mitsuba's volpath counts it towards max_depth, Russian roulette as at a surface), with
-// next-event estimation with the phase function (MIS against sampling it) and the phase
-// function's sample; the light reaching it through specular vertices is the volumetric
+// next-event estimation with the phase function (MIS against sampling it) where the medium
+// samples emitters; the light reaching it through specular vertices is the volumetric
 // caustic photons' where the graph looks photons up (docs/light-transport.md).
-fn scatter_in_medium(path: ptr<function, PathState>, m: Medium, t: f32, rng: ptr<function, vec4<u32>>, rays: ptr<function, u32>) -> bool {
-    let depth = (*path).depth;
+fn arrive_in_medium(path: ptr<function, PathState>, t: f32, depth: u32, rng: ptr<function, vec4<u32>>) -> Arrival {
     let position = (*path).origin + (*path).dir * t;
     (*path).travelled += t;
     if !goes_on(path, depth, rng) {
-        return false;
+        return arrival_of(ENDS);
     }
     // With photon-grid lookups the vertex takes the volumetric caustic (L S+ M) from photons
     // and drops it from what the path reaches next, as a diffuse vertex past the hit points
@@ -551,9 +640,12 @@ fn scatter_in_medium(path: ptr<function, PathState>, m: Medium, t: f32, rng: ptr
     if looked_up {
         (*path).radiance += (*path).throughput * volumetric_caustic(position, -(*path).dir, depth, (*path).medium);
     }
-    if m.sample_emitters {
-        (*path).radiance += (*path).throughput * direct_light_in_medium(position, (*path).dir, m, (*path).medium, rng, rays);
-    }
+    return Arrival(SCATTERS, medium_vertex(position, -(*path).dir), medium_at((*path).medium).sample_emitters);
+}
+
+// Leaves a medium vertex by the phase function's sample.
+fn leave_medium_vertex(path: ptr<function, PathState>, v: Vertex, rng: ptr<function, vec4<u32>>) {
+    let m = medium_at((*path).medium);
     let d_in = (*path).dir;
     let wo = phase_sample(m, d_in, rng_next_vec2(rng));
     (*path).bsdf_pdf = phase_eval(m, d_in, wo);
@@ -561,13 +653,8 @@ fn scatter_in_medium(path: ptr<function, PathState>, m: Medium, t: f32, rng: ptr
     (*path).after_delta = !m.sample_emitters;
     (*path).through_null = false;
     (*path).dir = wo;
-    (*path).origin = position;
+    (*path).origin = v.surface.position;
     (*path).since_scatter = 0.0;
-    if max_component((*path).throughput) <= 0.0 {
-        return false;
-    }
-    (*path).depth = depth + 1u;
-    return true;
 }
 #endif
 
