@@ -22,16 +22,21 @@
 #import common::rng::{rng_stream, rng_next_f32, rng_next_vec2}
 #import common::sampling::{PI, sample_cosine_hemisphere, sample_uniform_sphere, sample_cone, max_component, any_not_finite, basis_from_normal, square_to_disk_concentric}
 #import common::scene::{scene_info, lights, Light, NO_HIT, UNBOUNDED, MATERIAL_DIFFUSE, LIGHT_POINT, LIGHT_SPOT, LIGHT_PROJECTOR, LIGHT_DIRECTIONAL, LIGHT_CONSTANT, LIGHT_ENVMAP}
+#import common::intersection::Hit
 #import common::traversal::intersect_photon
-#import common::surface::{surface_at, offset_ray_origin, spawn_origin}
+#import common::surface::{Surface, surface_at, offset_ray_origin, spawn_origin}
 #import common::path_step::{arrive, bounce}
 #ifdef MEDIA
 #import common::scene::{materials, NO_MEDIUM}
-#import common::medium::{medium_at, medium_after, transmittance_along, sample_free_flight}
+#import common::medium::{MAX_CROSSINGS, medium_at, medium_after, transmittance_along, sample_free_flight}
 #endif
 #ifdef BLENDS
 #import common::scene::MATERIAL_NULL
 #import bsdfs::blendbsdf::diffuse_probability
+#else
+#ifdef MEDIA
+#import common::scene::MATERIAL_NULL
+#endif
 #endif
 #ifdef GLOSSY
 #import common::material::material_specular_share
@@ -360,6 +365,20 @@ fn cross_medium(photon: ptr<function, Photon>, segments: u32, t_max: f32, after_
 }
 #endif
 
+#ifdef MEDIA
+// Crosses `arrived` where it is a plain medium boundary, a null BSDF not a blend's: no vertex
+// (as in Mitsuba's volpath), the photon's medium changes.
+fn crosses_plain_boundary(photon: ptr<function, Photon>, arrived: Surface) -> bool {
+    let material = materials[arrived.material];
+    if material.kind != MATERIAL_NULL {
+        return false;
+    }
+    (*photon).medium = medium_after(material, (*photon).dir, arrived.normal, (*photon).medium);
+    (*photon).origin = spawn_origin(arrived, (*photon).dir);
+    return true;
+}
+#endif
+
 // Traces one segment of `path` and scatters it; false once the photon has ended.
 fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>) -> bool {
     if (*path).segments >= min(params.max_depth, SAFETY_MAX_DEPTH) {
@@ -370,14 +389,29 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     (*path).segments += 1u;
     let segments = (*path).segments;
     let initial = (*path).initial;
-    let hit = intersect_photon(photon.origin, photon.dir);
+    var hit: Hit;
+    var arrived: Surface;
+    // Without MEDIA one pass; with it, the segments of the ray between plain medium boundaries
+    // (see path_trace's extend_path).
+    var crossings = 0u;
+    loop {
+        hit = intersect_photon(photon.origin, photon.dir);
 #ifdef MEDIA
-    if photon.medium != NO_MEDIUM && !cross_medium(&photon, segments, hit.t, after_specular, rng) {
-        return false;
-    }
+        if photon.medium != NO_MEDIUM && !cross_medium(&photon, segments, hit.t, after_specular, rng) {
+            return false;
+        }
 #endif
-    if hit.prim == NO_HIT {
-        return false;
+        if hit.prim == NO_HIT {
+            return false;
+        }
+        arrived = surface_at(hit, photon.origin, photon.dir);
+#ifdef MEDIA
+        if crossings < MAX_CROSSINGS && crosses_plain_boundary(&photon, arrived) {
+            crossings += 1u;
+            continue;
+        }
+#endif
+        break;
     }
     let wi = -photon.dir;
     // The side and blend child this vertex scatters with, textured, in its shading frame: a
@@ -385,7 +419,6 @@ fn extend_photon(path: ptr<function, PhotonPath>, rng: ptr<function, vec4<u32>>)
     // depends on the viewer (taken as not flipped: exact wherever the camera direction sees
     // the perturbed normal from above). Its masking and shadow terminator belong to the
     // light's direction, here where the photon came from (`wi`).
-    let arrived = surface_at(hit, photon.origin, photon.dir);
     let v = arrive(arrived, hit.prim, wi, false, rng);
     let surface = v.surface;
     let material = v.material;
