@@ -760,15 +760,18 @@ fn quiet_headless_wayland_probe() {
 /// registers passes of its own gets the whole CLI with them in it. Call it first thing in
 /// `main`, before other threads start (it may set `XDG_RUNTIME_DIR` for wgpu's probe).
 pub fn run(registry: Registry) -> ExitCode {
+    quiet_headless_wayland_probe();
     run_from(std::env::args_os(), registry)
 }
 
-/// [`run`] on the given arguments (the first is the program's name).
+/// [`run`] on the given arguments (the first is the program's name). It leaves the process's
+/// environment alone, so any thread may call it (tests, the Python module); on a headless
+/// machine without `XDG_RUNTIME_DIR` wgpu's driver probe may then print libwayland's two
+/// harmless lines.
 pub fn run_from(
     args: impl IntoIterator<Item = impl Into<std::ffi::OsString> + Clone>,
     registry: Registry,
 ) -> ExitCode {
-    quiet_headless_wayland_probe();
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {
