@@ -1391,3 +1391,83 @@ fn broken_light_textures_and_projectors_are_errors_at_their_line() {
         );
     }
 }
+
+/// An `id` on an object nested inside another declares it for every later `<ref>`, as Mitsuba
+/// registers every id it reads: a BSDF inside a `twosided` (then used alone), a texture given
+/// to a BSDF (then given to another), a medium given as a shape's interior (then another
+/// shape's), and a shapegroup whose nested BSDF has an id, instanced twice (its shapes are read
+/// again per instance: the same declaration, not a second). Would catch nested ids dropped
+/// (the refs then fail as undeclared) or the wrong object stored under the id.
+#[test]
+fn ids_on_nested_objects_are_declared_for_later_refs() {
+    let body = format!(
+        r#"<shape type="cube"><bsdf type="twosided"><bsdf type="diffuse" id="inner"><rgb name="reflectance" value="0.2, 0.4, 0.6"/></bsdf></bsdf></shape>
+        <shape type="cube"><ref id="inner"/></shape>
+        <shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard" id="checks"/></bsdf></shape>
+        <shape type="cube"><bsdf type="roughplastic"><ref name="diffuse_reflectance" id="checks"/></bsdf></shape>
+        <shape type="cube"><bsdf type="null"/><medium type="homogeneous" name="interior" id="fog"><float name="sigma_t" value="0.5"/></medium></shape>
+        <shape type="sphere"><bsdf type="null"/><ref name="interior" id="fog"/></shape>
+        <shape type="shapegroup" id="group"><shape type="cube"><bsdf type="diffuse" id="grouped"/></shape></shape>
+        <shape type="instance"><ref id="group"/></shape>
+        <shape type="instance"><ref id="group"/><transform name="to_world"><translate x="3"/></transform></shape>
+        <shape type="cube"><ref id="grouped"/></shape>
+        {}{LIGHT}"#,
+        sensor("", 8, 8)
+    );
+    let scene = scene_of(check(&body));
+    let material = |i: usize| &scene.materials[scene.triangles[12 * i].material as usize];
+    let inner = Diffuse::bsdf(Vec3::new(0.2, 0.4, 0.6));
+    assert_eq!(material(0).bsdf, inner);
+    assert_eq!(material(0).back.as_ref(), Some(&inner), "twosided");
+    assert_eq!(material(1).bsdf, inner);
+    assert_eq!(
+        material(1).back,
+        None,
+        "the nested BSDF alone, not its twosided"
+    );
+    let checks = material(2)
+        .textures
+        .front
+        .all()
+        .flatten()
+        .collect::<Vec<_>>();
+    assert_eq!(checks.len(), 1, "{:?}", material(2).textures);
+    let plastic = material(3)
+        .textures
+        .front
+        .all()
+        .flatten()
+        .collect::<Vec<_>>();
+    assert_eq!(plastic, checks, "the same texture, added to the scene once");
+    let fog = material(4).media.interior.expect("the nested medium");
+    let sphere = &scene.materials[scene.spheres[0].material as usize];
+    assert_eq!(sphere.media.interior, Some(fog));
+    assert_eq!(scene.media.list.len(), 1);
+    // The two instances (shapes 5 and 6) and the cube that refers to the grouped BSDF.
+    assert_eq!(material(7).bsdf, Diffuse::bsdf(Vec3::splat(0.5)));
+}
+
+/// An id declared twice, whether at top level or nested, is refused at the second with the
+/// place of the first (Mitsuba refuses duplicate ids too). Would catch a nested declaration
+/// silently replacing the first, which every `<ref>` after it would then see.
+#[test]
+fn a_second_declaration_of_an_id_names_the_first() {
+    assert_error_at(
+        r#"<bsdf type="diffuse" id="white"/>
+<shape type="cube"><bsdf type="twosided"><bsdf type="conductor" id="white"/></bsdf></shape>"#,
+        4,
+        "a second <bsdf id=\"white\"> (the first is at shipped.xml:3:1)",
+    );
+    assert_error_at(
+        r#"<shape type="cube"><bsdf type="diffuse"><texture name="reflectance" type="checkerboard" id="t"/></bsdf></shape>
+<texture type="checkerboard" id="t"/>"#,
+        4,
+        "a second <texture id=\"t\"> (the first is at shipped.xml:3:",
+    );
+    assert_error_at(
+        r#"<medium type="homogeneous" id="m"/>
+<shape type="cube"><bsdf type="null"/><medium type="homogeneous" name="interior" id="m"/></shape>"#,
+        4,
+        "a second <medium id=\"m\"> (the first is at shipped.xml:3:1)",
+    );
+}

@@ -6,27 +6,21 @@ use super::*;
 use crate::bsdfs::{BsdfPlugin, BsdfReader, Sides};
 
 impl<'a, 'input> Reader<'a, 'input> {
+    /// A top-level `<bsdf>`. Mitsuba allows one without an id; nothing can use it, but it is
+    /// checked.
     pub(super) fn read_named_bsdf(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
-        // Mitsuba allows a top-level BSDF without an id; nothing can use it, but it is checked.
-        let Some(id) = self.attr(node, "id")? else {
-            return self.read_bsdf(node).map(drop);
-        };
-        if self.named_bsdfs.contains_key(&id) {
-            return Err(self.attr_error(
-                node,
-                "id",
-                format!("a second <bsdf id=\"{id}\">: ids must be unique"),
-            ));
-        }
-        let bsdf = self.read_bsdf(node).inspect_err(|_| {
-            self.failed_ids.insert(id.clone(), self.location(node).line);
-        })?;
-        self.named_bsdfs.insert(id, bsdf);
-        Ok(())
+        self.read_bsdf(node).map(drop)
     }
 
-    /// A `<bsdf>`, read by the unit its `type` names.
+    /// A `<bsdf>`, read by the unit its `type` names, and declared for later `<ref>`s where it
+    /// has an `id` (nested ones too, as in Mitsuba).
     pub(super) fn read_bsdf(&self, node: Node<'a, 'input>) -> Result<Sides, SceneError> {
+        self.read_declared(&self.named_bsdfs, node, "bsdf", || {
+            self.read_bsdf_unit(node)
+        })
+    }
+
+    fn read_bsdf_unit(&self, node: Node<'a, 'input>) -> Result<Sides, SceneError> {
         let kind = self.required_attr(node, "type")?;
         let Some(unit) = self.bsdfs.reader_of(&kind) else {
             return Err(self.attr_error(
@@ -136,8 +130,7 @@ impl<'r, 'a, 'input> Element<'r, 'a, 'input> {
         node.has_tag_name("ref")
             && self.objects_take_textures()
             && node.attribute("id").is_some_and(|id| {
-                !self.reader.named_bsdfs.contains_key(id)
-                    && self.reader.named_textures.contains_key(id)
+                !self.reader.named_bsdfs.contains(id) && self.reader.named_textures.contains(id)
             })
     }
 

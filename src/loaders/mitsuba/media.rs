@@ -16,29 +16,18 @@ const COEFFICIENT_TAGS: &[&str] = &["float", "rgb", "spectrum"];
 impl<'a, 'input> Reader<'a, 'input> {
     /// A top-level `<medium id=...>`, for `<ref>`s after it.
     pub(super) fn read_named_medium(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
-        let id = self.attr(node, "id")?;
-        if let Some(id) = &id
-            && self.named_media.contains_key(id)
-        {
-            return Err(self.attr_error(
-                node,
-                "id",
-                format!("a second <medium id=\"{id}\">: ids must be unique"),
-            ));
-        }
-        let index = self.read_medium(node).inspect_err(|_| {
-            if let Some(id) = &id {
-                self.failed_ids.insert(id.clone(), self.location(node).line);
-            }
-        })?;
-        if let Some(id) = id {
-            self.named_media.insert(id, index);
-        }
-        Ok(())
+        self.read_medium(node).map(drop)
     }
 
-    /// A `<medium>` element: its index in the scene's media.
+    /// A `<medium>` element: its index in the scene's media. Declared for later `<ref>`s where
+    /// it has an `id` (nested ones too, as in Mitsuba).
     pub(super) fn read_medium(&self, node: Node<'a, 'input>) -> Result<u32, SceneError> {
+        self.read_declared(&self.named_media, node, "medium", || {
+            self.read_medium_kind(node)
+        })
+    }
+
+    fn read_medium_kind(&self, node: Node<'a, 'input>) -> Result<u32, SceneError> {
         let kind = self.required_attr(node, "type")?;
         if !matches!(kind.as_str(), "homogeneous" | "heterogeneous") {
             return Err(self.attr_error(
@@ -324,7 +313,6 @@ impl<'a, 'input> Reader<'a, 'input> {
         let id = self.required_attr(node, "id")?;
         self.named_media
             .get(&id)
-            .copied()
             .ok_or_else(|| self.missing_ref(node, &id, "medium", &format!("<ref id=\"{id}\">")))
     }
 

@@ -34,6 +34,7 @@ use crate::scene::{
 
 mod bsdfs;
 mod emitters;
+mod ids;
 mod media;
 mod sensors;
 mod shapes;
@@ -135,13 +136,14 @@ pub fn check_text_with(
         defined: defines.iter().map(|(k, _)| k.clone()).collect(),
         used: RefCell::new(HashSet::new()),
         declared: Vec::new(),
-        named_bsdfs: HashMap::new(),
-        failed_ids: HashMap::new(),
+        named_bsdfs: ids::Ids::new(),
+        failed_ids: RefCell::new(HashMap::new()),
         shape_groups: HashMap::new(),
         meshes: RefCell::new(HashMap::new()),
         in_group: false,
-        named_textures: HashMap::new(),
-        named_media: HashMap::new(),
+        named_textures: ids::Ids::new(),
+        texture_indices: RefCell::new(HashMap::new()),
+        named_media: ids::Ids::new(),
         media: RefCell::new(Vec::new()),
         textures: RefCell::new(Vec::new()),
         materials: RefCell::new(Vec::new()),
@@ -320,11 +322,14 @@ struct Reader<'a, 'input> {
     used: RefCell<HashSet<String>>,
     /// The names of the scene's `<default>`s, for messages.
     declared: Vec<String>,
-    named_bsdfs: HashMap<String, crate::bsdfs::Sides>,
+    /// BSDFs, textures and media declared with an `id`, at top level or nested.
+    named_bsdfs: ids::Ids<crate::bsdfs::Sides>,
     /// Textures declared at top level with an `id`, and their index in `textures` once used.
-    named_textures: HashMap<String, (Texture, RefCell<Option<u32>>)>,
+    named_textures: ids::Ids<Texture>,
+    /// A named texture's index in `textures` once a `<ref>` has used it.
+    texture_indices: RefCell<HashMap<String, u32>>,
     /// Media declared at top level with an `id`: their index in `media`.
-    named_media: HashMap<String, u32>,
+    named_media: ids::Ids<u32>,
     /// The scene's media, in the order read (top level and nested).
     media: RefCell<Vec<crate::scene::medium::Medium>>,
     /// The textures the scene's materials use, in the order first used.
@@ -334,7 +339,7 @@ struct Reader<'a, 'input> {
     materials: RefCell<Vec<Material>>,
     /// The ids of top-level BSDFs and textures that could not be read, and where they were:
     /// a reference to one is reported as such, not as an undeclared id.
-    failed_ids: HashMap<String, usize>,
+    failed_ids: RefCell<HashMap<String, usize>>,
     /// Mesh files read for shapegroups (by path and serialized shape index), read once for
     /// all their instances. Others are not kept: a large mesh would be held twice.
     meshes: RefCell<HashMap<(PathBuf, u32), mesh::MeshData>>,
@@ -644,18 +649,18 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn read_alias(&mut self, node: Node) -> Result<(), SceneError> {
         let id = self.required_attr(node, "id")?;
         let alias = self.required_attr(node, "as")?;
-        if self.named_bsdfs.contains_key(&alias) || self.named_textures.contains_key(&alias) {
+        if self.named_bsdfs.contains(&alias) || self.named_textures.contains(&alias) {
             return Err(self.attr_error(
                 node,
                 "as",
                 format!("<alias>: the id \"{alias}\" is taken already"),
             ));
         }
-        if let Some(bsdf) = self.named_bsdfs.get(&id).cloned() {
-            self.named_bsdfs.insert(alias, bsdf);
-        } else if let Some((texture, _)) = self.named_textures.get(&id) {
-            let copy = (texture.clone(), RefCell::new(None));
-            self.named_textures.insert(alias, copy);
+        let at = self.location(node);
+        if let Some(bsdf) = self.named_bsdfs.get(&id) {
+            self.named_bsdfs.insert(alias, bsdf, at);
+        } else if let Some(texture) = self.named_textures.get(&id) {
+            self.named_textures.insert(alias, texture, at);
         } else {
             return Err(self.attr_error(
                 node,

@@ -58,13 +58,12 @@ impl<'a, 'input> Reader<'a, 'input> {
         let id = self.required_attr(node, "id")?;
         self.named_bsdfs
             .get(&id)
-            .cloned()
             .ok_or_else(|| self.missing_ref(node, &id, "bsdf", &format!("<ref id=\"{id}\">")))
     }
 
     /// A `<ref>` to an id no `<tag id=...>` before it declares, or to one that failed.
     pub(super) fn missing_ref(&self, node: Node, id: &str, tag: &str, what: &str) -> SceneError {
-        let why = match self.failed_ids.get(id) {
+        let why = match self.failed_ids.borrow().get(id) {
             Some(line) => format!("the <{tag} id=\"{id}\"> at line {line} could not be read"),
             None => format!("no <{tag} id=\"{id}\"> is declared before this"),
         };
@@ -91,7 +90,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             ));
         }
         let shapes = self.group_shapes(node).inspect_err(|_| {
-            self.failed_ids.insert(id.clone(), self.location(node).line);
+            self.failed_ids
+                .borrow_mut()
+                .insert(id.clone(), self.location(node).line);
         })?;
         self.shape_groups.insert(id, shapes);
         Ok(())

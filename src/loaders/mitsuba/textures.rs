@@ -31,39 +31,40 @@ impl<'a, 'input> Reader<'a, 'input> {
         };
         match node.tag_name().name() {
             "texture" => {
-                let texture = self.read_texture(node)?;
+                let texture = self.read_declared_texture(node)?;
                 let mean = texture.mean();
-                Ok(Some((mean, add(texture))))
+                let index = add(texture);
+                // A `<ref>` to its id later shares this one.
+                if let Some(id) = self.attr(node, "id")? {
+                    self.texture_indices.borrow_mut().insert(id, index);
+                }
+                Ok(Some((mean, index)))
             }
             "ref" => {
                 let id = self.required_attr(node, "id")?;
-                let Some((texture, index)) = self.named_textures.get(&id) else {
+                let Some(texture) = self.named_textures.get(&id) else {
                     let what = format!("<ref name=\"{name}\" id=\"{id}\">");
                     return Err(self.missing_ref(node, &id, "texture", &what));
                 };
-                let mut index = index.borrow_mut();
-                let i = *index.get_or_insert_with(|| add(texture.clone()));
+                let mut indices = self.texture_indices.borrow_mut();
+                let i = *indices.entry(id).or_insert_with(|| add(texture.clone()));
                 Ok(Some((texture.mean(), i)))
             }
             _ => Ok(None),
         }
     }
 
+    /// A top-level `<texture>`, which needs an id to be used.
     pub(super) fn read_named_texture(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
-        let id = self.required_attr(node, "id")?;
-        if self.named_textures.contains_key(&id) {
-            return Err(self.attr_error(
-                node,
-                "id",
-                format!("a second <texture id=\"{id}\">: ids must be unique"),
-            ));
-        }
-        let texture = self.read_texture(node).inspect_err(|_| {
-            self.failed_ids.insert(id.clone(), self.location(node).line);
-        })?;
-        self.named_textures
-            .insert(id, (texture, RefCell::new(None)));
-        Ok(())
+        self.required_attr(node, "id")?;
+        self.read_declared_texture(node).map(drop)
+    }
+
+    /// A `<texture>`, declared for later `<ref>`s where it has an `id` (nested ones too).
+    fn read_declared_texture(&self, node: Node<'a, 'input>) -> Result<Texture, SceneError> {
+        self.read_declared(&self.named_textures, node, "texture", || {
+            self.read_texture(node)
+        })
     }
 
     /// A `<texture>`: `checkerboard` or `bitmap`, with Mitsuba's defaults.
