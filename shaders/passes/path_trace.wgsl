@@ -188,26 +188,27 @@ fn record_hit_point(sink: HitPointSink, slot: u32, surface: Surface, wo: vec3<f3
     hit_points.points[index] = HitPoint(surface.position, sink.pixel, surface.normal, radius, wo, depth, weight * sink.film_weight, footprint);
 }
 
-// Caustic flux arriving per unit area at `surface` from the front, by this iteration's photons
-// within the grid's radius whose whole path (`depth` camera segments + theirs) obeys max_depth:
-// their flux sum over the disc's area (Knaus & Zwicker's estimate, with a constant kernel).
-fn caustic_irradiance(surface: Surface, depth: u32) -> vec3<f32> {
+// The caustic this iteration's photons bring to vertex `v` (`depth` camera segments from the
+// camera), as the radiance it sends back along `back_dir`: only photons whose whole path obeys
+// max_depth count. On a Lambertian surface the flux arriving from the front over the disc's
+// area (Knaus & Zwicker's estimate, with a constant kernel) times albedo / pi; in a medium (`v`
+// in the one at offset `medium`) each photon's flux times the phase function from its
+// direction, over the ball's volume (Jensen and Christensen 1998's volume radiance estimate,
+// with its extinction already in the stored flux, photon_trace.wgsl), which the camera path's
+// throughput after scattering (sigma_s over the distance's density) turns into what the vertex
+// sends. One call site for both, as for the light sample (see direct_light).
+fn caustic_from_photons(v: Vertex, depth: u32, medium: u32) -> vec3<f32> {
     let r = photon_grid.info.radius;
-    return nearby_photons(surface.position, surface.normal, depth, false, vec3<f32>(0.0), 0u) / (PI * (r * r));
-}
-
+    var normal = v.surface.normal;
+    var scale = v.material.albedo * INV_PI / (PI * (r * r));
 #ifdef MEDIA
-// Light scattered towards `towards` at `position` in the medium at offset `medium` by the
-// volumetric caustic photons of this iteration within the grid's radius (of paths that obey
-// max_depth, as above): each photon's flux times the phase function from its direction, over
-// the ball's volume (Jensen and Christensen 1998's volume radiance estimate, with its
-// extinction already in the stored flux, photon_trace.wgsl). Times the camera path's throughput
-// after scattering (sigma_s over the distance's density), the radiance the vertex sends.
-fn volumetric_caustic(position: vec3<f32>, towards: vec3<f32>, depth: u32, medium: u32) -> vec3<f32> {
-    let r = photon_grid.info.radius;
-    return nearby_photons(position, vec3<f32>(0.0), depth, true, towards, medium) / (4.0 / 3.0 * PI * r * r * r);
-}
+    if v.in_medium {
+        normal = vec3<f32>(0.0);
+        scale = vec3<f32>(1.0 / (4.0 / 3.0 * PI * r * r * r));
+    }
 #endif
+    return scale * nearby_photons(v.surface.position, normal, depth, v.in_medium, v.back_dir, medium);
+}
 
 // The flux of this iteration's photons within the grid's radius of `position` whose whole path
 // obeys max_depth: surface photons arriving from the front of `normal`, or (`in_medium`, with
@@ -414,7 +415,7 @@ fn crosses_plain_boundary(path: ptr<function, PathState>, arrived: Surface, t: f
 
 // What a path meets at the end of its segment: `ENDS` there, `PASSES` through it with no vertex
 // of its own (a medium's boundary, a mask), or `SCATTERS` from vertex `v`, sampling light there
-// or not.
+// or not, looking photons up there or not.
 const ENDS: u32 = 0u;
 const PASSES: u32 = 1u;
 const SCATTERS: u32 = 2u;
@@ -423,6 +424,8 @@ struct Arrival {
     what: u32,
     v: Vertex,
     samples_light: bool,
+    // The vertex takes the caustic from the photon grid (and the path then drops it).
+    looks_up: bool,
 }
 
 fn arrival_of(what: u32) -> Arrival {
@@ -490,6 +493,9 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
         return arrival.what == PASSES;
     }
     let v = arrival.v;
+    if arrival.looks_up {
+        (*path).radiance += (*path).throughput * caustic_from_photons(v, depth, (*path).medium);
+    }
     // One next-event estimate for every vertex and lobe light sampling can reach (see
     // direct_light).
     if arrival.samples_light {
@@ -562,6 +568,7 @@ fn arrive_at_surface(path: ptr<function, PathState>, hit: Hit, arrived: Surface,
 #endif
 
     let diffuse = material.kind == MATERIAL_DIFFUSE;
+    var looked_up = false;
     if diffuse {
         // One-sided, as Mitsuba's diffuse: black from behind, and where the shading normal
         // turns away from the viewer.
@@ -571,15 +578,12 @@ fn arrive_at_surface(path: ptr<function, PathState>, hit: Hit, arrived: Surface,
         (*path).diffuse_vertices += 1u;
         let at_hit_point = (*path).diffuse_vertices <= params.merge_depth;
         // Past the hit points the photon grid adds the caustic, which the path then drops.
-        let looked_up = params.lookups != 0u && !at_hit_point;
+        looked_up = params.lookups != 0u && !at_hit_point;
         (*path).after_merge = at_hit_point || looked_up;
 #ifdef GLOSSY
         (*path).mapped = select(vec3<f32>(0.0), vec3<f32>(1.0), (*path).after_merge);
         (*path).after_specular = false;
 #endif
-        if looked_up {
-            (*path).radiance += (*path).throughput * material.albedo * INV_PI * caustic_irradiance(surface, depth);
-        }
         if at_hit_point {
             let weight = (*path).throughput * material.albedo * INV_PI;
             if sink.enabled && max_component(weight) > 0.0 {
@@ -590,7 +594,7 @@ fn arrive_at_surface(path: ptr<function, PathState>, hit: Hit, arrived: Surface,
             }
         }
     }
-    return Arrival(SCATTERS, v, diffuse || material_has_continuous_lobe(material.kind));
+    return Arrival(SCATTERS, v, diffuse || material_has_continuous_lobe(material.kind), looked_up);
 }
 
 // Leaves surface vertex `v` by its BSDF's sample; false where it has none.
@@ -637,10 +641,7 @@ fn arrive_in_medium(path: ptr<function, PathState>, t: f32, depth: u32, rng: ptr
     (*path).mapped = select(vec3<f32>(0.0), vec3<f32>(1.0), looked_up);
     (*path).after_specular = false;
 #endif
-    if looked_up {
-        (*path).radiance += (*path).throughput * volumetric_caustic(position, -(*path).dir, depth, (*path).medium);
-    }
-    return Arrival(SCATTERS, medium_vertex(position, -(*path).dir), medium_at((*path).medium).sample_emitters);
+    return Arrival(SCATTERS, medium_vertex(position, -(*path).dir), medium_at((*path).medium).sample_emitters, looked_up);
 }
 
 // Leaves a medium vertex by the phase function's sample.
