@@ -1,6 +1,6 @@
 //! `photon_grid` run alone on synthetic photon hits: its lists against a CPU mirror of its cells
 //! and hash, its radius against Knaus & Zwicker's schedule, and range queries through its
-//! lists (walked the way path_trace.wgsl's `caustic_irradiance` walks them) against all pairs.
+//! lists (walked the way path_trace.wgsl's `nearby_photons` walks them) against all pairs.
 //! The camera's use of it is checked by whole renders: the furnace matrix (tests/furnace.rs)
 //! and the glass-sphere bias test (tests/bias.rs) run graphs/hybrid.ron, which uses it.
 
