@@ -11,7 +11,7 @@
 //!
 //! ```text
 //! python3 tests/differential/generate.py --first 1000 --count 1000 --out /tmp/corpus
-//! HPPM_DIFFERENTIAL_CORPUS=/tmp/corpus cargo test --release --test differential -- --ignored
+//! HPPM_DIFFERENTIAL_CORPUS=/tmp/corpus cargo test --release --test differential corpus_shard
 //! ```
 
 mod common;
@@ -59,9 +59,17 @@ fn assert_unbiased(cases: &[Case], k: usize, of: usize) {
     );
 }
 
+/// One of the corpus's shards: the committed corpus, or the one HPPM_DIFFERENTIAL_CORPUS names
+/// (written by generate.py: a longer run through the same tests).
 fn shard(k: usize) {
-    let cases = corpus(CORPUS);
-    assert!(cases.len() >= 40, "the corpus has {} scenes", cases.len());
+    let cases = match std::env::var("HPPM_DIFFERENTIAL_CORPUS") {
+        Ok(dir) => corpus(&dir),
+        Err(_) => {
+            let cases = corpus(CORPUS);
+            assert!(cases.len() >= 40, "the corpus has {} scenes", cases.len());
+            cases
+        }
+    };
     assert_unbiased(&cases, k, SHARDS);
 }
 
@@ -183,14 +191,4 @@ fn plugins_match_mitsuba_0() {
 #[test]
 fn plugins_match_mitsuba_1() {
     plugins_shard(1);
-}
-
-/// The corpus named by HPPM_DIFFERENTIAL_CORPUS (written by generate.py), every scene.
-#[test]
-#[ignore = "long: set HPPM_DIFFERENTIAL_CORPUS to a generated corpus"]
-fn corpus_from_env() {
-    let dir = std::env::var("HPPM_DIFFERENTIAL_CORPUS")
-        .expect("HPPM_DIFFERENTIAL_CORPUS names a corpus from tests/differential/generate.py");
-    let cases = corpus(&dir);
-    assert_unbiased(&cases, 0, 1);
 }
