@@ -501,17 +501,13 @@ fn extend_path(path: ptr<function, PathState>, sink: HitPointSink, rng: ptr<func
     if arrival.samples_light {
         (*path).radiance += (*path).throughput * direct_light(v, (*path).medium, (*path).mapped, params.glossy_threshold, rng, rays);
     }
-#ifdef MEDIA
     if v.in_medium {
+#ifdef MEDIA
         leave_medium_vertex(path, v, rng);
+#endif
     } else if !leave_surface(path, v, rng) {
         return false;
     }
-#else
-    if !leave_surface(path, v, rng) {
-        return false;
-    }
-#endif
     if max_component((*path).throughput) <= 0.0 {
         return false;
     }

@@ -74,7 +74,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     /// An error at `node`'s `id` if `ids` holds `id` from another declaration, naming where.
-    pub(super) fn refuse_taken<T: Clone>(
+    fn refuse_taken<T: Clone>(
         &self,
         ids: &Ids<T>,
         node: Node,

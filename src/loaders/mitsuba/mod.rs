@@ -324,11 +324,10 @@ struct Reader<'a, 'input> {
     declared: Vec<String>,
     /// BSDFs, textures and media declared with an `id`, at top level or nested.
     named_bsdfs: ids::Ids<crate::bsdfs::Sides>,
-    /// Textures declared at top level with an `id`, and their index in `textures` once used.
     named_textures: ids::Ids<Texture>,
     /// A named texture's index in `textures` once a `<ref>` has used it.
     texture_indices: RefCell<HashMap<String, u32>>,
-    /// Media declared at top level with an `id`: their index in `media`.
+    /// Media by id: their index in `media`.
     named_media: ids::Ids<u32>,
     /// The scene's media, in the order read (top level and nested).
     media: RefCell<Vec<crate::scene::medium::Medium>>,
@@ -337,8 +336,9 @@ struct Reader<'a, 'input> {
     /// The scene's materials: each shape's, and the ones blends and masks choose among
     /// (pushed while their BSDF is read, so before the blend that uses them).
     materials: RefCell<Vec<Material>>,
-    /// The ids of top-level BSDFs and textures that could not be read, and where they were:
-    /// a reference to one is reported as such, not as an undeclared id.
+    /// The ids of objects that could not be read (BSDFs, textures, media, shapegroups; top
+    /// level or nested), and their lines: a reference to one is reported as such, not as an
+    /// undeclared id.
     failed_ids: RefCell<HashMap<String, usize>>,
     /// Mesh files read for shapegroups (by path and serialized shape index), read once for
     /// all their instances. Others are not kept: a large mesh would be held twice.
