@@ -44,6 +44,10 @@ enum Command {
         /// Set a scene parameter (see `render -D`).
         #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
         defines: Vec<(String, String)>,
+        /// Also say which rules each file was read with (Mitsuba 3's, or 0.6's for a file
+        /// older than version 2.0) and list every upgrade applied to a 0.6 file.
+        #[arg(short, long)]
+        verbose: bool,
     },
     /// Validate a graph file and print its schedule.
     Graph {
@@ -545,8 +549,24 @@ fn check_scene(
     registry: &Registry,
     path: &Path,
     defines: &[(String, String)],
+    verbose: bool,
 ) -> Result<(), Error> {
     let report = crate::loaders::check_in(path, defines, registry.bsdfs());
+    for rules in &report.rule_sets {
+        if rules.legacy || verbose {
+            println!("rules: {rules}");
+        }
+    }
+    if verbose {
+        for upgrade in &report.upgrades {
+            println!("upgrade: {upgrade}");
+        }
+    } else if !report.upgrades.is_empty() {
+        println!(
+            "rules: {} upgrades applied to read Mitsuba 0.6 files (--verbose lists them)",
+            report.upgrades.len()
+        );
+    }
     for warning in &report.warnings {
         println!("warning: {warning}");
     }
@@ -792,7 +812,11 @@ pub fn run_from(
             Ok(())
         }
         Command::Info { markdown: false } => info(&registry),
-        Command::Check { scene, defines } => check_scene(&registry, &scene, &defines),
+        Command::Check {
+            scene,
+            defines,
+            verbose,
+        } => check_scene(&registry, &scene, &defines, verbose),
         Command::Plugins => {
             print!("{}", crate::loaders::plugins::markdown(registry.bsdfs()));
             Ok(())

@@ -111,4 +111,16 @@ pub trait BsdfReader {
 
     /// How messages name property `name` as the file gives it: `<float name="alpha">`.
     fn describe_property(&self, name: &str) -> String;
+
+    /// The element is in a Mitsuba 0.5/0.6 file (version below 2.0): a unit applies 0.6's
+    /// defaults and properties where 0.6's plugin differs from Mitsuba 3's.
+    fn legacy(&self) -> bool {
+        false
+    }
+
+    /// Records what reading a 0.6 file changed, at property `name` (or the element), for
+    /// `hppm check --verbose`.
+    fn upgrade(&self, name: &str, message: String) {
+        let _ = (name, message);
+    }
 }

@@ -14,6 +14,7 @@ pub mod vol;
 use std::path::Path;
 
 use crate::bsdfs::BsdfRegistry;
+pub use mitsuba::RuleSet;
 use crate::scene::{Scene, SceneError};
 
 pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
@@ -32,6 +33,12 @@ pub struct Report {
     pub scene: Option<Scene>,
     pub errors: Vec<SceneError>,
     pub warnings: Vec<SceneError>,
+    /// The rules each file was read with: Mitsuba 3's, or 0.6's for a file older than 2.0.
+    pub rule_sets: Vec<RuleSet>,
+    /// What reading a Mitsuba 0.5/0.6 file changed to read it with Mitsuba 3's plugins (a
+    /// property renamed, a preset expanded, 0.6's default applied), at its place; `hppm check
+    /// --verbose` lists them.
+    pub upgrades: Vec<SceneError>,
     /// Each plugin met (`"bsdf diffuse"`) and every property name its reader looked for,
     /// given or not: what the loader reads, to hold the plugin table to it.
     pub properties_read: std::collections::BTreeMap<String, std::collections::BTreeSet<String>>,
@@ -51,6 +58,8 @@ impl Report {
             scene: None,
             errors: vec![error],
             warnings: Vec::new(),
+            rule_sets: Vec::new(),
+            upgrades: Vec::new(),
             properties_read: Default::default(),
         }
     }
@@ -72,6 +81,8 @@ pub fn check_in(path: &Path, defines: &[(String, String)], bsdfs: &BsdfRegistry)
             scene: Some(scene),
             errors: Vec::new(),
             warnings: Vec::new(),
+            rule_sets: Vec::new(),
+            upgrades: Vec::new(),
             properties_read: Default::default(),
         },
         Err(e) => Report::failed(e),

@@ -292,6 +292,23 @@ impl Bitmap {
     }
 }
 
+impl Bitmap {
+    /// This bitmap's texels (read `raw`) decoded by `decode` per channel, kept as floats: an
+    /// encoding the file does not declare (Mitsuba 0.6's `gamma` on a bitmap).
+    pub fn decoded_with(mut self, decode: impl Fn(f32) -> f32) -> Self {
+        for t in &mut self.texels {
+            *t = Vec3::new(decode(t.x), decode(t.y), decode(t.z));
+        }
+        self.bytes = None;
+        self
+    }
+
+    /// The file's texels were stored as 8-bit values (PNG, JPEG, BMP), not as floats.
+    pub fn is_8_bit(&self) -> bool {
+        self.bytes.is_some()
+    }
+}
+
 /// Reads an image as linear RGB texels, row by row from the top: OpenEXR and Radiance HDR as
 /// they are, PNG, JPEG and BMP (8 or 16 bits, grey or colour; alpha dropped) decoded from sRGB
 /// unless `raw`. Refuses empty images, images over [`MAX_SIDE`] a side and non-finite texels;
@@ -299,12 +316,28 @@ impl Bitmap {
 /// Decodes an image by what its bytes are, not what its name says: downloaded scenes have JPEGs
 /// named .png and the other way round, which Mitsuba reads all the same.
 fn decode_image(path: &Path) -> Result<::image::DynamicImage, String> {
-    ::image::io::Reader::open(path)
-        .map_err(|e| e.to_string())?
+    let mut bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    radiance_signature(&mut bytes);
+    ::image::io::Reader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| e.to_string())?
         .decode()
         .map_err(|e| e.to_string())
+}
+
+/// Radiance HDR files begin `#?RADIANCE`, but many tools write `#?RGBE` (or another program
+/// name) there, which Radiance's own readers and Mitsuba accept and the `image` crate does not:
+/// such a first line is rewritten to the one it knows.
+fn radiance_signature(bytes: &mut Vec<u8>) {
+    const SIGNATURE: &[u8] = b"#?RADIANCE";
+    let Some(end) = bytes.iter().position(|&b| b == b'\n') else {
+        return;
+    };
+    let first = &bytes[..end];
+    let rgbe_header = bytes.windows(7).take(512).any(|w| w == b"FORMAT=");
+    if first.starts_with(b"#?") && first != SIGNATURE && rgbe_header {
+        bytes.splice(..end, SIGNATURE.iter().copied());
+    }
 }
 
 pub fn read_image(path: &Path, raw: bool) -> Result<(u32, u32, Vec<Vec3>), String> {

@@ -89,6 +89,9 @@ fn read(r: &mut dyn BsdfReader) -> Result<Sides, SceneError> {
 /// A conductor's complex index: `material` (Mitsuba's measured tables at RGB, default "none",
 /// a perfect mirror: eta 0, k 1) or explicit `eta` and `k`.
 pub fn read_index(r: &mut dyn BsdfReader) -> Result<(Vec3, Vec3), SceneError> {
+    if r.legacy() {
+        return read_legacy_index(r);
+    }
     let material = r.string("material")?;
     if let Some(name) = material.filter(|name| name != "none") {
         if let Some(given) = ["eta", "k"].into_iter().find(|n| r.has(n)) {
@@ -111,6 +114,40 @@ pub fn read_index(r: &mut dyn BsdfReader) -> Result<(Vec3, Vec3), SceneError> {
     let eta = r.color("eta")?.unwrap_or(Vec3::ZERO);
     let k = r.color("k")?.unwrap_or(Vec3::ONE);
     Ok((eta, k))
+}
+
+/// A conductor's index as Mitsuba 0.6 reads it (src/bsdfs/conductor.cpp of 0.6): `material`
+/// defaults to copper, `eta` and `k` each replace the material's where given, and both are
+/// divided by `ext_eta` (the outside medium's index, a number or a named dielectric, default
+/// air).
+fn read_legacy_index(r: &mut dyn BsdfReader) -> Result<(Vec3, Vec3), SceneError> {
+    let given = r.has("material");
+    let material = r.string("material")?.unwrap_or_else(|| "Cu".into());
+    let (table_eta, table_k) = if material.eq_ignore_ascii_case("none") {
+        (Vec3::ZERO, Vec3::ONE)
+    } else {
+        named_conductor(&material).ok_or_else(|| {
+            let names: Vec<&str> = NAMED_CONDUCTORS.iter().map(|(n, _, _)| *n).collect();
+            r.error_at(
+                "material",
+                format!(
+                    "conductor material \"{material}\" is not one of Mitsuba's: none, {}",
+                    names.join(", ")
+                ),
+            )
+        })?
+    };
+    let eta = r.color("eta")?;
+    let k = r.color("k")?;
+    if !given && (eta.is_none() || k.is_none()) {
+        r.upgrade(
+            "material",
+            "conductor: Mitsuba 0.6's default material Cu (copper) where eta or k is not given"
+                .into(),
+        );
+    }
+    let ext_eta = crate::bsdfs::shared::ior(r, "ext_eta", 1.000277)?;
+    Ok((eta.unwrap_or(table_eta) / ext_eta, k.unwrap_or(table_k) / ext_eta))
 }
 
 /// A conductor's index and tint into the GPU record.

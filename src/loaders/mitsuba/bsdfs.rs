@@ -279,4 +279,13 @@ impl BsdfReader for Element<'_, '_, '_> {
         self.property(name)
             .map_or_else(|| format!("\"{name}\""), describe)
     }
+
+    fn legacy(&self) -> bool {
+        self.reader.legacy(self.node)
+    }
+
+    fn upgrade(&self, name: &str, message: String) {
+        let node = self.property(name).unwrap_or(self.node);
+        self.reader.upgrade(node, message);
+    }
 }

@@ -58,23 +58,30 @@ impl<'a, 'input> Reader<'a, 'input> {
             .children()
             .filter(|c| c.has_tag_name("volume"))
             .collect();
-        let albedo = self.medium_coefficient(&mut props, &volumes, "albedo", 0.75)?;
-        // A heterogeneous medium's extinction may be a grid: sigma_t is then 1 times it.
+        let legacy = self.legacy(node);
+        // 0.6's heterogeneous medium calls its extinction grid "density".
+        let extinction_name = if legacy { "density" } else { "sigma_t" };
         let grid_node = volumes.iter().copied().find(|v| {
-            v.attribute("name") == Some("sigma_t") && v.attribute("type") == Some("gridvolume")
+            v.attribute("name") == Some(extinction_name)
+                && v.attribute("type") == Some("gridvolume")
         });
-        let density = match grid_node {
+        let (sigma_t, albedo, density) = match grid_node {
+            // A heterogeneous medium's extinction may be a grid: sigma_t is then 1 times it.
             Some(v) if kind == "heterogeneous" => {
                 // Taken off the list of props as the coefficient would be.
-                props.take("sigma_t");
-                Some(self.grid_volume(v)?)
+                props.take(extinction_name);
+                let albedo = self.medium_coefficient(&mut props, &volumes, "albedo", 0.75)?;
+                (Vec3::ONE, albedo, Some(self.grid_volume(v)?))
             }
-            _ => None,
-        };
-        let sigma_t = if density.is_some() {
-            Vec3::ONE
-        } else {
-            self.medium_coefficient(&mut props, &volumes, "sigma_t", 1.0)?
+            _ if legacy && kind == "homogeneous" => {
+                let (sigma_t, albedo) = self.legacy_coefficients(&mut props, node)?;
+                (sigma_t, albedo, None)
+            }
+            _ => {
+                let albedo = self.medium_coefficient(&mut props, &volumes, "albedo", 0.75)?;
+                let sigma_t = self.medium_coefficient(&mut props, &volumes, "sigma_t", 1.0)?;
+                (sigma_t, albedo, None)
+            }
         };
         let scale = match props.take("scale") {
             Some(n) => {
@@ -99,15 +106,17 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.ignore(&mut props, &["has_spectral_extinction"], |r, n| {
             r.boolean(n).map(drop)
         })?;
+        if legacy {
+            self.drop_legacy_sampling(&mut props)?;
+        }
         self.finish(props, node)?;
-        if let Some(v) = volumes
-            .iter()
-            .find(|v| !matches!(v.attribute("name"), Some("albedo" | "sigma_t")))
-        {
+        if let Some(v) = volumes.iter().find(|v| {
+            !matches!(v.attribute("name"), Some(n) if n == "albedo" || n == extinction_name)
+        }) {
             return Err(self.error(
                 *v,
                 format!(
-                    "{}: a homogeneous medium takes a volume as \"albedo\" or \"sigma_t\" only",
+                    "{}: a medium takes a volume as \"albedo\" or \"{extinction_name}\" only",
                     describe_object(*v)
                 ),
             ));
@@ -198,6 +207,128 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
     }
 
+    /// A homogeneous medium's (sigma_t, albedo) in a 0.6 file, as 0.6's `lookupMaterial` forms
+    /// them: a preset (`material`, default `skin1`), then `sigma_s` and `sigma_a`, or `sigma_t`
+    /// and `albedo`, each replacing the preset's value where given.
+    fn legacy_coefficients(
+        &self,
+        props: &mut Props<'a, 'input>,
+        node: Node<'a, 'input>,
+    ) -> Result<(Vec3, Vec3), SceneError> {
+        let given = |names: [&'static str; 2]| {
+            names
+                .into_iter()
+                .find(|n| props.entries.iter().any(|(e, _)| e == n))
+        };
+        let scattering = given(["sigma_s", "sigma_a"]);
+        let extinction = given(["sigma_t", "albedo"]);
+        let material = props.take("material");
+        if let (Some(m), Some(other)) = (material, scattering.or(extinction)) {
+            return Err(self.attr_error(
+                m,
+                "value",
+                format!(
+                    "give either a preset material or coefficients (\"{other}\" is given too), \
+                     not both (as Mitsuba 0.6 requires)"
+                ),
+            ));
+        }
+        if let (Some(a), Some(b)) = (scattering, extinction) {
+            let at = props.take(b).unwrap_or(node);
+            return Err(self.error(
+                at,
+                format!(
+                    "\"{a}\" and \"{b}\" both given: give sigma_s and sigma_a, or sigma_t and \
+                     albedo (as Mitsuba 0.6 requires)"
+                ),
+            ));
+        }
+        let name = match material {
+            Some(m) => self.string(m)?,
+            None => legacy::DEFAULT_PRESET.to_string(),
+        };
+        let (mut sigma_s, mut sigma_a) = legacy::medium_preset(&name).ok_or_else(|| {
+            self.attr_error(
+                material.unwrap_or(node),
+                "value",
+                format!(
+                    "medium material \"{name}\" is not one of Mitsuba 0.6's presets: {}",
+                    legacy::medium_preset_names()
+                ),
+            )
+        })?;
+        // The coefficients the file leaves to the preset, for the note.
+        let mut from_preset = Vec::new();
+        let mut coefficient = |props: &mut Props<'a, 'input>, name: &'static str, preset: Vec3| {
+            if props.entries.iter().any(|(e, _)| e == name) {
+                self.medium_coefficient(props, &[], name, 0.0)
+            } else {
+                from_preset.push(name);
+                Ok(preset)
+            }
+        };
+        if extinction.is_some() {
+            let preset_t = sigma_s + sigma_a;
+            let preset_albedo = albedo_of(sigma_s, preset_t);
+            let sigma_t = coefficient(props, "sigma_t", preset_t)?;
+            let albedo = coefficient(props, "albedo", preset_albedo)?;
+            sigma_s = albedo * sigma_t;
+            sigma_a = sigma_t - sigma_s;
+        } else {
+            sigma_s = coefficient(props, "sigma_s", sigma_s)?;
+            sigma_a = coefficient(props, "sigma_a", sigma_a)?;
+        }
+        if !from_preset.is_empty() {
+            let default = if material.is_none() {
+                ", 0.6's default"
+            } else {
+                ""
+            };
+            self.upgrade(
+                material.unwrap_or(node),
+                format!(
+                    "homogeneous medium: {} from Mitsuba 0.6's preset \"{name}\"{default} \
+                     (the medium: sigma_s {sigma_s}, sigma_a {sigma_a} per unit; 0.6's table is in mm^-1, times 100)",
+                    from_preset.join(" and ")
+                ),
+            );
+        }
+        let sigma_t = sigma_s + sigma_a;
+        Ok((sigma_t, albedo_of(sigma_s, sigma_t)))
+    }
+
+    /// 0.6's choices of how to sample distances in a medium: they change its noise, not its
+    /// image (but `monochromatic`, which keeps one colour channel's coefficients, is refused).
+    fn drop_legacy_sampling(&self, props: &mut Props<'a, 'input>) -> Result<(), SceneError> {
+        for name in ["strategy", "method"] {
+            if let Some(n) = props.take(name) {
+                self.string(n)?;
+                self.upgrade(n, format!("{name}: 0.6's distance sampling; hppm samples its own way"));
+            }
+        }
+        for name in ["medium_sampling_weight", "sampling_density", "step_size"] {
+            if let Some(n) = props.take(name) {
+                self.float(n)?;
+                self.upgrade(n, format!("{name}: 0.6's distance sampling; hppm samples its own way"));
+            }
+        }
+        if let Some(n) = props.take("channel") {
+            self.integer(n)?;
+            self.upgrade(n, "channel: 0.6's distance sampling; hppm samples its own way");
+        }
+        if let Some(n) = props.take("monochromatic")
+            && self.boolean(n)?
+        {
+            return Err(self.attr_error(
+                n,
+                "value",
+                "monochromatic: 0.6 then keeps one colour channel's coefficients for a \
+                 per-channel render; hppm renders all channels at once (remove it)",
+            ));
+        }
+        Ok(())
+    }
+
     /// `<volume type="gridvolume">`: its `.vol` file (relative to the scene's folder), placed by
     /// `to_world` (and the file's box with `use_grid_bbox`), filtered and wrapped as Mitsuba's
     /// gridvolume does (src/scene/grid.rs).
@@ -237,19 +368,41 @@ impl<'a, 'input> Reader<'a, 'input> {
             2 => WrapMode::Mirror,
             _ => WrapMode::Clamp,
         };
+        let legacy = self.legacy(node);
+        // 0.6 places the grid in the box its file gives (or `min`/`max`), Mitsuba 3 in the
+        // unit cube unless asked.
         let use_bbox = props
             .take("use_grid_bbox")
             .map(|n| self.boolean(n))
             .transpose()?
-            .unwrap_or(false);
+            .unwrap_or(legacy);
+        let legacy_box = if legacy {
+            self.ignore(&mut props, &["send_data"], |r, n| r.boolean(n).map(drop))?;
+            match (props.take("min"), props.take("max")) {
+                (Some(lo), Some(hi)) => Some((self.point(lo)?, self.point(hi)?)),
+                (None, None) => None,
+                (Some(one), None) | (None, Some(one)) => {
+                    return Err(self.error(
+                        one,
+                        "a gridvolume's box needs both \"min\" and \"max\" (0.6 ignores one alone)",
+                    ));
+                }
+            }
+        } else {
+            None
+        };
         // `raw` changes only spectral variants' colours; `accel` only Mitsuba's GPU lookups.
         self.ignore(&mut props, &["raw", "accel"], |r, n| r.boolean(n).map(drop))?;
         self.finish(props, node)?;
         if to_world.determinant().abs() < 1e-30 || !to_world.is_finite() {
             return Err(self.error(node, "the gridvolume's to_world is not invertible"));
         }
-        let grid = crate::loaders::vol::read_vol(&self.relative(&filename))
+        let path = self.existing_file(file_node, self.relative(&filename));
+        let mut grid = crate::loaders::vol::read_vol(&path)
             .map_err(|why| self.attr_error(file_node, "value", format!("{filename}: {why}")))?;
+        if let Some((lo, hi)) = legacy_box {
+            (grid.bbox_min, grid.bbox_max) = (lo, hi);
+        }
         let mut to_local = to_world.inverse();
         if use_bbox {
             let bbox = grid.bbox_transform().ok_or_else(|| {
@@ -261,6 +414,19 @@ impl<'a, 'input> Reader<'a, 'input> {
                 )
             })?;
             to_local = bbox * to_local;
+        }
+        if legacy {
+            // 0.6 puts the first and last voxels' values at the box's faces, Mitsuba 3 (and
+            // hppm's lookup) at half a voxel inside them.
+            let size = Vec3::from(grid.size.map(|n| n as f32));
+            let to_centres = Mat4::from_translation(0.5 / size)
+                * Mat4::from_scale((size - 1.0).max(Vec3::ZERO) / size);
+            to_local = to_centres * to_local;
+            self.upgrade(
+                node,
+                "gridvolume: placed as 0.6 places it (the file's box or min/max, with voxel \
+                 values at the box's faces)",
+            );
         }
         Ok(Density {
             grid: Arc::new(grid),
@@ -324,4 +490,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             self.read_medium(node)
         }
     }
+}
+
+/// Single-scattering albedo sigma_s / sigma_t per channel (0 where nothing is there).
+fn albedo_of(sigma_s: Vec3, sigma_t: Vec3) -> Vec3 {
+    Vec3::select(sigma_t.cmpgt(Vec3::ZERO), sigma_s / sigma_t, Vec3::ZERO)
 }

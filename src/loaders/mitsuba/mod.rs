@@ -31,18 +31,30 @@ use crate::scene::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode
 use crate::scene::{
     Camera, Crop, Integrator, Lens, Material, PointLight, Scene, SceneError, Sphere, mesh,
 };
+use legacy::LEGACY_PROPERTIES;
+
+pub use legacy::RuleSet;
 
 mod bsdfs;
 mod emitters;
 mod ids;
+mod legacy;
 mod media;
 mod sensors;
 mod shapes;
 mod textures;
 
-/// Mitsuba's default BSDF for a shape that names none: diffuse, reflectance 0.5.
-fn default_bsdf() -> crate::bsdfs::Sides {
-    let bsdf = crate::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.5));
+/// Mitsuba's default BSDF for a shape that names none: diffuse, reflectance 0.5, or 0 for an
+/// area light (src/render/shape.cpp); in a 0.6 file a medium boundary's is null instead
+/// (0.6's src/librender/shape.cpp).
+fn default_bsdf(emits: bool, medium_boundary_06: bool) -> crate::bsdfs::Sides {
+    let bsdf = if emits {
+        crate::bsdfs::diffuse::Diffuse::bsdf(Vec3::ZERO)
+    } else if medium_boundary_06 {
+        crate::bsdfs::null::Null::bsdf()
+    } else {
+        crate::bsdfs::diffuse::Diffuse::bsdf(Vec3::splat(0.5))
+    };
     crate::bsdfs::Sides::one(bsdf, Default::default())
 }
 
@@ -104,7 +116,7 @@ pub fn check_text_with(
     defines: &[(String, String)],
     bsdfs: &BsdfRegistry,
 ) -> Report {
-    let texts = with_includes(path, text);
+    let texts = with_includes(path, text, defines);
     let mut docs = Vec::with_capacity(texts.len());
     for (file, text) in &texts {
         match Document::parse(text) {
@@ -124,6 +136,7 @@ pub fn check_text_with(
             path: file.clone(),
             doc,
             before_v2: false,
+            version: None,
         })
         .collect();
     let doc = &docs[0].1;
@@ -152,6 +165,7 @@ pub fn check_text_with(
         has_sensor: false,
         errors: RefCell::new(Vec::new()),
         warnings: RefCell::new(Vec::new()),
+        upgrades: RefCell::new(Vec::new()),
         properties_read: RefCell::new(BTreeMap::new()),
     };
     reader.check_attributes();
@@ -174,6 +188,9 @@ pub fn check_text_with(
     errors.sort_by_key(by_place);
     let mut warnings = reader.warnings.take();
     warnings.sort_by_key(by_place);
+    let mut upgrades = reader.upgrades.take();
+    upgrades.sort_by_key(by_place);
+    let rule_sets = reader.rule_sets();
     // Validation judges the scene as a whole: with parts of it missing it would only repeat
     // what is reported already.
     if errors.is_empty()
@@ -185,6 +202,8 @@ pub fn check_text_with(
         scene: errors.is_empty().then_some(reader.scene),
         errors,
         warnings,
+        rule_sets,
+        upgrades,
         properties_read: reader.properties_read.take(),
     }
 }
@@ -195,17 +214,36 @@ const MAX_INCLUDE_DEPTH: usize = 16;
 
 /// The scene's text and every file it `<include>`s, directly or not, that can be read, each once.
 /// An include that cannot be read is left out here and reported where the scene includes it.
-fn with_includes(path: &Path, text: &str) -> Vec<(PathBuf, String)> {
+/// An include's file name may use `$name`s: they are the `-D` parameters and the `<default>`s
+/// of the files read so far (as the reader will have them where the include stands).
+fn with_includes(
+    path: &Path,
+    text: &str,
+    defines: &[(String, String)],
+) -> Vec<(PathBuf, String)> {
     let mut files = vec![(path.to_path_buf(), text.to_string())];
+    let mut values: HashMap<String, String> = HashMap::new();
     let mut next = 0;
     while next < files.len() && files.len() <= MAX_INCLUDE_DEPTH * 4 {
         let found: Vec<PathBuf> = match Document::parse(&files[next].1) {
-            Ok(doc) => doc
-                .descendants()
-                .filter(|n| n.has_tag_name("include"))
-                .filter_map(|n| n.attribute("filename"))
-                .map(|f| relative_to(&files[next].0, f))
-                .collect(),
+            Ok(doc) => {
+                for n in doc.descendants().filter(|n| n.has_tag_name("default")) {
+                    if let (Some(k), Some(v)) = (n.attribute("name"), n.attribute("value")) {
+                        values.entry(k.to_string()).or_insert_with(|| v.to_string());
+                    }
+                }
+                values.extend(defines.iter().cloned());
+                doc.descendants()
+                    .filter(|n| n.has_tag_name("include"))
+                    .filter_map(|n| n.attribute("filename"))
+                    .map(|f| {
+                        // A name without a value is reported where the reader meets it.
+                        let name = substitute(f, |k| values.get(k).map(String::as_str))
+                            .unwrap_or_else(|_| f.to_string());
+                        relative_to(&files[next].0, &name)
+                    })
+                    .collect()
+            }
             Err(_) => Vec::new(),
         };
         for file in found {
@@ -219,6 +257,25 @@ fn with_includes(path: &Path, text: &str) -> Vec<(PathBuf, String)> {
         next += 1;
     }
     files
+}
+
+/// `raw` with each `$name` replaced by `value(name)`; the first name it has no value for is
+/// the error.
+fn substitute<'v>(raw: &str, mut value: impl FnMut(&str) -> Option<&'v str>) -> Result<String, String> {
+    let mut out = String::new();
+    let mut rest = raw;
+    while let Some(i) = rest.find('$') {
+        out.push_str(&rest[..i]);
+        let tail = &rest[i + 1..];
+        let end = tail
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+            .unwrap_or(tail.len());
+        let key = &tail[..end];
+        out.push_str(value(key).ok_or_else(|| key.to_string())?);
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    Ok(out)
 }
 
 /// `file` as named in `from`: relative to `from`'s folder unless absolute.
@@ -302,9 +359,11 @@ const PROPERTY_TAGS: &[&str] = &[
 struct SourceFile<'a, 'input> {
     path: PathBuf,
     doc: &'a Document<'input>,
-    /// The file declares a Mitsuba version before 2.0: property names are upgraded as Mitsuba
-    /// 3 upgrades them (camelCase to snake_case, ...).
+    /// The file declares a Mitsuba version before 2.0: it is read with 0.6's rules where 0.6
+    /// and Mitsuba 3 differ (legacy.rs), its property names upgraded as Mitsuba 3 upgrades them.
     before_v2: bool,
+    /// Its `<scene version=...>`, if it gives one.
+    version: Option<String>,
 }
 
 struct Reader<'a, 'input> {
@@ -352,6 +411,8 @@ struct Reader<'a, 'input> {
     has_sensor: bool,
     errors: RefCell<Vec<SceneError>>,
     warnings: RefCell<Vec<SceneError>>,
+    /// What reading a 0.5/0.6 file changed (see [`Report::upgrades`]).
+    upgrades: RefCell<Vec<SceneError>>,
     /// See [`Report::properties_read`].
     properties_read: RefCell<BTreeMap<String, BTreeSet<String>>>,
 }
@@ -383,34 +444,6 @@ impl<'a, 'input> Props<'a, 'input> {
             .min_by_key(|(d, _)| *d)
             .map(|(_, a)| a.as_str())
     }
-}
-
-/// Properties that Mitsuba 0.5/0.6 plugins read and Mitsuba 3's do not (after the version
-/// upgrade renames them): a scene written for those versions renders without them, so they are
-/// warnings, not errors.
-const LEGACY_PROPERTIES: &[&str] = &[
-    "high_quality_edges",
-    "strict_normals",
-    "banner",
-    "attach_log",
-    "max_smooth_angle",
-    "generate_normals",
-    "sample_count_per_pass",
-];
-
-/// A property name as Mitsuba 3 upgrades it from a file older than version 2.0: camelCase
-/// words joined by underscores (`maxDepth` -> `max_depth`, `fovAxis` -> `fov_axis`).
-fn snake_case(name: &str) -> String {
-    let mut out = String::with_capacity(name.len() + 4);
-    let mut previous_lower = false;
-    for c in name.chars() {
-        if c.is_ascii_uppercase() && previous_lower {
-            out.push('_');
-        }
-        out.push(c.to_ascii_lowercase());
-        previous_lower = c.is_ascii_lowercase() || c.is_ascii_digit();
-    }
-    out
 }
 
 /// A view angle as a file gives it: degrees along `axis` (x, y, diagonal, smaller, larger),
@@ -490,7 +523,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn check_attributes(&self) {
         let all = self.files.iter().flat_map(|f| f.doc.descendants());
         for node in all.filter(Node::is_element) {
-            let tag = node.tag_name().name();
+            let tag = self.tag_of(node);
             let Some(allowed) = allowed_attributes(tag) else {
                 continue;
             };
@@ -519,30 +552,23 @@ impl<'a, 'input> Reader<'a, 'input> {
         if !raw.contains('$') {
             return Ok(Some(raw.to_string()));
         }
-        let mut out = String::new();
-        let mut rest = raw;
-        while let Some(i) = rest.find('$') {
-            out.push_str(&rest[..i]);
-            let tail = &rest[i + 1..];
-            let end = tail
-                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
-                .unwrap_or(tail.len());
-            let key = &tail[..end];
-            let value = self.defaults.get(key).ok_or_else(|| {
-                self.attr_error(
-                    node,
-                    name,
-                    format!(
-                        "{}: {name}=\"{raw}\" uses ${key}, but there is no <default name=\"{key}\">",
-                        describe(node)
-                    ),
-                )
-            })?;
-            out.push_str(value);
-            self.used.borrow_mut().insert(key.to_string());
-            rest = &tail[end..];
-        }
-        out.push_str(rest);
+        let mut used = Vec::new();
+        let out = substitute(raw, |key| {
+            let value = self.defaults.get(key)?;
+            used.push(key.to_string());
+            Some(value.as_str())
+        })
+        .map_err(|key| {
+            self.attr_error(
+                node,
+                name,
+                format!(
+                    "{}: {name}=\"{raw}\" uses ${key}, but there is no <default name=\"{key}\">",
+                    describe(node)
+                ),
+            )
+        })?;
+        self.used.borrow_mut().extend(used);
         Ok(Some(out))
     }
 
@@ -689,6 +715,18 @@ impl<'a, 'input> Reader<'a, 'input> {
                         child.tag_name().name()
                     ),
                 )),
+                tag if PROPERTY_TAGS.contains(&tag) && self.legacy(child) => {
+                    self.warn(
+                        child,
+                        format!(
+                            "{}: a property of the scene itself, which reads none; ignored, as \
+                             Mitsuba 0.6 ignored an unqueried property (this file's version is \
+                             below 2.0)",
+                            describe(child)
+                        ),
+                    );
+                    Ok(())
+                }
                 other => Err(self.error(child, format!("unknown tag <{other}> in <scene>"))),
             }
         }
@@ -726,6 +764,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             .position(|f| std::ptr::eq(f.doc, root.document()))
             .unwrap_or(0);
         self.files[index].before_v2 = major < 2;
+        self.files[index].version = Some(version);
         Ok(())
     }
 
@@ -759,7 +798,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
             let mut name = self.required_attr(child, "name")?;
             if self.file_of(child).before_v2 {
-                name = self.upgraded_name(node, &name);
+                name = self.upgraded_name(node, child, &name);
             }
             if let Some((_, first)) = entries.iter().find(|(n, _)| *n == name) {
                 return Err(self.attr_error(
@@ -779,17 +818,6 @@ impl<'a, 'input> Reader<'a, 'input> {
             entries,
             asked: Vec::new(),
         })
-    }
-
-    /// Property `name` of `owner` in a file older than Mitsuba 2.0, renamed as Mitsuba 3's
-    /// loader renames it.
-    fn upgraded_name(&self, owner: Node, name: &str) -> String {
-        let name = snake_case(name);
-        let diffuse = owner.has_tag_name("bsdf") && owner.attribute("type") == Some("diffuse");
-        if diffuse && name == "diffuse_reflectance" {
-            return "reflectance".into();
-        }
-        name
     }
 
     /// Records what `owner`'s plugin looked for (see [`Report::properties_read`]).
@@ -830,6 +858,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                         describe(*node)
                     ),
                 );
+                continue;
+            }
+            if self.legacy(owner) {
+                self.unqueried(&props, owner, name, *node);
                 continue;
             }
             let mut message = format!(
@@ -1006,6 +1038,12 @@ impl<'a, 'input> Reader<'a, 'input> {
             return self.spectrum_plugin(node, &plugin, kind);
         }
         let parsed = match (self.attr(node, "value")?, self.attr(node, "filename")?) {
+            (Some(value), None) if self.legacy(node) && !value.contains(':') => {
+                if let Some(rgb) = self.legacy_rgb_spectrum(node, &value)? {
+                    return Ok(rgb);
+                }
+                spectrum::parse_spectrum_value(&value).map_err(|why| fail("value", why))?
+            }
             (Some(value), None) => {
                 spectrum::parse_spectrum_value(&value).map_err(|why| fail("value", why))?
             }
@@ -1168,12 +1206,15 @@ impl<'a, 'input> Reader<'a, 'input> {
         self.expect_tag(node, &["transform"])?;
         let mut m = Mat4::IDENTITY;
         for child in node.children().filter(Node::is_element) {
-            let step = match child.tag_name().name() {
+            let step = match self.tag_of(child) {
                 "matrix" => self.matrix(child)?,
                 "translate" => Mat4::from_translation(self.xyz_or_value(child, 0.0, false)?),
                 "scale" => Mat4::from_scale(self.xyz_or_value(child, 1.0, true)?),
                 "rotate" => self.rotation(child)?,
                 "lookat" => {
+                    if child.tag_name().name() != "lookat" {
+                        self.upgrade(child, "<lookAt> read as <lookat>");
+                    }
                     let origin = self.vec3_attr(child, "origin")?;
                     let target = self.vec3_attr(child, "target")?;
                     // Mitsuba picks an up vector itself when none (or zero) is given.

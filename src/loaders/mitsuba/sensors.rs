@@ -413,12 +413,27 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     pub(super) fn read_film(&mut self, node: Node<'a, 'input>) -> Result<(), SceneError> {
         let kind = self.required_attr(node, "type")?;
-        if kind != "hdrfilm" {
+        let legacy_film = self.legacy(node) && matches!(kind.as_str(), "ldrfilm" | "tiledhdrfilm");
+        if kind != "hdrfilm" && !legacy_film {
+            let old = if self.legacy(node) {
+                " and Mitsuba 0.6's \"ldrfilm\" and \"tiledhdrfilm\""
+            } else {
+                ""
+            };
             return Err(self.attr_error(
                 node,
                 "type",
-                format!("film type \"{kind}\" is not supported (only \"hdrfilm\")"),
+                format!("film type \"{kind}\" is not supported (only \"hdrfilm\"{old})"),
             ));
+        }
+        if legacy_film {
+            self.upgrade(
+                node,
+                format!(
+                    "film \"{kind}\": read as hdrfilm (hppm's image is linear radiance; its \
+                     PNG output applies the sRGB curve)"
+                ),
+            );
         }
         if let Some(filter) = self.single_child(node, "rfilter")? {
             match self.read_rfilter(filter) {
@@ -439,6 +454,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             &["pixel_format", "component_format", "file_format"],
             |r, n| r.string(n).map(drop),
         )?;
+        if self.legacy(node) {
+            self.drop_legacy_film(&mut props, &kind)?;
+        }
         if let Some(n) = props.take("compensate") {
             self.boolean(n)?;
             self.warn(
@@ -472,6 +490,68 @@ impl<'a, 'input> Reader<'a, 'input> {
             camera.height = height;
         }
         self.finish(props, node)
+    }
+
+    /// What 0.6's films read for their output files only: `ldrfilm`'s tonemapping and any
+    /// film's `gamma` (0.6's hdrfilm ignored it). Each is noted; a tonemap that would change
+    /// the PNG 0.6 wrote is a warning.
+    fn drop_legacy_film(&self, props: &mut Props<'a, 'input>, kind: &str) -> Result<(), SceneError> {
+        if let Some(n) = props.take("gamma") {
+            let gamma = self.float(n)?;
+            if kind == "ldrfilm" && gamma > 0.0 {
+                self.warn(
+                    n,
+                    format!(
+                        "ldrfilm gamma {gamma}: 0.6 encoded its PNG with this gamma; hppm's \
+                         image is linear (EXR) or sRGB-encoded (PNG)"
+                    ),
+                );
+            } else {
+                self.upgrade(
+                    n,
+                    format!("{kind} gamma: read by 0.6 for low dynamic range output only; ignored"),
+                );
+            }
+        }
+        if kind != "ldrfilm" {
+            return Ok(());
+        }
+        let tonemap = match props.take("tonemap_method") {
+            Some(n) => (self.string(n)?, Some(n)),
+            None => ("gamma".to_string(), None),
+        };
+        for (name, neutral) in [("exposure", 0.0), ("key", 0.18), ("burn", 0.0)] {
+            let Some(n) = props.take(name) else { continue };
+            let value = self.float(n)?;
+            let used = (name == "exposure") == (tonemap.0 == "gamma");
+            if used && value != neutral {
+                self.warn(
+                    n,
+                    format!(
+                        "ldrfilm {name} {value}: 0.6 tonemapped its PNG with it; hppm writes the \
+                         image untonemapped"
+                    ),
+                );
+            } else {
+                self.upgrade(n, format!("ldrfilm {name}: no effect on the image; ignored"));
+            }
+        }
+        if let (method, Some(n)) = tonemap {
+            if method == "reinhard" {
+                self.warn(
+                    n,
+                    "ldrfilm tonemap_method \"reinhard\": 0.6 tonemapped its PNG; hppm writes the \
+                     image untonemapped",
+                );
+            } else if method != "gamma" {
+                return Err(self.attr_error(
+                    n,
+                    "value",
+                    format!("tonemap_method \"{method}\": 0.6 knows \"gamma\" and \"reinhard\""),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// One axis of hdrfilm's crop window, (offset, size) on a film `film` pixels long: Mitsuba's

@@ -19,10 +19,14 @@ impl<'a, 'input> Reader<'a, 'input> {
             let side = match self.attr(child, "name")?.as_deref() {
                 Some("interior") if matches!(tag, "ref" | "medium") => Some(&mut media.interior),
                 Some("exterior") if matches!(tag, "ref" | "medium") => Some(&mut media.exterior),
-                _ if tag == "medium" => {
+                _ if tag == "medium" || (tag == "ref" && self.names_medium(child)) => {
                     return Err(self.error(
                         child,
-                        "a shape's <medium> needs name=\"interior\" or name=\"exterior\"",
+                        format!(
+                            "{}: a medium given to a shape needs name=\"interior\" or \
+                             name=\"exterior\" (as Mitsuba requires)",
+                            describe(child)
+                        ),
                     ));
                 }
                 _ => None,
@@ -48,10 +52,18 @@ impl<'a, 'input> Reader<'a, 'input> {
                 _ => {}
             }
         }
-        let sides = bsdf.unwrap_or_else(default_bsdf);
+        let boundary_06 = self.legacy(node) && (media.interior.is_some() || media.exterior.is_some());
+        let sides = bsdf.unwrap_or_else(|| default_bsdf(emission.is_some(), boundary_06));
         let mut material = sides.material(emission.unwrap_or(Vec3::ZERO));
         material.media = media;
         Ok(material)
+    }
+
+    /// A `<ref>` whose id is a medium's, not a BSDF's.
+    fn names_medium(&self, node: Node) -> bool {
+        node.attribute("id").is_some_and(|id| {
+            self.named_media.contains(id) && !self.named_bsdfs.contains(id)
+        })
     }
 
     pub(super) fn bsdf_ref(&self, node: Node) -> Result<crate::bsdfs::Sides, SceneError> {

@@ -3,6 +3,12 @@
 
 use super::*;
 
+/// What a 0.6 bitmap's MIP-mapped filtering becomes.
+const MIP_FILTERING: &str = "bitmap: 0.6 filters with MIP-mapping (EWA by default, or \
+    trilinear) over the pixel's footprint; read bilinear, as Mitsuba 3 does: the same wherever \
+    a pixel covers at most a texel, sharper where the texture is minified (the samples of a \
+    pixel then average its texels themselves)";
+
 impl<'a, 'input> Reader<'a, 'input> {
     /// A float or a texture given to parameter `name`: the number, or the texture's mean and
     /// its index in the scene's textures.
@@ -73,6 +79,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let mut props = self.props(node, &[])?;
         let to_uv = match props.take("to_uv") {
             Some(n) => UvTransform::from_mat4(self.transform(n)?),
+            None if self.legacy(node) => self.legacy_uv_transform(&mut props)?,
             None => UvTransform::IDENTITY,
         };
         let texture = match kind.as_str() {
@@ -95,10 +102,21 @@ impl<'a, 'input> Reader<'a, 'input> {
                     ));
                 };
                 let filename = self.string(file_node)?;
-                let raw = match props.take("raw") {
+                let mut raw = match props.take("raw") {
                     Some(n) => self.boolean(n)?,
                     None => false,
                 };
+                let legacy = self.legacy(node);
+                let gamma = if legacy {
+                    self.legacy_bitmap_options(&mut props)?
+                } else {
+                    None
+                };
+                // 0.6's gamma overrides the file's encoding: 1 is linear, -1 sRGB, others a
+                // power law.
+                if gamma.is_some_and(|g| g != -1.0) {
+                    raw = true;
+                }
                 // Hardware interpolation on CUDA (Mitsuba's `accel`): no effect here.
                 if let Some(n) = props.take("accel") {
                     self.boolean(n)?;
@@ -118,7 +136,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                         ));
                     }
                 }
-                let wrap = match props.take("wrap_mode") {
+                let wrap = match self.wrap_mode_node(&mut props, legacy)? {
                     None => WrapMode::Repeat,
                     Some(n) => match self.string(n)?.as_str() {
                         "repeat" => WrapMode::Repeat,
@@ -136,10 +154,18 @@ impl<'a, 'input> Reader<'a, 'input> {
                     },
                 };
                 let filter = match props.take("filter_type") {
+                    None if legacy => {
+                        self.upgrade(node, MIP_FILTERING);
+                        Filter::Bilinear
+                    }
                     None => Filter::Bilinear,
                     Some(n) => match self.string(n)?.as_str() {
                         "bilinear" => Filter::Bilinear,
                         "nearest" => Filter::Nearest,
+                        "ewa" | "trilinear" if legacy => {
+                            self.upgrade(n, MIP_FILTERING);
+                            Filter::Bilinear
+                        }
                         other => {
                             return Err(self.attr_error(
                                 n,
@@ -151,9 +177,18 @@ impl<'a, 'input> Reader<'a, 'input> {
                         }
                     },
                 };
-                let path = self.relative(&filename);
-                let bitmap = Bitmap::load(&path, raw, wrap, filter, to_uv)
+                let path = self.existing_file(file_node, self.relative(&filename));
+                let mut bitmap = Bitmap::load(&path, raw, wrap, filter, to_uv)
                     .map_err(|message| self.attr_error(file_node, "value", message))?;
+                match gamma {
+                    Some(-1.0) if !bitmap.is_8_bit() => {
+                        bitmap = bitmap.decoded_with(texture::srgb_to_linear);
+                    }
+                    Some(g) if g != 1.0 && g != -1.0 => {
+                        bitmap = bitmap.decoded_with(|x| x.max(0.0).powf(g));
+                    }
+                    _ => {}
+                }
                 Texture::Bitmap(bitmap)
             }
             other => {
@@ -170,5 +205,101 @@ impl<'a, 'input> Reader<'a, 'input> {
         let takes = plugins::properties_of("texture", &kind);
         self.finish_with(props, node, Some(&takes))?;
         Ok(texture)
+    }
+}
+
+impl<'a, 'input> Reader<'a, 'input> {
+    /// A 0.6 texture's `uoffset`, `voffset`, `uscale`, `vscale` and `uvscale` as a `to_uv`
+    /// (0.6's Texture2D: uv * scale + offset).
+    fn legacy_uv_transform(&self, props: &mut Props<'a, 'input>) -> Result<UvTransform, SceneError> {
+        let mut float = |name: &str, default: f32| -> Result<(f32, bool), SceneError> {
+            match props.take(name) {
+                Some(n) => Ok((self.float(n)?, true)),
+                None => Ok((default, false)),
+            }
+        };
+        let (uvscale, _) = float("uvscale", 1.0)?;
+        let (su, a) = float("uscale", uvscale)?;
+        let (sv, b) = float("vscale", uvscale)?;
+        let (ou, c) = float("uoffset", 0.0)?;
+        let (ov, d) = float("voffset", 0.0)?;
+        if !(a || b || c || d || uvscale != 1.0) {
+            return Ok(UvTransform::IDENTITY);
+        }
+        let m = Mat4::from_translation(Vec3::new(ou, ov, 0.0))
+            * Mat4::from_scale(Vec3::new(su, sv, 1.0));
+        Ok(UvTransform::from_mat4(m))
+    }
+
+    /// A 0.6 bitmap's own properties: `gamma` (returned; 0 is the file's own encoding), and
+    /// what only 0.6's filtering read (`max_anisotropy`, `cache`).
+    fn legacy_bitmap_options(&self, props: &mut Props<'a, 'input>) -> Result<Option<f32>, SceneError> {
+        for name in ["max_anisotropy"] {
+            if let Some(n) = props.take(name) {
+                self.float(n)?;
+                self.upgrade(n, format!("{name}: 0.6's EWA filtering only; ignored"));
+            }
+        }
+        if let Some(n) = props.take("cache") {
+            self.boolean(n)?;
+            self.upgrade(n, "cache: 0.6's MIP-map cache file; ignored");
+        }
+        if let Some(n) = props.take("channel") {
+            return Err(self.attr_error(
+                n,
+                "value",
+                "channel: a bitmap reduced to one channel is not supported; give an image of \
+                 that channel",
+            ));
+        }
+        let Some(n) = props.take("gamma") else {
+            return Ok(None);
+        };
+        let gamma = self.float(n)?;
+        if gamma == 0.0 {
+            return Ok(None);
+        }
+        if !(gamma == -1.0 || (gamma.is_finite() && gamma > 0.0)) {
+            return Err(self.attr_error(
+                n,
+                "value",
+                format!("bitmap gamma {gamma}: expected -1 (sRGB), 0 (the file's), or a positive number"),
+            ));
+        }
+        Ok(Some(gamma))
+    }
+
+    /// The node of a bitmap's wrap mode: `wrap_mode`, or in a 0.6 file `wrap_mode_u` and
+    /// `wrap_mode_v`, which must then agree (hppm wraps both axes alike).
+    fn wrap_mode_node(
+        &self,
+        props: &mut Props<'a, 'input>,
+        legacy: bool,
+    ) -> Result<Option<Node<'a, 'input>>, SceneError> {
+        let common = props.take("wrap_mode");
+        if !legacy {
+            return Ok(common);
+        }
+        let mut chosen = common;
+        for name in ["wrap_mode_u", "wrap_mode_v"] {
+            let Some(n) = props.take(name) else { continue };
+            let value = self.string(n)?;
+            if let Some(c) = chosen
+                && self.string(c)? != value
+            {
+                return Err(self.attr_error(
+                    n,
+                    "value",
+                    format!(
+                        "{name} \"{value}\" differs from the other axis' \"{}\" (line {}): \
+                         hppm wraps both axes alike",
+                        self.string(c)?,
+                        self.location(c).line
+                    ),
+                ));
+            }
+            chosen = Some(n);
+        }
+        Ok(chosen)
     }
 }
