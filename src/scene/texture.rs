@@ -316,13 +316,29 @@ impl Bitmap {
 /// Decodes an image by what its bytes are, not what its name says: downloaded scenes have JPEGs
 /// named .png and the other way round, which Mitsuba reads all the same.
 fn decode_image(path: &Path) -> Result<::image::DynamicImage, String> {
-    let mut bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-    radiance_signature(&mut bytes);
-    ::image::io::Reader::new(std::io::Cursor::new(bytes))
+    ::image::io::Reader::open(path)
+        .map_err(|e| e.to_string())?
         .with_guessed_format()
         .map_err(|e| e.to_string())?
         .decode()
         .map_err(|e| e.to_string())
+}
+
+/// A Radiance HDR file's texels as the floats it stores. (The `image` crate's generic decoding
+/// of these files tonemaps them to 8 bits: its own HDR reader keeps them.)
+fn read_radiance(path: &Path) -> Result<(u32, u32, Vec<Vec3>), String> {
+    let mut bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    radiance_signature(&mut bytes);
+    let decoder = ::image::codecs::hdr::HdrDecoder::new(std::io::Cursor::new(bytes))
+        .map_err(|e| e.to_string())?;
+    let meta = decoder.metadata();
+    let texels = decoder
+        .read_image_hdr()
+        .map_err(|e| e.to_string())?
+        .into_iter()
+        .map(|p| Vec3::from_array(p.0))
+        .collect();
+    Ok((meta.width, meta.height, texels))
 }
 
 /// Radiance HDR files begin `#?RADIANCE`, but many tools write `#?RGBE` (or another program
@@ -359,10 +375,8 @@ fn read_image_bytes(path: &Path, raw: bool) -> Result<Decoded, String> {
             (image.width, image.height, texels, None)
         }
         "hdr" => {
-            let image = decode_image(path).map_err(fail)?;
-            let rgb = image.to_rgb32f();
-            let texels = rgb.pixels().map(|p| Vec3::from_array(p.0)).collect();
-            (rgb.width(), rgb.height(), texels, None)
+            let (width, height, texels) = read_radiance(path).map_err(fail)?;
+            (width, height, texels, None)
         }
         "png" | "jpg" | "jpeg" | "bmp" => {
             let image = decode_image(path).map_err(fail)?;
