@@ -522,7 +522,9 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// Every attribute of every known tag must be one it takes.
     fn check_attributes(&self) {
         let all = self.files.iter().flat_map(|f| f.doc.descendants());
-        for node in all.filter(Node::is_element) {
+        // An <animation>'s keyframes are refused with it, not attribute by attribute.
+        let keyframe = |n: &Node| n.parent_element().is_some_and(|p| p.has_tag_name("animation"));
+        for node in all.filter(|n| n.is_element() && !keyframe(n)) {
             let tag = self.tag_of(node);
             let Some(allowed) = allowed_attributes(tag) else {
                 continue;
@@ -789,6 +791,13 @@ impl<'a, 'input> Reader<'a, 'input> {
             let tag = child.tag_name().name();
             if is_object(child) {
                 continue;
+            }
+            if tag == "animation" {
+                return Err(self.error(
+                    child,
+                    "<animation>: a transform that changes while the shutter is open (motion \
+                     blur) is not supported",
+                ));
             }
             if !PROPERTY_TAGS.contains(&tag) {
                 return Err(self.error(
