@@ -14,8 +14,8 @@ pub mod vol;
 use std::path::Path;
 
 use crate::bsdfs::BsdfRegistry;
-pub use mitsuba::RuleSet;
 use crate::scene::{Scene, SceneError};
+pub use mitsuba::RuleSet;
 
 pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
     std::fs::read_to_string(path).map_err(|source| SceneError::Io {

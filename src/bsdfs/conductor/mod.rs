@@ -147,7 +147,10 @@ fn read_legacy_index(r: &mut dyn BsdfReader) -> Result<(Vec3, Vec3), SceneError>
         );
     }
     let ext_eta = crate::bsdfs::shared::ior(r, "ext_eta", 1.000277)?;
-    Ok((eta.unwrap_or(table_eta) / ext_eta, k.unwrap_or(table_k) / ext_eta))
+    Ok((
+        eta.unwrap_or(table_eta) / ext_eta,
+        k.unwrap_or(table_k) / ext_eta,
+    ))
 }
 
 /// A conductor's index and tint into the GPU record.

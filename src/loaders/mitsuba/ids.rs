@@ -95,3 +95,47 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
     }
 }
+
+/// The tags whose ids [`Ids`] checks as they are read.
+const READ_WITH_IDS: &[&str] = &["bsdf", "texture", "medium"];
+
+impl Reader<'_, '_> {
+    /// Mitsuba keeps one table of ids for every object (0.6's scene handler and Mitsuba 3's
+    /// parser both refuse a second declaration): an id given twice where [`Ids`] does not see
+    /// it (a shape, an emitter, a sensor, or two objects of different types) is an error at the
+    /// second, naming the first.
+    pub(super) fn check_unique_ids(&self) {
+        let mut seen: HashMap<&str, Node> = HashMap::new();
+        let declarations = self
+            .files
+            .iter()
+            .flat_map(|f| f.doc.descendants())
+            .filter(|n| n.is_element() && !matches!(n.tag_name().name(), "ref" | "alias"));
+        for node in declarations {
+            let Some(id) = node.attribute("id") else {
+                continue;
+            };
+            let Some(first) = seen.get(id) else {
+                seen.insert(id, node);
+                continue;
+            };
+            let (tag, first_tag) = (node.tag_name().name(), first.tag_name().name());
+            if tag == first_tag && READ_WITH_IDS.contains(&tag) {
+                continue;
+            }
+            let at = self.location(*first);
+            self.report(self.attr_error(
+                node,
+                "id",
+                format!(
+                    "{}: id \"{id}\" is declared already, by the {} at {}:{} (Mitsuba refuses \
+                     an id given twice)",
+                    describe_object(node),
+                    describe_object(*first),
+                    at.file.display(),
+                    at.line
+                ),
+            ));
+        }
+    }
+}

@@ -110,9 +110,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             self.drop_legacy_sampling(&mut props)?;
         }
         self.finish(props, node)?;
-        if let Some(v) = volumes.iter().find(|v| {
-            !matches!(v.attribute("name"), Some(n) if n == "albedo" || n == extinction_name)
-        }) {
+        if let Some(v) = volumes.iter().find(
+            |v| !matches!(v.attribute("name"), Some(n) if n == "albedo" || n == extinction_name),
+        ) {
             return Err(self.error(
                 *v,
                 format!(
@@ -303,18 +303,27 @@ impl<'a, 'input> Reader<'a, 'input> {
         for name in ["strategy", "method"] {
             if let Some(n) = props.take(name) {
                 self.string(n)?;
-                self.upgrade(n, format!("{name}: 0.6's distance sampling; hppm samples its own way"));
+                self.upgrade(
+                    n,
+                    format!("{name}: 0.6's distance sampling; hppm samples its own way"),
+                );
             }
         }
         for name in ["medium_sampling_weight", "sampling_density", "step_size"] {
             if let Some(n) = props.take(name) {
                 self.float(n)?;
-                self.upgrade(n, format!("{name}: 0.6's distance sampling; hppm samples its own way"));
+                self.upgrade(
+                    n,
+                    format!("{name}: 0.6's distance sampling; hppm samples its own way"),
+                );
             }
         }
         if let Some(n) = props.take("channel") {
             self.integer(n)?;
-            self.upgrade(n, "channel: 0.6's distance sampling; hppm samples its own way");
+            self.upgrade(
+                n,
+                "channel: 0.6's distance sampling; hppm samples its own way",
+            );
         }
         if let Some(n) = props.take("monochromatic")
             && self.boolean(n)?

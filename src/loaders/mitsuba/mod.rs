@@ -169,6 +169,7 @@ pub fn check_text_with(
         properties_read: RefCell::new(BTreeMap::new()),
     };
     reader.check_attributes();
+    reader.check_unique_ids();
     let read = reader.read_scene(doc.root_element());
     reader.keep(read);
     let unused = reader.check_defines_used(defines);
@@ -216,11 +217,7 @@ const MAX_INCLUDE_DEPTH: usize = 16;
 /// An include that cannot be read is left out here and reported where the scene includes it.
 /// An include's file name may use `$name`s: they are the `-D` parameters and the `<default>`s
 /// of the files read so far (as the reader will have them where the include stands).
-fn with_includes(
-    path: &Path,
-    text: &str,
-    defines: &[(String, String)],
-) -> Vec<(PathBuf, String)> {
+fn with_includes(path: &Path, text: &str, defines: &[(String, String)]) -> Vec<(PathBuf, String)> {
     let mut files = vec![(path.to_path_buf(), text.to_string())];
     let mut values: HashMap<String, String> = HashMap::new();
     let mut next = 0;
@@ -261,7 +258,10 @@ fn with_includes(
 
 /// `raw` with each `$name` replaced by `value(name)`; the first name it has no value for is
 /// the error.
-fn substitute<'v>(raw: &str, mut value: impl FnMut(&str) -> Option<&'v str>) -> Result<String, String> {
+fn substitute<'v>(
+    raw: &str,
+    mut value: impl FnMut(&str) -> Option<&'v str>,
+) -> Result<String, String> {
     let mut out = String::new();
     let mut rest = raw;
     while let Some(i) = rest.find('$') {
@@ -523,7 +523,10 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn check_attributes(&self) {
         let all = self.files.iter().flat_map(|f| f.doc.descendants());
         // An <animation>'s keyframes are refused with it, not attribute by attribute.
-        let keyframe = |n: &Node| n.parent_element().is_some_and(|p| p.has_tag_name("animation"));
+        let keyframe = |n: &Node| {
+            n.parent_element()
+                .is_some_and(|p| p.has_tag_name("animation"))
+        };
         for node in all.filter(|n| n.is_element() && !keyframe(n)) {
             let tag = self.tag_of(node);
             let Some(allowed) = allowed_attributes(tag) else {

@@ -495,7 +495,11 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// What 0.6's films read for their output files only: `ldrfilm`'s tonemapping and any
     /// film's `gamma` (0.6's hdrfilm ignored it). Each is noted; a tonemap that would change
     /// the PNG 0.6 wrote is a warning.
-    fn drop_legacy_film(&self, props: &mut Props<'a, 'input>, kind: &str) -> Result<(), SceneError> {
+    fn drop_legacy_film(
+        &self,
+        props: &mut Props<'a, 'input>,
+        kind: &str,
+    ) -> Result<(), SceneError> {
         if let Some(n) = props.take("gamma") {
             let gamma = self.float(n)?;
             if kind == "ldrfilm" && gamma > 0.0 {
@@ -533,7 +537,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                     ),
                 );
             } else {
-                self.upgrade(n, format!("ldrfilm {name}: no effect on the image; ignored"));
+                self.upgrade(
+                    n,
+                    format!("ldrfilm {name}: no effect on the image; ignored"),
+                );
             }
         }
         if let (method, Some(n)) = tonemap {

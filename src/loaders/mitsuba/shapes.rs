@@ -52,7 +52,8 @@ impl<'a, 'input> Reader<'a, 'input> {
                 _ => {}
             }
         }
-        let boundary_06 = self.legacy(node) && (media.interior.is_some() || media.exterior.is_some());
+        let boundary_06 =
+            self.legacy(node) && (media.interior.is_some() || media.exterior.is_some());
         let sides = bsdf.unwrap_or_else(|| default_bsdf(emission.is_some(), boundary_06));
         let mut material = sides.material(emission.unwrap_or(Vec3::ZERO));
         material.media = media;
@@ -61,9 +62,8 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// A `<ref>` whose id is a medium's, not a BSDF's.
     fn names_medium(&self, node: Node) -> bool {
-        node.attribute("id").is_some_and(|id| {
-            self.named_media.contains(id) && !self.named_bsdfs.contains(id)
-        })
+        node.attribute("id")
+            .is_some_and(|id| self.named_media.contains(id) && !self.named_bsdfs.contains(id))
     }
 
     pub(super) fn bsdf_ref(&self, node: Node) -> Result<crate::bsdfs::Sides, SceneError> {

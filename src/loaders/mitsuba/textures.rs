@@ -211,7 +211,10 @@ impl<'a, 'input> Reader<'a, 'input> {
 impl<'a, 'input> Reader<'a, 'input> {
     /// A 0.6 texture's `uoffset`, `voffset`, `uscale`, `vscale` and `uvscale` as a `to_uv`
     /// (0.6's Texture2D: uv * scale + offset).
-    fn legacy_uv_transform(&self, props: &mut Props<'a, 'input>) -> Result<UvTransform, SceneError> {
+    fn legacy_uv_transform(
+        &self,
+        props: &mut Props<'a, 'input>,
+    ) -> Result<UvTransform, SceneError> {
         let mut float = |name: &str, default: f32| -> Result<(f32, bool), SceneError> {
             match props.take(name) {
                 Some(n) => Ok((self.float(n)?, true)),
@@ -233,7 +236,10 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// A 0.6 bitmap's own properties: `gamma` (returned; 0 is the file's own encoding), and
     /// what only 0.6's filtering read (`max_anisotropy`, `cache`).
-    fn legacy_bitmap_options(&self, props: &mut Props<'a, 'input>) -> Result<Option<f32>, SceneError> {
+    fn legacy_bitmap_options(
+        &self,
+        props: &mut Props<'a, 'input>,
+    ) -> Result<Option<f32>, SceneError> {
         for name in ["max_anisotropy"] {
             if let Some(n) = props.take(name) {
                 self.float(n)?;
@@ -263,7 +269,9 @@ impl<'a, 'input> Reader<'a, 'input> {
             return Err(self.attr_error(
                 n,
                 "value",
-                format!("bitmap gamma {gamma}: expected -1 (sRGB), 0 (the file's), or a positive number"),
+                format!(
+                    "bitmap gamma {gamma}: expected -1 (sRGB), 0 (the file's), or a positive number"
+                ),
             ));
         }
         Ok(Some(gamma))
