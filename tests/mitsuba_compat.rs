@@ -893,7 +893,20 @@ fn the_plugin_table_is_what_the_loader_reads() {
             } else {
                 kind
             };
+            // Mitsuba 0.6's plugins that Mitsuba 3 dropped (roughdiffuse, phong, ward) are
+            // refused in version 3 files, saying so; they are checked in a 0.6.0 file.
+            let mut version = "3.0.0";
             let base = check(&host(plugin.object, kind, ""));
+            let base = if base
+                .errors
+                .iter()
+                .any(|e| e.to_string().contains("is a Mitsuba 0.6 plugin"))
+            {
+                version = "0.6.0";
+                check_version(version, &host(plugin.object, kind, ""))
+            } else {
+                base
+            };
             if !base.errors.is_empty() {
                 failures.push(format!(
                     "{} {kind} does not load: {:?}",
@@ -915,7 +928,7 @@ fn the_plugin_table_is_what_the_loader_reads() {
             }
             for property in plugin.properties {
                 let given = format!(r#"<boolean name="{}" value="true"/>"#, property.name);
-                let report = check(&host(plugin.object, kind, &given));
+                let report = check_version(version, &host(plugin.object, kind, &given));
                 let unknown = report
                     .errors
                     .iter()

@@ -23,15 +23,18 @@ pub mod dielectric;
 pub mod diffuse;
 pub mod normalmap;
 pub mod null;
+pub mod phong;
 pub mod plastic;
 pub mod pplastic;
 pub mod principled;
 pub mod principledthin;
 pub mod roughconductor;
 pub mod roughdielectric;
+pub mod roughdiffuse;
 pub mod roughplastic;
 pub mod thindielectric;
 pub mod twosided;
+pub mod ward;
 
 pub use plugin::{BsdfPlugin, Glossy, GpuKind, WgslCall};
 pub use reader::{BsdfReader, Sides};
@@ -57,6 +60,9 @@ pub fn builtin() -> &'static [&'static BsdfPlugin] {
         &twosided::PLUGIN,
         &normalmap::PLUGIN,
         &normalmap::BUMP_PLUGIN,
+        &roughdiffuse::PLUGIN,
+        &phong::PLUGIN,
+        &ward::PLUGIN,
     ];
     UNITS
 }

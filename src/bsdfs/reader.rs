@@ -87,6 +87,19 @@ pub trait BsdfReader {
     /// Whether texture `index` is a bitmap (the others have no gradient and no RGB lookup).
     fn is_bitmap(&self, index: u32) -> bool;
 
+    /// Texture `index`'s mean colour and its largest value per channel (Mitsuba 0.6's
+    /// `getAverage` and `getMaximum`, which its `phong` and `ward` weigh and scale their
+    /// reflectances by); `None` where the reader cannot say.
+    fn texture_average_and_maximum(&self, _index: u32) -> Option<(Vec3, Vec3)> {
+        None
+    }
+
+    /// The `version` the element's file declares (`<scene version="0.5.0">`: the file itself,
+    /// not the scene that includes it), or `None` when it declares none.
+    fn file_version(&self) -> Option<String> {
+        None
+    }
+
     /// The BSDFs nested in the element (`<bsdf>` children and `<ref>`s to declared ones), each
     /// read through the registry, in file order.
     fn nested(&mut self) -> Result<Vec<Sides>, SceneError>;

@@ -171,6 +171,38 @@ impl Texture {
         }
     }
 
+    /// The mean colour, per channel (Mitsuba 0.6's `Texture::getAverage`: a checkerboard's two
+    /// colours averaged, a bitmap's texels), what its `phong` and `ward` weigh their lobes by.
+    pub fn average(&self) -> Vec3 {
+        match self {
+            Texture::Checkerboard { color0, color1, .. } => 0.5 * (*color0 + *color1),
+            Texture::Bitmap(b) => {
+                let sum = b.texels.iter().fold([0.0f64; 3], |s, t| {
+                    [s[0] + t.x as f64, s[1] + t.y as f64, s[2] + t.z as f64]
+                });
+                let n = b.texels.len().max(1) as f64;
+                Vec3::new(
+                    (sum[0] / n) as f32,
+                    (sum[1] / n) as f32,
+                    (sum[2] / n) as f32,
+                )
+            }
+        }
+    }
+
+    /// The largest value of each channel (Mitsuba 0.6's `Texture::getMaximum`: a checkerboard's
+    /// colours, a bitmap's texels), what its energy-conservation check scales by.
+    pub fn maximum(&self) -> Vec3 {
+        match self {
+            Texture::Checkerboard { color0, color1, .. } => color0.max(*color1),
+            Texture::Bitmap(b) => b
+                .texels
+                .iter()
+                .fold(Vec3::splat(f32::NEG_INFINITY), |m, t| m.max(*t))
+                .max(Vec3::ZERO),
+        }
+    }
+
     /// The scalar mean Mitsuba's `Texture::mean` gives (what plastic's sampling weight uses):
     /// a checkerboard's colours' channel means averaged, a bitmap's mean luminance.
     pub fn mean(&self) -> f32 {

@@ -1,9 +1,11 @@
 //! What several BSDF units share: Fresnel terms and microfacet distributions (each with its
-//! WGSL twin beside it), the dielectrics' tint, and the readers of properties several plugins
-//! read alike (indices of refraction, roughness).
+//! WGSL twin beside it), the dielectrics' tint, the readers of properties several plugins
+//! read alike (indices of refraction, roughness), and what the Mitsuba 0.6 units share
+//! (`mitsuba06`).
 
 pub mod fresnel;
 pub mod microfacet;
+pub mod mitsuba06;
 pub mod tint;
 
 use super::BsdfReader;

@@ -231,6 +231,17 @@ impl BsdfReader for Element<'_, '_, '_> {
         )
     }
 
+    fn texture_average_and_maximum(&self, index: u32) -> Option<(Vec3, Vec3)> {
+        let textures = self.reader.textures.borrow();
+        let texture = textures.get(index as usize)?;
+        Some((texture.average(), texture.maximum()))
+    }
+
+    fn file_version(&self) -> Option<String> {
+        let root = self.node.document().root_element();
+        self.reader.attr(root, "version").ok().flatten()
+    }
+
     fn nested(&mut self) -> Result<Vec<Sides>, SceneError> {
         let mut nested = Vec::new();
         self.nested_nodes.clear();

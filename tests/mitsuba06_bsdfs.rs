@@ -1,0 +1,1093 @@
+//! Mitsuba 0.6's `roughdiffuse`, `phong` and `ward` (src/bsdfs/roughdiffuse/, phong/, ward/):
+//! their CPU models against values worked out from 0.6's own formulas (src/bsdfs/roughdiffuse.cpp,
+//! phong.cpp, ward.cpp of mitsuba-renderer/mitsuba), their WGSL through the generated dispatch
+//! against the CPU models, their samplers against their pdfs, their energy, how the partition
+//! sees them, and how they are read from 0.5/0.6 files (and refused in version 3 ones).
+//!
+//! The expected values are not computed by the code under test: the closed forms are written
+//! out below as arithmetic on the parameters, and the others come from a separate double
+//! precision transcription of 0.6's formulas (Python with numpy, run when these tests were
+//! written: f at fixed directions, and directional albedos integrated on a 1600 x 3200 midpoint
+//! grid over (cos theta, phi), which agrees with a 800 x 1600 grid to 1e-5).
+
+mod common;
+
+use std::path::Path;
+
+use bytemuck::Zeroable;
+use glam::{Vec2, Vec3};
+use hppm::bsdfs::phong::Phong;
+use hppm::bsdfs::roughdiffuse::RoughDiffuse;
+use hppm::bsdfs::ward::{Variant, Ward};
+use hppm::scene::bsdf::{BsdfModel, GpuMaterial, Mode};
+use hppm::scene::{Bsdf, Scene};
+use hppm::testing::bsdf::{Rng, chi_square, furnace, gpu_against_cpu, incident_directions};
+
+const PI: f32 = std::f32::consts::PI;
+
+/// A scene of one sphere per BSDF snippet in a file of `version`, through the XML loader.
+fn scene_with(version: &str, bsdfs: &[&str]) -> Result<Scene, hppm::scene::SceneError> {
+    let shapes: String = bsdfs
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            format!(
+                r#"<shape type="sphere"><point name="center" x="{i}" y="0" z="0"/><float name="radius" value="0.4"/>{b}</shape>"#
+            )
+        })
+        .collect();
+    let xml =
+        format!("<scene version=\"{version}\"><sensor type=\"perspective\"/>\n{shapes}</scene>");
+    hppm::loaders::mitsuba::parse(Path::new("m06.xml"), &xml)
+}
+
+fn loaded(version: &str, bsdfs: &[&str]) -> Vec<Bsdf> {
+    scene_with(version, bsdfs)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .materials
+        .iter()
+        .map(|m| m.bsdf.clone())
+        .collect()
+}
+
+fn close(a: f32, b: f32, rel: f32) -> bool {
+    (a - b).abs() <= rel * a.abs().max(b.abs()) + 1e-7
+}
+
+fn assert_close(what: &str, got: f32, expected: f32, rel: f32) {
+    assert!(
+        close(got, expected, rel),
+        "{what}: {got}, expected {expected}"
+    );
+}
+
+fn unit(x: f32, y: f32, z: f32) -> Vec3 {
+    let v = Vec3::new(x, y, z);
+    assert!((v.length() - 1.0).abs() < 1e-6, "{v} is not a unit vector");
+    v
+}
+
+/// The test directions: wi 37 degrees off the normal, wo elsewhere in the hemisphere.
+fn wi() -> Vec3 {
+    unit(0.48, 0.36, 0.8)
+}
+fn wo_across() -> Vec3 {
+    unit(-0.6, 0.0, 0.8)
+}
+fn wo_beside() -> Vec3 {
+    unit(0.0, 0.28, 0.96)
+}
+fn wo_near_mirror() -> Vec3 {
+    Vec3::new(-0.4, -0.3, 0.75f32.sqrt())
+}
+const N: Vec3 = Vec3::Z;
+
+// ---------------------------------------------------------------- roughdiffuse
+
+/// Oren-Nayar as 0.6 writes it, reflectance 0.8: at normal incidence and exitance (both sin
+/// theta 0, so cos(phi_o - phi_i) is taken as 0 and alpha = beta = 0) the full model is
+/// (rho C1 + rho^2 C4) / pi and the fast one rho A / pi, with sigma^2 = alpha^2 / 2 (0.6's
+/// conversion), C1 = A = 1 - sigma^2 / (2 (sigma^2 + 0.33)), C4 = 0.17 sigma^2 / (sigma^2 +
+/// 0.13); at oblique pairs (both orders: it is reciprocal) the values of 0.6's formulas in
+/// double precision. Catches a wrong alpha-to-sigma conversion (sigma = alpha would change
+/// every value by 2-10%), a swapped alpha/beta (the order of wi and wo), a lost
+/// inter-reflection term (rho^2 C4) or sign in C2, and the fast model mixed up with the full.
+#[test]
+fn roughdiffuse_eval_is_oren_nayar_as_mitsuba06_writes_it() {
+    let rho = 0.8f32;
+    for alpha in [0.3f32, 0.7] {
+        let s2 = alpha * alpha / 2.0;
+        let c1 = 1.0 - 0.5 * s2 / (s2 + 0.33);
+        let c4 = 0.17 * s2 / (s2 + 0.13);
+        let full = RoughDiffuse::new(Vec3::splat(rho), alpha, false);
+        let fast = RoughDiffuse::new(Vec3::splat(rho), alpha, true);
+        let f_full = full.eval(N, N, Mode::Radiance).x;
+        assert_close(
+            &format!("full, alpha {alpha}, normal"),
+            f_full,
+            (rho * c1 + rho * rho * c4) / PI,
+            1e-5,
+        );
+        let f_fast = fast.eval(N, N, Mode::Radiance).x;
+        assert_close(
+            &format!("fast, alpha {alpha}, normal"),
+            f_fast,
+            rho * c1 / PI,
+            1e-5,
+        );
+    }
+    // (alpha, fast, wi, wo, f |cos wo|) from 0.6's formulas.
+    let table = [
+        (0.3, false, wi(), wo_across(), 0.18987168871133075),
+        (0.3, true, wi(), wo_across(), 0.1914952275281685),
+        (0.7, false, wi(), wo_across(), 0.15955708774106034),
+        (0.7, true, wi(), wo_across(), 0.16031746615447967),
+        (0.3, false, wi(), wo_beside(), 0.24203746058054143),
+        (0.3, true, wi(), wo_beside(), 0.23364454941708132),
+        (0.7, false, wi(), wo_beside(), 0.2221489228102984),
+        (0.7, true, wi(), wo_beside(), 0.20082858070391338),
+        (0.3, false, wo_beside(), wi(), 0.20169788381711787),
+        (0.3, true, wo_beside(), wi(), 0.19470379118090111),
+        (0.7, false, wo_beside(), wi(), 0.18512410234191534),
+        (0.7, true, wo_beside(), wi(), 0.16735715058659448),
+    ];
+    for (alpha, fast, a, b, expected) in table {
+        let model = RoughDiffuse::new(Vec3::splat(rho), alpha, fast);
+        let f = model.eval(a, b, Mode::Radiance);
+        assert_close(
+            &format!("alpha {alpha} fast {fast} wi {a} wo {b}"),
+            f.x,
+            expected as f32,
+            2e-5,
+        );
+        assert_eq!(f.x, f.z, "a grey reflectance gives grey");
+        assert_close("pdf", model.pdf(a, b), b.z / PI, 1e-6);
+    }
+    // One-sided.
+    let model = RoughDiffuse::new(Vec3::splat(rho), 0.3, false);
+    assert_eq!(model.eval(-wi(), wo_across(), Mode::Radiance), Vec3::ZERO);
+    assert_eq!(model.eval(wi(), -wo_across(), Mode::Radiance), Vec3::ZERO);
+}
+
+/// alpha 0 is Lambert's law, reflectance / pi |cos wo|, at random pairs in both models (sigma
+/// 0 zeroes every term but C1 = 1), and a white one reflects exactly what it receives. Catches
+/// a roughness term that does not vanish at alpha 0.
+#[test]
+fn roughdiffuse_with_alpha_0_is_lambertian() {
+    let mut rng = Rng(3);
+    for fast in [false, true] {
+        let model = RoughDiffuse::new(Vec3::new(0.9, 0.5, 0.1), 0.0, fast);
+        for _ in 0..1000 {
+            let (mut a, mut b) = (rng.direction(), rng.direction());
+            a.z = a.z.abs();
+            b.z = b.z.abs();
+            let f = model.eval(a, b, Mode::Radiance);
+            let lambert = Vec3::new(0.9, 0.5, 0.1) * (b.z / PI);
+            assert!(
+                (f - lambert).abs().max_element() <= 1e-6,
+                "{f} vs {lambert}"
+            );
+        }
+        let white = Bsdf::new(RoughDiffuse::new(Vec3::ONE, 0.0, fast));
+        for wi in incident_directions(false) {
+            let f = furnace(&white, wi, 20_000, &mut rng);
+            assert!((f.albedo.mean - 1.0).abs() < 1e-5, "{:?}", f.albedo);
+        }
+    }
+}
+
+/// White furnace (reflectance 1, 200,000 samples per incident direction): the mean sample
+/// weight equals the directional albedo of 0.6's formulas integrated numerically (within 4
+/// standard errors + 0.2%), and the integral of eval. The albedo is at most 1 at cos theta_i
+/// 0.95 and 0.6; at grazing incidence 0.6's full model, whose inter-reflection term is not
+/// energy-bounded, reflects more than it receives (alpha 0.2, cos 0.2: 1.0123; up to 1.033 at
+/// alpha 0.3, cos 0.05), and hppm keeps that rather than differ from 0.6. Catches weights that
+/// are not eval / pdf and a model that differs from 0.6's in energy.
+#[test]
+fn roughdiffuse_white_furnace_is_mitsuba06s_albedo() {
+    // (alpha, fast, albedo at cos theta_i 0.95, 0.6, 0.2).
+    let table = [
+        (0.2f32, false, [0.9942f64, 0.9992, 1.0123]),
+        (0.7, false, [0.89862, 0.91845, 0.97114]),
+        (0.7, true, [0.8099, 0.86988, 0.92772]),
+    ];
+    let mut rng = Rng(21);
+    for (alpha, fast, albedos) in table {
+        let bsdf = Bsdf::new(RoughDiffuse::new(Vec3::ONE, alpha, fast));
+        for (wi, expected) in incident_directions(false).into_iter().zip(albedos) {
+            let f = furnace(&bsdf, wi, 200_000, &mut rng);
+            let (a, i) = (f.albedo, f.eval_integral);
+            let what = format!("alpha {alpha} fast {fast} cos {}", wi.z);
+            assert!(
+                (a.mean - expected).abs() <= 4.0 * a.error + 2e-3,
+                "{what}: albedo {a:?}, 0.6's {expected}"
+            );
+            assert!(
+                (a.mean - i.mean).abs() <= 4.0 * (a.error + i.error) + 2e-3,
+                "{what}: albedo {a:?} but eval integrates to {i:?}"
+            );
+            if wi.z >= 0.6 {
+                assert!(a.mean <= 1.0 + 4.0 * a.error, "{what}: albedo {a:?} > 1");
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------- phong
+
+/// 0.6's modified Phong: at normal incidence and exitance (cos alpha = 1) f = kd / pi + ks (n +
+/// 2) / (2 pi), and the pdf w (n + 1) / (2 pi) + (1 - w) / pi with w = ks / (kd + ks) (grey
+/// reflectances: luminance is the value); with kd 0.8 + ks 0.5 > 1 both are scaled by 0.99 /
+/// 1.3 (0.6's ensureEnergyConservation) and w is unchanged; at two oblique pairs the values of
+/// 0.6's formulas. Catches a wrong normalisation ((n + 1) for (n + 2) in f, or the reverse in
+/// the pdf), a lobe about the wrong direction, a lobe weight not 0.6's, and reflectances not
+/// scaled as 0.6 scales them.
+#[test]
+fn phong_eval_and_pdf_are_mitsuba06s() {
+    let (kd, ks, n) = (0.5f32, 0.2f32, 30.0f32);
+    let model = Phong::new(Vec3::splat(kd), Vec3::splat(ks), n);
+    let w = ks / (kd + ks);
+    assert_close("weight", model.lobes.specular_weight, w, 1e-6);
+    assert_close(
+        "f normal",
+        model.eval(N, N, Mode::Radiance).x,
+        kd / PI + ks * (n + 2.0) / (2.0 * PI),
+        1e-5,
+    );
+    assert_close(
+        "pdf normal",
+        model.pdf(N, N),
+        w * (n + 1.0) / (2.0 * PI) + (1.0 - w) / PI,
+        1e-5,
+    );
+    // (wo, f |cos wo|, pdf) at wi from 0.6's formulas.
+    for (wo, f, pdf) in [
+        (wo_across(), 0.2139262450892011, 0.331705593951353),
+        (wo_near_mirror(), 0.8484736079344224, 1.3325245007090158),
+    ] {
+        assert_close(
+            &format!("f at {wo}"),
+            model.eval(wi(), wo, Mode::Radiance).y,
+            f as f32,
+            2e-5,
+        );
+        assert_close(
+            &format!("pdf at {wo}"),
+            model.pdf(wi(), wo),
+            pdf as f32,
+            2e-5,
+        );
+    }
+    let scaled = Phong::new(Vec3::splat(0.8), Vec3::splat(0.5), n);
+    let scale = 0.99 / 1.3;
+    assert_close("scale", scaled.lobes.scale, scale, 1e-6);
+    assert_close(
+        "scaled weight",
+        scaled.lobes.specular_weight,
+        0.5 / 1.3,
+        1e-6,
+    );
+    assert_close(
+        "scaled f normal",
+        scaled.eval(N, N, Mode::Radiance).x,
+        scale * (0.8 / PI + 0.5 * (n + 2.0) / (2.0 * PI)),
+        1e-5,
+    );
+    // The lobe's weight is the luminance of the means (Rec. 709 weights, as 0.6's RGB mode).
+    let coloured = Phong::new(Vec3::new(0.2, 0.5, 0.8), Vec3::splat(0.2), n);
+    let lum_d = 0.212671 * 0.2 + 0.715160 * 0.5 + 0.072169 * 0.8;
+    assert_close(
+        "coloured weight",
+        coloured.lobes.specular_weight,
+        0.2 / (lum_d + 0.2),
+        1e-5,
+    );
+    assert_eq!(model.eval(-wi(), N, Mode::Radiance), Vec3::ZERO);
+    assert_eq!(model.pdf(wi(), -N), 0.0);
+}
+
+/// The Phong lobe alone (kd 0, ks 1) reflects exactly cos theta_i wherever the lobe lies above
+/// the horizon (its f |cos wo| averages to cos alpha times wi's mirror direction's z, and (n + 2)
+/// / (2 pi) normalises cos^(n + 1)): 0.95 and 0.6 at n = 30, 0.2119 at cos 0.2 where the horizon
+/// cuts it (numerically). With kd 0.5, ks 0.5 it is 0.5 + half that. The mean sample weight
+/// must equal these (4 standard errors + 0.2%) and the integral of eval, and never exceed 1.
+/// Catches a normalisation or sample weight that gains or loses energy.
+#[test]
+fn phong_white_furnace_is_cos_theta_for_the_lobe() {
+    let lobe_albedo = [0.95f64, 0.6, 0.21191];
+    let mut rng = Rng(8);
+    for (kd, ks) in [(0.0f32, 1.0f32), (0.5, 0.5)] {
+        let bsdf = Bsdf::new(Phong::new(Vec3::splat(kd), Vec3::splat(ks), 30.0));
+        for (wi, lobe) in incident_directions(false).into_iter().zip(lobe_albedo) {
+            let expected = kd as f64 + ks as f64 * lobe;
+            let f = furnace(&bsdf, wi, 200_000, &mut rng);
+            let (a, i) = (f.albedo, f.eval_integral);
+            let what = format!("kd {kd} ks {ks} cos {}", wi.z);
+            assert!(
+                (a.mean - expected).abs() <= 4.0 * a.error + 2e-3,
+                "{what}: albedo {a:?}, expected {expected}"
+            );
+            assert!(
+                (a.mean - i.mean).abs() <= 4.0 * (a.error + i.error) + 2e-3,
+                "{what}: albedo {a:?} but eval integrates to {i:?}"
+            );
+            assert!(a.mean <= 1.0 + 4.0 * a.error, "{what}: albedo {a:?} > 1");
+        }
+    }
+}
+
+// ---------------------------------------------------------------- ward
+
+/// 0.6's Ward variants with kd 0.5, ks 0.2, alpha_u 0.1, alpha_v 0.3: at normal incidence and
+/// exitance (h = 2z, no exponential decay) every variant's lobe is 1 / (4 pi alpha_u alpha_v),
+/// the pdf w / (4 pi alpha_u alpha_v) + (1 - w) / pi; at two oblique pairs the values of 0.6's
+/// formulas, which differ per variant while the pdf is the same for all three. Catches a
+/// variant's normalisation mixed up with another's, alpha_u and alpha_v swapped (the pairs are
+/// not symmetric in x and y), h normalised where 0.6 keeps it unnormalised (balanced), and a
+/// pdf that is not 0.6's.
+#[test]
+fn ward_eval_and_pdf_are_mitsuba06s_per_variant() {
+    let (kd, ks, au, av) = (0.5f32, 0.2f32, 0.1f32, 0.3f32);
+    let w = ks / (kd + ks);
+    // (variant, f |cos wo| at wo_near_mirror, at wo_across).
+    let table = [
+        (Variant::Ward, 0.5698703279527539, 0.29955743769705484),
+        (Variant::WardDuer, 0.6568852677885209, 0.34261580850293943),
+        (Variant::Balanced, 0.6579371483291298, 0.3547259752920946),
+    ];
+    for (variant, near, across) in table {
+        let model = Ward::new(variant, Vec3::splat(kd), Vec3::splat(ks), au, av);
+        assert_close(
+            &format!("{variant:?} f normal"),
+            model.eval(N, N, Mode::Radiance).x,
+            kd / PI + ks / (4.0 * PI * au * av),
+            1e-5,
+        );
+        assert_close(
+            &format!("{variant:?} pdf normal"),
+            model.pdf(N, N),
+            w / (4.0 * PI * au * av) + (1.0 - w) / PI,
+            1e-5,
+        );
+        for (wo, f, pdf) in [
+            (wo_near_mirror(), near, 0.9115869437338181),
+            (wo_across(), across, 0.5067513932744208),
+        ] {
+            let what = format!("{variant:?} at {wo}");
+            assert_close(
+                &what,
+                model.eval(wi(), wo, Mode::Radiance).x,
+                f as f32,
+                2e-5,
+            );
+            assert_close(&what, model.pdf(wi(), wo), pdf as f32, 2e-5);
+        }
+        let swapped = Ward::new(variant, Vec3::splat(kd), Vec3::splat(ks), av, au);
+        assert!(
+            !close(
+                swapped.eval(wi(), wo_near_mirror(), Mode::Radiance).x,
+                near as f32,
+                1e-2
+            ),
+            "{variant:?}: swapping alpha_u and alpha_v changes nothing at an anisotropic pair"
+        );
+    }
+}
+
+/// White furnace of the Ward lobe alone (kd 0, ks 1, alpha_u 0.1, alpha_v 0.3): the mean sample
+/// weight equals the albedo of 0.6's formulas integrated numerically (4 standard errors +
+/// 0.3%) and the integral of eval. `ward` loses energy away from the normal, `balanced` keeps
+/// its albedo bounded, `ward-duer` stays below 1 at these angles (0.6's docs warn that it
+/// exceeds 1 at grazing angles: 1.46 at cos theta_i 0.05 by the same integration, which hppm
+/// keeps). Catches a variant's normalisation or weight that differs from 0.6's.
+#[test]
+fn ward_white_furnace_is_mitsuba06s_albedo_per_variant() {
+    // (variant, albedo at cos theta_i 0.95, 0.6, 0.2).
+    let table = [
+        (Variant::Ward, [0.83427f64, 0.53328, 0.22237]),
+        (Variant::WardDuer, [0.91549, 0.91036, 0.8858]),
+        (Variant::Balanced, [0.94763, 0.91251, 0.80534]),
+    ];
+    let mut rng = Rng(13);
+    for (variant, albedos) in table {
+        let bsdf = Bsdf::new(Ward::new(variant, Vec3::ZERO, Vec3::ONE, 0.1, 0.3));
+        for (wi, expected) in incident_directions(false).into_iter().zip(albedos) {
+            let f = furnace(&bsdf, wi, 200_000, &mut rng);
+            let (a, i) = (f.albedo, f.eval_integral);
+            let what = format!("{variant:?} cos {}", wi.z);
+            assert!(
+                (a.mean - expected).abs() <= 4.0 * a.error + 3e-3,
+                "{what}: albedo {a:?}, 0.6's {expected}"
+            );
+            assert!(
+                (a.mean - i.mean).abs() <= 4.0 * (a.error + i.error) + 3e-3,
+                "{what}: albedo {a:?} but eval integrates to {i:?}"
+            );
+            assert!(a.mean <= 1.0 + 4.0 * a.error, "{what}: albedo {a:?} > 1");
+        }
+    }
+}
+
+// ---------------------------------------------------------------- all three
+
+/// Each sampler draws what its pdf says: chi-square over 20 x 40 cells of (cos theta, phi),
+/// 200,000 samples per incident direction (cos 0.95, 0.6, 0.2), z under 5 (p ~ 3e-7 per test);
+/// lost samples (a Phong or Ward lobe direction below the horizon, which 0.6 returns as 0) are
+/// the extra cell. Catches a pdf that is not the sampler's (a lobe probability, a Jacobian
+/// 1 / (4 wo.h) off, a Phong lobe sampled about the wrong axis, Ward's azimuth quadrants),
+/// which MIS would turn into bias.
+#[test]
+fn samplers_match_their_pdf_chi_square() {
+    let models: Vec<(String, Bsdf)> = vec![
+        (
+            "roughdiffuse".into(),
+            Bsdf::new(RoughDiffuse::new(Vec3::splat(0.7), 0.5, false)),
+        ),
+        (
+            "phong n 30".into(),
+            Bsdf::new(Phong::new(Vec3::splat(0.5), Vec3::splat(0.2), 30.0)),
+        ),
+        (
+            "phong lobe n 1".into(),
+            Bsdf::new(Phong::new(Vec3::ZERO, Vec3::ONE, 1.0)),
+        ),
+        (
+            "phong n 300".into(),
+            Bsdf::new(Phong::new(Vec3::splat(0.3), Vec3::splat(0.6), 300.0)),
+        ),
+        (
+            "ward balanced 0.1 0.3".into(),
+            Bsdf::new(Ward::new(
+                Variant::Balanced,
+                Vec3::splat(0.5),
+                Vec3::splat(0.2),
+                0.1,
+                0.3,
+            )),
+        ),
+        (
+            "ward lobe 0.4 0.05".into(),
+            Bsdf::new(Ward::new(Variant::Ward, Vec3::ZERO, Vec3::ONE, 0.4, 0.05)),
+        ),
+        (
+            "ward-duer 0.2".into(),
+            Bsdf::new(Ward::new(
+                Variant::WardDuer,
+                Vec3::splat(0.3),
+                Vec3::splat(0.6),
+                0.2,
+                0.2,
+            )),
+        ),
+    ];
+    let mut rng = Rng(0x5eed);
+    let mut report = Vec::new();
+    for (name, bsdf) in &models {
+        for wi in incident_directions(false) {
+            let chi = chi_square(bsdf, wi, 200_000, &mut rng);
+            report.push(format!(
+                "{name} wi.z {:.2}: chi2 {:.0} dof {} z {:.2}",
+                wi.z, chi.chi2, chi.dof, chi.z
+            ));
+            assert!(
+                chi.z < 5.0,
+                "{name}, wi {wi}: the sampler does not follow its pdf ({chi:?})\n{}",
+                report.join("\n")
+            );
+        }
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+/// Reciprocity f(wi, wo) = f(wo, wi) on 2,000 random pairs each: Oren-Nayar, the modified
+/// Phong lobe and all three Ward variants are symmetric in their two directions. Catches an
+/// asymmetric term (a cos_i where 0.6 has cos_o, tan beta from the wrong direction).
+#[test]
+fn the_three_are_reciprocal() {
+    let models = [
+        Bsdf::new(RoughDiffuse::new(Vec3::new(0.9, 0.6, 0.3), 0.4, false)),
+        Bsdf::new(RoughDiffuse::new(Vec3::new(0.9, 0.6, 0.3), 0.4, true)),
+        Bsdf::new(Phong::new(Vec3::splat(0.4), Vec3::splat(0.5), 12.0)),
+        Bsdf::new(Ward::new(
+            Variant::Ward,
+            Vec3::splat(0.4),
+            Vec3::splat(0.5),
+            0.2,
+            0.3,
+        )),
+        Bsdf::new(Ward::new(
+            Variant::WardDuer,
+            Vec3::splat(0.4),
+            Vec3::splat(0.5),
+            0.2,
+            0.3,
+        )),
+        Bsdf::new(Ward::new(
+            Variant::Balanced,
+            Vec3::splat(0.4),
+            Vec3::splat(0.5),
+            0.2,
+            0.3,
+        )),
+    ];
+    let mut rng = Rng(11);
+    for b in &models {
+        for _ in 0..2000 {
+            let (mut a, mut c) = (rng.direction(), rng.direction());
+            a.z = a.z.abs().max(0.05);
+            c.z = c.z.abs().max(0.05);
+            let (a, c) = (a.normalize(), c.normalize());
+            let forward = b.eval(a, c, Mode::Radiance) / c.z;
+            let backward = b.eval(c, a, Mode::Radiance) / a.z;
+            assert!(
+                (forward - backward).abs().max_element() <= 2e-3 * forward.max_element() + 1e-6,
+                "{}: f(wi {a}, wo {c}) = {forward} but f(wo, wi) = {backward}",
+                b.kind()
+            );
+        }
+    }
+}
+
+/// The WGSL of the three (through the generated material dispatch, every kind compiled in)
+/// gives the CPU models' eval, pdf and sample on 600 random direction pairs per material, in
+/// radiance and importance mode: both models of roughdiffuse, its alpha 0 and a reflectance
+/// scaled down by 0.6's energy check; phong at several exponents, coloured and scaled; each Ward
+/// variant, anisotropic both ways. Materials are read from a 0.6.0 file. Catches a WGSL port
+/// that differs from the reference: a slot of the GPU record read wrong (the exponent, the
+/// scale, the variant), a sign, Mitsuba 0.6's frame about the mirror direction built
+/// differently, a dispatch entry missing.
+#[test]
+fn gpu_matches_the_cpu_models() {
+    let gpu = common::gpu();
+    let bsdfs = [
+        r#"<bsdf type="roughdiffuse"><rgb name="reflectance" value="0.8, 0.5, 0.2"/></bsdf>"#,
+        r#"<bsdf type="roughdiffuse"><float name="alpha" value="0.6"/><boolean name="use_fast_approx" value="true"/></bsdf>"#,
+        r#"<bsdf type="roughdiffuse"><float name="alpha" value="0"/><rgb name="reflectance" value="0.3, 0.6, 0.9"/></bsdf>"#,
+        r#"<bsdf type="roughdiffuse"><float name="alpha" value="0.9"/><rgb name="reflectance" value="1.3, 0.7, 0.2"/></bsdf>"#,
+        r#"<bsdf type="phong"/>"#,
+        r#"<bsdf type="phong"><float name="exponent" value="5"/><rgb name="diffuse_reflectance" value="0.2, 0.5, 0.7"/><rgb name="specular_reflectance" value="0.6, 0.4, 0.2"/></bsdf>"#,
+        r#"<bsdf type="phong"><float name="exponent" value="300"/><float name="diffuse_reflectance" value="0.8"/><float name="specular_reflectance" value="0.5"/></bsdf>"#,
+        r#"<bsdf type="phong"><float name="exponent" value="0"/><float name="diffuse_reflectance" value="0"/><float name="specular_reflectance" value="1"/></bsdf>"#,
+        r#"<bsdf type="ward"/>"#,
+        r#"<bsdf type="ward"><string name="variant" value="ward"/><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/></bsdf>"#,
+        r#"<bsdf type="ward"><string name="variant" value="ward-duer"/><float name="alpha_u" value="0.4"/><float name="alpha_v" value="0.1"/><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/><rgb name="specular_reflectance" value="0.5, 0.3, 0.1"/></bsdf>"#,
+        r#"<bsdf type="ward"><string name="variant" value="Balanced"/><float name="alpha" value="0.25"/><float name="specular_reflectance" value="0.9"/></bsdf>"#,
+    ];
+    let scene = scene_with("0.6.0", &bsdfs).unwrap_or_else(|e| panic!("{e}"));
+    let registry = hppm::passes::Registry::builtin();
+    let report =
+        gpu_against_cpu(&gpu, &registry, &scene, 600, 2e-3, &mut Rng(99)).expect("bsdf kernel");
+    assert_eq!(report.evals, 600 * bsdfs.len());
+    assert!(
+        report.eval_failures.is_empty(),
+        "{} evals differ:\n{}",
+        report.eval_failures.len(),
+        report.eval_failures.join("\n")
+    );
+    eprintln!(
+        "{} samples compared, {} differ",
+        report.samples_compared, report.sample_mismatches
+    );
+    assert!(
+        report.samples_compared > report.queries / 2,
+        "only {} samples compared",
+        report.samples_compared
+    );
+    assert!(
+        report.sample_mismatches * 200 <= report.queries,
+        "{} of {} GPU samples differ from the CPU's",
+        report.sample_mismatches,
+        report.queries
+    );
+}
+
+/// How the light-transport partition sees them: roughdiffuse is continuous (path traced) with
+/// no microfacet lobe; phong's lobe is glossy with the Beckmann-equivalent roughness
+/// sqrt(2 / (n + 2)) (0.25 at n = 30), ward's with its larger alpha, and each packs that
+/// roughness where the GPU's glossy split compares it with the threshold (alpha_u, alpha_v).
+/// Catches a lobe classification that would photon-map a non-Lambertian vertex or never let
+/// the hybrid's glossy threshold see phong and ward, and a roughness the CPU and the GPU
+/// disagree on.
+#[test]
+fn the_partition_sees_glossy_phong_and_ward_and_a_continuous_roughdiffuse() {
+    let b = loaded(
+        "0.6.0",
+        &[
+            r#"<bsdf type="roughdiffuse"/>"#,
+            r#"<bsdf type="phong"/>"#,
+            r#"<bsdf type="ward"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.2"/></bsdf>"#,
+        ],
+    );
+    let lobes = b[0].lobes();
+    assert!(lobes.continuous && !lobes.microfacet && !lobes.delta && !lobes.transmits);
+    assert_eq!(b[0].microfacet_roughness(), None);
+    for (bsdf, roughness) in [(&b[1], (2.0f32 / 32.0).sqrt()), (&b[2], 0.2)] {
+        let lobes = bsdf.lobes();
+        assert!(lobes.continuous && lobes.microfacet && !lobes.delta && !lobes.transmits);
+        assert_close(
+            bsdf.kind(),
+            bsdf.microfacet_roughness().expect("roughness"),
+            roughness,
+            1e-6,
+        );
+        let mut record = GpuMaterial::zeroed();
+        bsdf.pack(&mut record, &Default::default(), &mut Vec::new());
+        assert_close(
+            "packed",
+            record.alpha_u.max(record.alpha_v),
+            roughness,
+            1e-6,
+        );
+    }
+    assert_close(
+        "phong alpha 0.25",
+        b[1].microfacet_roughness().unwrap(),
+        0.25,
+        1e-6,
+    );
+    let registry = hppm::bsdfs::BsdfRegistry::builtin();
+    for (kind, glossy) in [("roughdiffuse", false), ("phong", true), ("ward", true)] {
+        let (_, k) = registry.kind(kind).expect(kind);
+        assert_eq!(
+            matches!(k.glossy, hppm::bsdfs::Glossy::Split { .. }),
+            glossy,
+            "{kind}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------- reading
+
+/// A Mitsuba 0.5.0 file with 0.5's camelCase names (upgraded to snake_case as hppm upgrades
+/// every pre-2.0 file) loads, each value where it belongs: phong's exponent 50 and
+/// diffuseReflectance/specularReflectance, ward's variant and alphaU/alphaV (and `alpha` as
+/// their default), roughdiffuse's useFastApprox, alpha and diffuseReflectance (0.6's other name
+/// for its reflectance), ensureEnergyConservation; defaults where nothing is given; a textured
+/// diffuse reflectance (checkerboard 0.9/0.1, mean 0.5, maximum 0.9) weighs and scales the lobes
+/// by its mean and maximum as 0.6's getAverage and getMaximum do (0.9 + 0.2 > 1: scale 0.99 /
+/// 1.1; weight 0.2 / 0.7). Catches a property read under the wrong name, a default that is not
+/// 0.6's, the energy check or the lobe weight taken from the wrong statistics of a texture.
+#[test]
+fn a_mitsuba_05_file_with_camel_case_names_loads() {
+    let b = loaded(
+        "0.5.0",
+        &[
+            r#"<bsdf type="phong"><float name="exponent" value="50"/></bsdf>"#,
+            r#"<bsdf type="phong"><rgb name="diffuseReflectance" value="0.1, 0.2, 0.3"/><rgb name="specularReflectance" value="0.4, 0.4, 0.4"/></bsdf>"#,
+            r#"<bsdf type="ward"><string name="variant" value="ward-duer"/><float name="alphaU" value="0.05"/><float name="alphaV" value="0.2"/><float name="diffuseReflectance" value="0.3"/></bsdf>"#,
+            r#"<bsdf type="ward"><float name="alpha" value="0.25"/><float name="alphaV" value="0.4"/><float name="diffuseReflectance" value="0.9"/><float name="specularReflectance" value="0.9"/><boolean name="ensureEnergyConservation" value="false"/></bsdf>"#,
+            r#"<bsdf type="roughdiffuse"><boolean name="useFastApprox" value="true"/><float name="alpha" value="0.4"/><rgb name="diffuseReflectance" value="0.7, 0.6, 0.5"/></bsdf>"#,
+            r#"<bsdf type="roughdiffuse"/>"#,
+            r#"<bsdf type="phong"><texture name="diffuseReflectance" type="checkerboard"><rgb name="color0" value="0.9, 0.9, 0.9"/><rgb name="color1" value="0.1, 0.1, 0.1"/></texture></bsdf>"#,
+        ],
+    );
+    let phong = |i: usize| *b[i].get::<Phong>().expect("phong");
+    let ward = |i: usize| *b[i].get::<Ward>().expect("ward");
+    let rough = |i: usize| *b[i].get::<RoughDiffuse>().expect("roughdiffuse");
+
+    let p = phong(0);
+    assert_eq!(p.exponent, 50.0);
+    assert_eq!(
+        (p.lobes.diffuse, p.lobes.specular),
+        (Vec3::splat(0.5), Vec3::splat(0.2))
+    );
+    assert_eq!(p.lobes.scale, 1.0);
+    let p = phong(1);
+    assert_eq!(p.exponent, 30.0);
+    assert_eq!(p.lobes.diffuse, Vec3::new(0.1, 0.2, 0.3));
+    assert_eq!(p.lobes.specular, Vec3::splat(0.4));
+
+    let w = ward(2);
+    assert_eq!(w.variant, Variant::WardDuer);
+    assert_eq!((w.alpha_u, w.alpha_v), (0.05, 0.2));
+    assert_eq!(
+        (w.lobes.diffuse, w.lobes.specular),
+        (Vec3::splat(0.3), Vec3::splat(0.2))
+    );
+    let w = ward(3);
+    assert_eq!(w.variant, Variant::Balanced);
+    assert_eq!((w.alpha_u, w.alpha_v), (0.25, 0.4));
+    assert_eq!(
+        w.lobes.scale, 1.0,
+        "ensureEnergyConservation false keeps 0.9 + 0.9"
+    );
+
+    let r = rough(4);
+    assert!(r.fast_approx);
+    assert_eq!((r.alpha, r.reflectance), (0.4, Vec3::new(0.7, 0.6, 0.5)));
+    let r = rough(5);
+    assert!(!r.fast_approx);
+    assert_eq!(
+        (r.alpha, r.reflectance, r.scale),
+        (0.2, Vec3::splat(0.5), 1.0)
+    );
+
+    let t = phong(6);
+    assert_close("textured scale", t.lobes.scale, 0.99 / 1.1, 1e-6);
+    assert_close("textured weight", t.lobes.specular_weight, 0.2 / 0.7, 1e-6);
+
+    // Textures where 0.6 takes them: phong's exponent (into the record's field 3, eta.x, with
+    // the texture's mean as the model's value), ward's alphaU and alphaV, roughdiffuse's alpha
+    // (the roughness slots) and reflectance.
+    let checker = |name: &str, a: f32, b: f32| {
+        format!(
+            r#"<texture name="{name}" type="checkerboard"><float name="color0" value="{a}"/><float name="color1" value="{b}"/></texture>"#
+        )
+    };
+    let scene = scene_with(
+        "0.5.0",
+        &[
+            &format!(
+                r#"<bsdf type="phong">{}</bsdf>"#,
+                checker("exponent", 10.0, 50.0)
+            ),
+            &format!(
+                r#"<bsdf type="ward">{}{}</bsdf>"#,
+                checker("alphaU", 0.1, 0.3),
+                checker("alphaV", 0.2, 0.4)
+            ),
+            &format!(
+                r#"<bsdf type="roughdiffuse">{}{}</bsdf>"#,
+                checker("alpha", 0.0, 0.6),
+                checker("reflectance", 0.2, 0.8)
+            ),
+        ],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let m = &scene.materials;
+    assert!(m[0].textures.front.fields[3].is_some());
+    assert_eq!(m[0].bsdf.get::<Phong>().unwrap().exponent, 30.0);
+    let mut record = GpuMaterial::zeroed();
+    let mut tables = Vec::new();
+    m[0].bsdf
+        .pack(&mut record, &m[0].textures.front, &mut tables);
+    assert_eq!(record.field_texture_count, 1);
+    assert_eq!(tables[record.field_textures as usize], 3.0, "eta.x");
+    let t = &m[1].textures.front;
+    assert!(t.alpha_u.is_some() && t.alpha_v.is_some() && t.alpha_u != t.alpha_v);
+    let t = &m[2].textures.front;
+    assert!(t.alpha_u.is_some() && t.diffuse.is_some());
+}
+
+/// The three are Mitsuba 0.6 plugins: a version 3 file (Mitsuba 3 has none of them) is refused
+/// at the element's line with the version named; 0.6.0 and a file without a version load.
+/// Catches a file Mitsuba 3 would refuse loading silently as if it were a 0.6 one.
+#[test]
+fn version_3_files_refuse_them() {
+    for kind in ["roughdiffuse", "phong", "ward"] {
+        let bsdf = format!(r#"<bsdf type="{kind}"/>"#);
+        let err = scene_with("3.0.0", &[&bsdf]).expect_err(kind).to_string();
+        assert!(err.starts_with("m06.xml:2:"), "{err}");
+        assert!(
+            err.contains(&format!(
+                "{kind} is a Mitsuba 0.6 plugin; this file is version 3.0.0"
+            )),
+            "{err}"
+        );
+        assert!(scene_with("2.1.0", &[&bsdf]).is_err(), "{kind} in 2.1.0");
+        scene_with("0.6.0", &[&bsdf]).unwrap_or_else(|e| panic!("{e}"));
+        let xml = format!(
+            "<scene><sensor type=\"perspective\"/>\n<shape type=\"sphere\">{bsdf}</shape></scene>"
+        );
+        hppm::loaders::mitsuba::parse(Path::new("m06.xml"), &xml)
+            .unwrap_or_else(|e| panic!("no version: {e}"));
+    }
+}
+
+/// Malformed parameters are errors at their line (line 2 of the file) saying what is wrong: a
+/// negative exponent, alpha, alphaU or reflectance; a value of the wrong type (a string
+/// exponent, a float useFastApprox); a variant 0.6 does not know; both of roughdiffuse's names
+/// for its reflectance; a misspelt name (with a did-you-mean). Catches a value accepted that 0.6
+/// would misrender (a negative alpha divides by a negative roughness) or an error without its
+/// place.
+#[test]
+fn bad_parameters_are_errors_at_their_line() {
+    let cases = [
+        (
+            r#"<bsdf type="phong"><float name="exponent" value="-1"/></bsdf>"#,
+            "must not be negative",
+        ),
+        (
+            r#"<bsdf type="phong"><string name="exponent" value="high"/></bsdf>"#,
+            "exponent",
+        ),
+        (
+            r#"<bsdf type="phong"><rgb name="diffuseReflectance" value="-0.1, 0.5, 0.5"/></bsdf>"#,
+            "must not be negative",
+        ),
+        (
+            r#"<bsdf type="phong"><float name="exponet" value="20"/></bsdf>"#,
+            "did you mean \"exponent\"",
+        ),
+        (
+            r#"<bsdf type="ward"><float name="alphaU" value="-0.1"/></bsdf>"#,
+            "must not be negative",
+        ),
+        (
+            r#"<bsdf type="ward"><float name="alpha" value="-0.1"/></bsdf>"#,
+            "must not be negative",
+        ),
+        (
+            r#"<bsdf type="ward"><string name="variant" value="duer"/></bsdf>"#,
+            "variant \"duer\": expected \"ward\", \"ward-duer\" or \"balanced\"",
+        ),
+        (
+            r#"<bsdf type="roughdiffuse"><float name="alpha" value="-0.2"/></bsdf>"#,
+            "must not be negative",
+        ),
+        (
+            r#"<bsdf type="roughdiffuse"><float name="useFastApprox" value="1"/></bsdf>"#,
+            "<float name=\"useFastApprox\">: expected <boolean>",
+        ),
+        (
+            r#"<bsdf type="roughdiffuse"><rgb name="reflectance" value="0.5, 0.5, 0.5"/><rgb name="diffuseReflectance" value="0.5, 0.5, 0.5"/></bsdf>"#,
+            "not both",
+        ),
+    ];
+    for (bsdf, expected) in cases {
+        let err = scene_with("0.5.0", &[bsdf]).expect_err(bsdf).to_string();
+        assert!(err.starts_with("m06.xml:2:"), "{bsdf}: {err}");
+        assert!(err.contains(expected), "{bsdf}: {err}");
+    }
+}
+
+/// Sampling through the unit models is what `sample_from_eval` makes of the direction: a
+/// sample's weight is eval / pdf at its direction, for the three, at fixed random numbers,
+/// with the lobe picked by u1 against the specular weight. Catches a sampler whose weight is
+/// not its own eval over its own pdf (what the GPU's sample weight is compared with).
+#[test]
+fn sample_weights_are_eval_over_pdf() {
+    let models = [
+        Bsdf::new(RoughDiffuse::new(Vec3::splat(0.6), 0.3, false)),
+        Bsdf::new(Phong::new(Vec3::splat(0.4), Vec3::splat(0.5), 20.0)),
+        Bsdf::new(Ward::new(
+            Variant::Balanced,
+            Vec3::splat(0.4),
+            Vec3::splat(0.5),
+            0.2,
+            0.3,
+        )),
+    ];
+    let mut rng = Rng(5);
+    for b in &models {
+        let mut drawn = 0;
+        for _ in 0..500 {
+            let u = Vec2::new(rng.unit(), rng.unit());
+            let Some(s) = b.sample(wi(), rng.unit(), u, Mode::Radiance) else {
+                continue;
+            };
+            drawn += 1;
+            let expected = b.eval(wi(), s.wo, Mode::Radiance) / b.pdf(wi(), s.wo);
+            assert!(!s.delta);
+            assert!((s.weight - expected).abs().max_element() <= 1e-5 * expected.max_element());
+            assert!(s.wo.z > 0.0);
+        }
+        assert!(drawn > 400, "{}: only {drawn} samples", b.kind());
+    }
+}
+
+/// The glossy split of phong and ward (their lobe's f |cos wo| and its share, which a graph's
+/// `glossy_threshold` uses through `GLOSSY`) composes and validates in every pass shader with
+/// every scene and BSDF def on, and its functions are in the composed kernels. Catches a split
+/// function that does not compile or is not imported (the GPU check above composes without
+/// `GLOSSY`, so it never compiles them).
+#[test]
+fn the_glossy_split_composes_into_the_tracing_kernels() {
+    let registry = hppm::bsdfs::BsdfRegistry::builtin();
+    let lib = hppm::gpu::shaders::ShaderLibrary::new(
+        false,
+        hppm::passes::all_scene_defs(&registry),
+        &hppm::passes::common_modules(&registry),
+    )
+    .expect("modules compose");
+    let mut seen = Vec::new();
+    for kind in hppm::passes::builtin_kinds() {
+        for file in kind.shaders {
+            let module = lib
+                .compose_with(file, hppm::passes::PASS_DEFS)
+                .unwrap_or_else(|e| panic!("{} + GLOSSY: {e}", file.path));
+            wgpu::naga::valid::Validator::new(
+                wgpu::naga::valid::ValidationFlags::all(),
+                wgpu::naga::valid::Capabilities::all(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{}: {e:?}", file.path));
+            for (_, f) in module.functions.iter() {
+                if let Some(name) = &f.name {
+                    seen.push(name.clone());
+                }
+            }
+        }
+    }
+    for function in [
+        "phong_specular_share",
+        "ward_specular_share",
+        "phong_specular",
+        "ward_specular",
+    ] {
+        assert!(
+            // naga_oil names an imported function `<name>X_naga_oil_mod_...`.
+            seen.iter()
+                .any(|n| n == function || n.starts_with(&format!("{function}X"))),
+            "no kernel calls {function}"
+        );
+    }
+}
+
+/// What `GLOSSY` kernels ask of a material: its glossy lobe's f |cos wo| and that lobe's share
+/// of a sample's weight, per channel, when the lobe counts as specular.
+const GLOSSY_KERNEL: &str = r#"
+#import common::scene::materials
+#import common::bsdf::BsdfSample
+#import common::material::{material_eval, material_specular_eval, material_specular_share}
+
+@group(1) @binding(0) var<storage, read> queries: array<vec4<f32>>;
+@group(1) @binding(1) var<storage, read_write> answers: array<vec4<f32>>;
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if 2u * id.x >= arrayLength(&queries) {
+        return;
+    }
+    let a = queries[2u * id.x];
+    let b = queries[2u * id.x + 1u];
+    let m = materials[u32(a.w)];
+    let full = material_eval(m, a.xyz, b.xyz, true);
+    let spec = material_specular_eval(m, a.xyz, b.xyz, full, b.w);
+    let s = BsdfSample(b.xyz, full.value / max(full.pdf, 1e-20), full.pdf, false, true);
+    let share = material_specular_share(m, a.xyz, s, b.w);
+    answers[2u * id.x] = vec4<f32>(spec, 0.0);
+    answers[2u * id.x + 1u] = vec4<f32>(share, 0.0);
+}
+"#;
+
+/// The glossy split on the GPU (`GLOSSY`, a `glossy_threshold` of 0.2, hybrid.ron's): a Phong
+/// lobe of exponent 200 (Beckmann-equivalent alpha 0.0995) and a Ward lobe of alphas 0.05 and
+/// 0.08 are specular there, so the split gives their lobe's f |cos wo| (the CPU model's lobe
+/// alone) and its share of f, per channel; exponent 30 (alpha 0.25) and a Ward lobe of alphas
+/// 0.1 and 0.3 (the larger counts) are not, and give nothing. 500 random pairs each. Catches a
+/// split that returns the whole BSDF or the wrong lobe, a roughness packed where the threshold
+/// test does not read it (the exponent itself in alpha_u), or a Ward lobe judged by its smaller
+/// alpha.
+#[test]
+fn the_gpu_glossy_split_takes_the_lobe_below_the_threshold() {
+    use hppm::gpu::binding::{Access, bind_buffers};
+    use hppm::gpu::shaders::ShaderFile;
+    use hppm::gpu_scene::{GpuScene, SceneResources};
+
+    let gpu = common::gpu();
+    let threshold = 0.2f32;
+    let bsdfs = [
+        (
+            r#"<bsdf type="phong"><float name="exponent" value="200"/><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/><rgb name="specular_reflectance" value="0.3, 0.2, 0.1"/></bsdf>"#,
+            true,
+        ),
+        (r#"<bsdf type="phong"/>"#, false),
+        (
+            r#"<bsdf type="ward"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.08"/><rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/></bsdf>"#,
+            true,
+        ),
+        (
+            r#"<bsdf type="ward"><string name="variant" value="ward"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
+            false,
+        ),
+    ];
+    let xmls: Vec<&str> = bsdfs.iter().map(|(x, _)| *x).collect();
+    let scene = scene_with("0.6.0", &xmls).unwrap_or_else(|e| panic!("{e}"));
+    let registry = hppm::passes::Registry::builtin();
+    let gpu_scene = GpuScene::with_bsdfs(&scene, 4, 4, registry.bsdfs()).expect("layout");
+    let resources = SceneResources::for_adapter(&gpu, &gpu_scene).expect("resources");
+    let shaders = registry
+        .shader_library(gpu.has_float_atomics(), &scene, &resources.placement)
+        .expect("library");
+
+    let mut rng = Rng(77);
+    let mut queries: Vec<[f32; 4]> = Vec::new();
+    let mut pairs = Vec::new();
+    for material in 0..bsdfs.len() {
+        for _ in 0..500 {
+            // Near the mirror direction half the time, where the lobe has most of f.
+            let mut wi = rng.direction();
+            wi.z = wi.z.abs().max(0.05);
+            let wi = wi.normalize();
+            let mut wo = if rng.unit() < 0.5 {
+                (Vec3::new(-wi.x, -wi.y, wi.z) + 0.1 * rng.direction()).normalize()
+            } else {
+                rng.direction()
+            };
+            wo.z = wo.z.abs().max(0.01);
+            let wo = wo.normalize();
+            queries.push([wi.x, wi.y, wi.z, material as f32]);
+            queries.push([wo.x, wo.y, wo.z, threshold]);
+            pairs.push((material, wi, wo));
+        }
+    }
+    let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let query_buffer = gpu
+        .create_buffer_init("queries", bytemuck::cast_slice(&queries), storage)
+        .expect("queries");
+    let answer_buffer = gpu
+        .create_buffer("answers", (queries.len() * 16) as u64, storage)
+        .expect("answers");
+    let (layout, group) = bind_buffers(
+        &gpu,
+        "glossy split check",
+        &[
+            (Access::Read, &query_buffer),
+            (Access::ReadWrite, &answer_buffer),
+        ],
+    );
+    let file = ShaderFile {
+        path: "tests/mitsuba06_bsdfs.rs (glossy kernel)",
+        source: GLOSSY_KERNEL,
+    };
+    // With HPPM_SHADER_DIR set, ShaderFile::text reads `path` from there; this kernel has no file.
+    assert!(
+        std::env::var_os("HPPM_SHADER_DIR").is_none(),
+        "run without HPPM_SHADER_DIR"
+    );
+    let pipeline = shaders
+        .compute_pipeline_with(
+            &gpu,
+            &file,
+            "main",
+            &[&resources.layout, &layout],
+            &["GLOSSY"],
+        )
+        .expect("glossy kernel");
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &resources.bind_group, &[]);
+        pass.set_bind_group(1, &group, &[]);
+        pass.dispatch_workgroups((pairs.len() as u32).div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    gpu.check_errors().expect("kernel");
+    let answers: Vec<[f32; 4]> = gpu
+        .read_pod(&answer_buffer, queries.len())
+        .expect("readback");
+
+    let mut failures = Vec::new();
+    let mut lobe_seen = [0usize; 4];
+    for (i, (material, wi, wo)) in pairs.iter().enumerate() {
+        let bsdf = &scene.materials[*material].bsdf;
+        let specular = bsdfs[*material].1;
+        let lobe = if let Some(p) = bsdf.get::<Phong>() {
+            p.specular_eval(*wi, *wo)
+        } else {
+            bsdf.get::<Ward>().expect("ward").specular_eval(*wi, *wo)
+        };
+        let full = bsdf.eval(*wi, *wo, Mode::Radiance);
+        let (want_spec, want_share) = if specular {
+            let share = Vec3::select(full.cmpgt(Vec3::ZERO), lobe / full, Vec3::ZERO);
+            (lobe, share)
+        } else {
+            (Vec3::ZERO, Vec3::ZERO)
+        };
+        let got_spec = Vec3::from_slice(&answers[2 * i][..3]);
+        let got_share = Vec3::from_slice(&answers[2 * i + 1][..3]);
+        lobe_seen[*material] += (lobe.max_element() > 1e-3 * full.max_element()) as usize;
+        let near = |a: Vec3, b: Vec3| {
+            (a - b).abs().max_element() <= 2e-3 * a.abs().max(b.abs()).max_element() + 1e-5
+        };
+        if !near(got_spec, want_spec) || !near(got_share, want_share) {
+            failures.push(format!(
+                "material {material} wi {wi} wo {wo}: GPU lobe {got_spec} share {got_share}, \
+                 expected {want_spec} {want_share}"
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} differ:\n{}",
+        failures.len(),
+        pairs.len(),
+        failures[..failures.len().min(20)].join("\n")
+    );
+    // The pairs reach each lobe, so the split is tested where it is not zero.
+    assert!(lobe_seen.iter().all(|&n| n > 100), "{lobe_seen:?}");
+}
