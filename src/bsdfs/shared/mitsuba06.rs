@@ -10,26 +10,19 @@ use crate::bsdfs::BsdfReader;
 use crate::scene::texture::luminance;
 use crate::scene::{SceneError, SideTextures};
 
-/// Refuses the element in a file that declares Mitsuba version 2 or later, which has no such
-/// plugin (Mitsuba 3 dropped `roughdiffuse`, `phong` and `ward`). A file that declares no
-/// version is read.
+/// Refuses the element in a file read with Mitsuba 3's rules (one that declares version 2 or
+/// later, or none): Mitsuba 2 and 3 dropped `roughdiffuse`, `phong` and `ward`.
 pub fn only_in_mitsuba06(r: &dyn BsdfReader) -> Result<(), SceneError> {
-    let Some(version) = r.file_version() else {
+    if r.legacy() {
         return Ok(());
-    };
-    let major = version
-        .split('.')
-        .next()
-        .and_then(|m| m.trim().parse::<u32>().ok());
-    match major {
-        Some(major) if major >= 2 => Err(r.error(format!(
-            "{} is a Mitsuba 0.6 plugin; this file is version {version} (Mitsuba 2 and 3 have \
-             no {}; hppm reads it from files of version 0.x only)",
-            r.plugin(),
-            r.plugin()
-        ))),
-        _ => Ok(()),
     }
+    let version = r.file_version().unwrap_or_else(|| "not given".into());
+    Err(r.error(format!(
+        "{} is a Mitsuba 0.6 plugin; this file is version {version} (Mitsuba 2 and 3 have no \
+         {}; hppm reads it from files of version 0.x only)",
+        r.plugin(),
+        r.plugin()
+    )))
 }
 
 /// Mitsuba 0.6's `ensureEnergyConservation` property (true by default): whether the unit scales
