@@ -14,8 +14,11 @@ script and written to scenes/NAME.xml so that they can be read:
   sampler      a type Mitsuba 3 lacks (sobol) becomes `independent`
   film         becomes an hdrfilm of the test's reduced size with the original rfilter
                (ldrfilm, gamma, banner, tonemapping only shaped 0.6's output files)
+  bitmap       filterType ewa/trilinear removed (Mitsuba 3 filters bilinear, as hppm does)
   spectrum     three plain values become <rgb> (0.6's RGB build read them so)
   media        sigmaA/sigmaS become sigma_t/albedo (Mitsuba 3 reads only those)
+  boundary     a shape with a medium and no BSDF gets a null BSDF (0.6's default for a
+               medium boundary; Mitsuba 3's is diffuse)
   conductor    no material and no eta/k: material Cu, 0.6's default
   unread       properties Mitsuba 3 then still refuses ("unreferenced property") are removed,
                one at a time, each named in the log
@@ -43,7 +46,6 @@ DATA = os.path.join(HERE, '..', '..', 'data', 'mitsuba06')
 SCENES = {
     'nlvrl_box': ('nlvrl/FBD15ALVRL_box/box.xml', 64, 64),
     'nlvrl_glass': ('nlvrl/FBD15ALVRL_glass/glass/glass.xml', 48, 72),
-    'nlvrl_testscene': ('nlvrl/TestScene/TestScene.xml', 64, 64),
     'nlvrl_cbox040': ('nlvrl/cbox_v040/cbox.xml', 64, 64),
     'redner_teapot': ('redner/teapot/teapot.xml', 64, 64),
     'redner_teapot_specular': ('redner/teapot_specular/teapot_specular.xml', 64, 64),
@@ -140,15 +142,34 @@ def edit(name, log):
                 if n in props:
                     m.remove(props[n])
             fmt = lambda a: ', '.join(f'{x:.9g}' for x in a)
-            ET.SubElement(m, 'rgb', {'name': 'sigma_t', 'value': fmt(st)})
+            # Mitsuba 3's RGB variants hold an <rgb> to [0, 1]: the largest goes to `scale`.
+            peak = float(st.max()) or 1.0
+            scale = m.find("float[@name='scale']")
+            if scale is None:
+                scale = ET.SubElement(m, 'float', {'name': 'scale', 'value': '1'})
+            scale.set('value', f'{float(scale.get("value")) * peak:.9g}')
+            ET.SubElement(m, 'rgb', {'name': 'sigma_t', 'value': fmt(st / peak)})
             ET.SubElement(m, 'rgb', {'name': 'albedo', 'value': fmt(albedo)})
-            log.append(f'medium {m.get("id")}: sigmaA/sigmaS -> sigma_t {fmt(st)}, '
-                       f'albedo {fmt(albedo)}')
+            log.append(f'medium {m.get("id")}: sigmaA/sigmaS -> sigma_t {fmt(st)} (as '
+                       f'{fmt(st / peak)} times scale), albedo {fmt(albedo)}')
         if m.get('name') and m.get('id'):
             del m.attrib['name']
+    for t in root.iter('texture'):
+        for f in list(t.findall('string')):
+            if f.get('name') == 'filterType' and f.get('value') in ('ewa', 'trilinear'):
+                t.remove(f)
+                log.append(f'bitmap filterType {f.get("value")} removed (bilinear)')
     for t in root.iter('lookAt'):
         t.tag = 'lookat'
         log.append('<lookAt> -> <lookat>')
+    for shape in root.iter('shape'):
+        medium = any(c.tag in ('ref', 'medium') and c.get('name') in ('interior', 'exterior')
+                     for c in shape)
+        has_bsdf = any(c.tag == 'bsdf' or (c.tag == 'ref' and not c.get('name')) for c in shape)
+        if medium and not has_bsdf and shape.find('emitter') is None:
+            ET.SubElement(shape, 'bsdf', {'type': 'null'})
+            log.append(f'shape {shape.get("type")} with a medium and no BSDF: null BSDF '
+                       f'(0.6\'s default for a medium boundary)')
     for b in root.iter('bsdf'):
         if b.get('type') in ('conductor', 'roughconductor'):
             names = {p.get('name') for p in b}
@@ -166,10 +187,9 @@ def load_edited(name, log):
     for _ in range(64):
         ET.ElementTree(root).write(out)
         try:
-            return mi.load_file(out), out
+            return mi.load_file(out, optimize=False), out
         except Exception as e:
-            m = re.search(r'nreferenced property "(\w+)"', str(e)) or \
-                re.search(r'roperty "(\w+)".*not (?:referenced|queried)', str(e))
+            m = re.search(r'unreferenced propert[\s\S]*?- \w+ "(\w+)"', str(e))
             if not m:
                 raise
             prop = m.group(1)
