@@ -499,6 +499,54 @@ fn unused_or_malformed_defines_are_errors() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `hppm check` says which rules a Mitsuba 0.x file is read with and how many upgrades that
+/// took; `--verbose` names each at its line, and says Mitsuba 3's rules for a version 3 file.
+/// Catches: a user left guessing why a 0.6 file reads differently from Mitsuba 3.
+#[test]
+fn check_names_the_rule_set_and_verbose_lists_the_upgrades() {
+    let dir = std::env::temp_dir().join(format!("hppm_rules_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let old = dir.join("old.xml");
+    std::fs::write(
+        &old,
+        "<scene version=\"0.5.0\">\n<sensor type=\"perspective\"><transform name=\"toWorld\"><lookAt origin=\"0, 0, 3\" target=\"0, 0, 0\"/></transform>\n<film type=\"ldrfilm\"><integer name=\"width\" value=\"8\"/><integer name=\"height\" value=\"8\"/></film></sensor>\n<emitter type=\"constant\"/></scene>",
+    )
+    .expect("write");
+    let out = hppm(&["check", old.to_str().expect("path")]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(out.status.success(), "{text}{}", stderr(&out));
+    assert!(
+        text.contains("old.xml: Mitsuba 0.5/0.6 rules (version 0.5.0)")
+            && text.contains("upgrades applied to read Mitsuba 0.6 files (--verbose lists them)"),
+        "{text}"
+    );
+    let out = hppm(&["check", "--verbose", old.to_str().expect("path")]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    for expected in [
+        "upgrade: ",
+        "old.xml:2:",
+        "property \"toWorld\" read as \"to_world\"",
+        "<lookAt> read as <lookat>",
+        "old.xml:3:",
+        "film \"ldrfilm\": read as hdrfilm",
+    ] {
+        assert!(text.contains(expected), "{expected:?} missing in:\n{text}");
+    }
+    let current = dir.join("current.xml");
+    std::fs::write(
+        &current,
+        "<scene version=\"3.0.0\"><sensor type=\"perspective\"/><emitter type=\"constant\"/></scene>",
+    )
+    .expect("write");
+    let out = hppm(&["check", "-v", current.to_str().expect("path")]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        text.contains("current.xml: Mitsuba 3 rules (version 3.0.0)"),
+        "{text}"
+    );
+    assert!(!text.contains("upgrade"), "{text}");
+}
+
 /// `hppm check` lists every problem of a scene at once, errors and warnings apart, each with
 /// file:line:col, and exits 0 only when the scene renders; `render` prints the warnings of a
 /// scene it renders (an integrator taken as advice) before rendering.

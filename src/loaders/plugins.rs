@@ -519,5 +519,13 @@ pub fn markdown(bsdfs: &BsdfRegistry) -> String {
             plugin.notes
         ));
     }
+    out.push_str(
+        "\n**Mitsuba 0.5/0.6 files** (a `<scene version>` below 2.0; names upgraded from \
+         camelCase first) are read with 0.6's rules where 0.6 and Mitsuba 3 differ:\n\n\
+         | where | 0.6's rule (Mitsuba 3's in brackets) |\n|---|---|\n",
+    );
+    for (place, rule) in crate::loaders::mitsuba::LEGACY_RULES {
+        out.push_str(&format!("| {place} | {rule} |\n"));
+    }
     out
 }

@@ -342,7 +342,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "<emitter type=\"envmap\"> needs <string name=\"filename\" value=\"...\"/>",
             ));
         };
-        let file = self.relative(&self.string(file_node)?);
+        let file = self.existing_file(file_node, self.relative(&self.string(file_node)?));
         let scale = match props.take("scale") {
             Some(n) => {
                 let v = self.float(n)?;

@@ -65,6 +65,81 @@ pub(super) fn snake_case(name: &str) -> String {
     out
 }
 
+/// Where 0.6's rules differ from Mitsuba 3's, as docs/scenes.md lists them (`hppm plugins`):
+/// (where, the rule, with Mitsuba 3's in brackets).
+pub const RULES: &[(&str, &str)] = &[
+    (
+        "any property",
+        "one no plugin reads is a warning with a did-you-mean, as 0.6 printed \"unqueried \
+         property\" (an error); so is a property under `<scene>`",
+    ),
+    (
+        "`<lookAt>`",
+        "the camelCase tag places the camera (Mitsuba 3.9.1 refuses it)",
+    ),
+    (
+        "film",
+        "`ldrfilm` and `tiledhdrfilm` give the image's size (refused); `gamma`, `exposure`, \
+         `key`, `burn`, `tonemapMethod` only shaped 0.6's PNG: a warning where they would \
+         have changed it, a note otherwise (`gamma` on an hdrfilm, which 0.6 never read, a \
+         note); `mfilm` is refused",
+    ),
+    (
+        "bitmap",
+        "`filterType` ewa (0.6's default) and trilinear are read bilinear with a note: 0.6 \
+         MIP-mapped over the pixel's footprint, bilinear converges to the same picture \
+         wherever a pixel covers at most a texel and is sharper where the texture is \
+         minified, since a pixel's samples then average its texels themselves (Mitsuba 3 has \
+         only bilinear and nearest); `uscale`, `vscale`, `uvscale`, `uoffset`, `voffset` map \
+         uv as 0.6's Texture2D does, uv * scale + offset (`to_uv`); `gamma` 1 reads the file \
+         as linear, -1 as sRGB, other values as that power, 0 as the file says (`raw`); \
+         `wrapModeU`/`wrapModeV` must agree (hppm wraps both axes alike); `maxAnisotropy` and \
+         `cache` are notes; `channel` is refused",
+    ),
+    (
+        "conductor",
+        "`material` defaults to `Cu` (`none`, a mirror); `eta` or `k` replaces the material's \
+         own where given, with a material given too (refused); both are divided by `extEta`, \
+         a number or a named dielectric, default air",
+    ),
+    (
+        "homogeneous medium",
+        "`material` is one of 0.6's 47 measured presets (Jensen et al. 2001, Narasimhan et \
+         al. 2006; its table in mm^-1, times 100 as 0.6 applies it, then times `scale`); with \
+         no coefficient the medium is `skin1`, 0.6's default (sigma_t 1, albedo 0.75); \
+         `sigmaS`/`sigmaA` or `sigmaT`/`albedo`, each missing one from the preset; a preset \
+         with coefficients, or the two pairs mixed, is refused as 0.6 refuses it; `strategy`, \
+         `samplingDensity`, `mediumSamplingWeight` and `channel` only chose 0.6's distance \
+         sampling (notes); `monochromatic` is refused",
+    ),
+    (
+        "heterogeneous medium",
+        "the extinction grid is `<volume name=\"density\">` (`sigma_t`), placed in the box \
+         the `.vol` file states or `min`/`max` (the unit cube), with the first and last \
+         voxels' values on the box's faces (half a voxel inside); `method` and `stepSize` are \
+         notes",
+    ),
+    (
+        "shape",
+        "a shape with a medium and no BSDF is a null boundary (diffuse 0.5); an area light \
+         without a BSDF is black in both",
+    ),
+    (
+        "spectrum",
+        "three plain values are RGB, as 0.6's RGB build read as many values as it had \
+         spectral samples (refused)",
+    ),
+    (
+        "files",
+        "a texture, mesh, environment map or grid file missing under its exact name is found in another case, \
+         with a warning (0.6 scenes were often written on file systems that ignore case)",
+    ),
+    (
+        "plugins",
+        "`roughdiffuse`, `phong` and `ward` (in the table above; files of version 0.x only)",
+    ),
+];
+
 /// One of 0.6's homogeneous medium presets (src/medium/materials.h of Mitsuba 0.6): scattering
 /// and absorption coefficients in mm^-1 (0.6 multiplies them by 100 before `scale`), and the
 /// anisotropy its dipole models read (a homogeneous medium's phase function is its own

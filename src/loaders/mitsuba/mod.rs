@@ -33,7 +33,7 @@ use crate::scene::{
 };
 use legacy::LEGACY_PROPERTIES;
 
-pub use legacy::RuleSet;
+pub use legacy::{RULES as LEGACY_RULES, RuleSet};
 
 mod bsdfs;
 mod emitters;

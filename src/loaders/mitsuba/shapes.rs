@@ -364,7 +364,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 .transpose()?
                 .unwrap_or(format == MeshFormat::Obj),
         };
-        let mesh_path = self.relative(&file);
+        let mesh_path = self.existing_file(file_node, self.relative(&file));
         let index = match format {
             MeshFormat::Serialized => self.shape_index(props)?,
             _ => 0,
