@@ -400,6 +400,21 @@ fn default_bsdfs_follow_each_version() {
         let boundary_null = scene.materials[1].bsdf.get::<Null>().is_some();
         assert_eq!(boundary_null, version == "0.6.0", "{version}: the boundary");
     }
+    // A BSDF by reference and a medium by reference on one shape: both taken.
+    let both = format!(
+        r#"{SENSOR}<medium type="homogeneous" id="milk"><string name="material" value="Wholemilk"/></medium>
+<bsdf type="dielectric" id="glass"/>
+<shape type="sphere"><ref id="glass"/><ref name="interior" id="milk"/></shape><emitter type="constant"/>"#
+    );
+    let scene = scene_of(check_version("0.6.0", &both));
+    let glass = &scene.materials[0];
+    assert!(
+        glass
+            .bsdf
+            .get::<hppm::bsdfs::dielectric::Dielectric>()
+            .is_some()
+    );
+    assert_eq!(glass.media.interior, Some(0));
     let nameless = check_version(
         "0.6.0",
         &body.replace(r#"<ref name="interior" id="fog"/>"#, r#"<ref id="fog"/>"#),

@@ -1460,9 +1460,10 @@ fn ids_on_nested_objects_are_declared_for_later_refs() {
     assert_eq!(material(7).bsdf, Diffuse::bsdf(Vec3::splat(0.5)));
 }
 
-/// An id declared twice, whether at top level or nested, is refused at the second with the
-/// place of the first (Mitsuba refuses duplicate ids too). Would catch a nested declaration
-/// silently replacing the first, which every `<ref>` after it would then see.
+/// An id declared twice, whether at top level or nested, on objects of any type, is refused at
+/// the second with the place of the first (Mitsuba refuses duplicate ids too). Would catch a
+/// nested declaration silently replacing the first, which every `<ref>` after it would then
+/// see, and two shapes or two kinds of object sharing an id unnoticed.
 #[test]
 fn a_second_declaration_of_an_id_names_the_first() {
     assert_error_at(
@@ -1482,5 +1483,17 @@ fn a_second_declaration_of_an_id_names_the_first() {
 <shape type="cube"><bsdf type="null"/><medium type="homogeneous" name="interior" id="m"/></shape>"#,
         4,
         "a second <medium id=\"m\"> (the first is at shipped.xml:3:1)",
+    );
+    // One table of ids for every object, as in Mitsuba: two shapes, or a BSDF and a texture.
+    assert_error_at(
+        &format!("{LIGHT}\n<shape type=\"cube\" id=\"box\"/>\n<shape type=\"sphere\" id=\"box\"/>"),
+        5,
+        "id \"box\" is declared already, by the <shape type=\"cube\"> at shipped.xml:4",
+    );
+    assert_error_at(
+        r#"<bsdf type="diffuse" id="red"/>
+<texture type="checkerboard" id="red"/>"#,
+        4,
+        "id \"red\" is declared already, by the <bsdf type=\"diffuse\"> at shipped.xml:3",
     );
 }
