@@ -189,8 +189,11 @@ fn hppm_itself_never_names_the_custom_pass() {
     assert!(all.len() > 50, "{} files", all.len());
     for file in all {
         let text = std::fs::read_to_string(&file).unwrap_or_default();
+        // What names the pass: its kind, its shaders and their modules, its crate (Mitsuba 0.6's
+        // ldrfilm property `tonemap_method`, which hppm's loader reads, does not).
+        let names = ["\"tonemap\"", "tonemap.wgsl", "tonemap::", "tone_curves", "custom_pass"];
         assert!(
-            !text.contains("tonemap") && !text.contains("tone_curves"),
+            !names.iter().any(|name| text.contains(name)),
             "{} names the custom pass",
             file.display()
         );
