@@ -542,7 +542,7 @@ fn every_problem_is_reported_at_once() {
 <shape type="sphere"><float name="radius" value="one"/></shape>
 <integrator type="bdpt"/>
 <shape type="cube"><bsdf type="plastic"><float name="int_ior" value="1.5"/><float name="intior" value="1.5"/></bsdf></shape>
-<emitter type="sunsky"/>"#;
+<emitter type="timed_sunsky"/>"#;
     let report = check(&format!("{body}{}{LIGHT}", sensor("", 8, 8)));
     let expected: &[(usize, &str)] = &[
         (2, "did you mean \"reflectance\"?"),
@@ -550,7 +550,7 @@ fn every_problem_is_reported_at_once() {
         (4, "the <bsdf id=\"a\"> at line 2 could not be read"),
         (5, "expected a number"),
         (7, "did you mean \"int_ior\"?"),
-        (8, "sunsky"),
+        (8, "timed_sunsky"),
     ];
     assert_errors_in_order(&report, expected);
     assert_eq!(warnings(&report).len(), 1, "bdpt's warning");

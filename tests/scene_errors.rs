@@ -232,7 +232,7 @@ fn unsupported_mitsuba_features_are_refused_with_a_location() {
             r#"<shape type="sphere"><emitter type="point"/></shape>"#,
             "only \"area\"",
         ),
-        (r#"<emitter type="sunsky"/>"#, "sunsky"),
+        (r#"<emitter type="timed_sunsky"/>"#, "timed_sunsky"),
         (r#"<emitter type="envmap"/>"#, "filename"),
         (
             r#"<emitter type="envmap"><string name="filename" value="missing.exr"/></emitter>"#,

@@ -459,12 +459,14 @@ fn collect_lights(scene: &Scene, tables: &mut Vec<f32>) -> Vec<LightEntry> {
     }
     if let Some(env) = &scene.emitters.environment {
         let power = disc_area * mean(env.radiance_integral());
-        let environment = match env {
-            Environment::Constant { radiance } => light(LIGHT_CONSTANT, *radiance),
-            Environment::Map(map) => GpuLight {
+        // A sunsky renders as the map baked from it.
+        let environment = match (env, env.map()) {
+            (Environment::Constant { radiance }, _) => light(LIGHT_CONSTANT, *radiance),
+            (_, Some(map)) => GpuLight {
                 table: map.append_gpu_table(tables),
                 ..light(LIGHT_ENVMAP, Vec3::ONE)
             },
+            (_, None) => unreachable!("every environment but a constant is a map"),
         };
         if power > 0.0 {
             let environment = GpuLight {

@@ -407,6 +407,42 @@ pub const AFTER_BSDFS: &[Plugin] = &[
                 rotation; `filter_type` bilinear and `mis_compensation` false only.",
     },
     Plugin {
+        object: "emitter",
+        kinds: &["sunsky"],
+        properties: &[
+            p("turbidity", "3"),
+            p("albedo", "0.3"),
+            p("latitude", "35.6894"),
+            p("longitude", "139.6917"),
+            p("timezone", "9"),
+            p("year", "2010"),
+            p("month", "7"),
+            p("day", "10"),
+            p("hour", "15"),
+            p("minute", "0"),
+            p("second", "0"),
+            p("sun_direction", ""),
+            p("sun_scale", "1"),
+            p("sky_scale", "1"),
+            p("sun_aperture", "0.5358"),
+            p("complex_sun", "false"),
+            p("to_world", "identity"),
+            p("sampling_weight", "1"),
+        ],
+        notes: "The Hosek-Wilkie sky and sun as Mitsuba 3.9.1's RGB variants evaluate them, \
+                from its own datasets (src/scene/sunsky; Mitsuba's values in \
+                tests/refs/sunsky), baked at load into a 1024 x 4097 environment map whose \
+                pole is the sun (0.044 degrees a row; the disc integrated into its texels so \
+                that its power is exact), rendered as an `envmap` is. The sun from \
+                `sun_direction` (world space) or a place and time (not both), in Mitsuba's \
+                frame: z up, +x south, +y west (its docs say x north; its code is followed), \
+                turned by `to_world`, a rotation. `albedo` a colour in [0, 1], not a texture; \
+                `turbidity` in [1, 10]; `complex_sun` Mitsuba's limb-darkened disc. Beyond \
+                Mitsuba: latitude, longitude, timezone, date and time must be real ones (year \
+                1 to 9999). A sun below the horizon renders black, sky included, as in \
+                Mitsuba (a warning).",
+    },
+    Plugin {
         object: "spectrum",
         kinds: &["blackbody"],
         properties: &[

@@ -357,6 +357,36 @@ fn xyz_to_srgb(xyz: [f64; 3]) -> [f64; 3] {
     })
 }
 
+/// Mitsuba's `linear_rgb_rec` (include/mitsuba/core/spectrum.h) in its f32 precision: the
+/// ITU-R BT.709 linear RGB colour-matching functions at `nm`, its table being the CIE 1931
+/// table turned by `xyz_to_srgb` entry by entry, linear between the 5-nm samples, zero outside
+/// 360-830 nm. `spectrum_to_srgb` weighs a spectrum's samples by it (the `sunsky` emitter's sun
+/// irradiance, src/scene/sunsky).
+pub fn linear_rgb_rec(nm: f32) -> Vec3 {
+    if !(cie::MIN_NM as f32..=cie::MAX_NM as f32).contains(&nm) {
+        return Vec3::ZERO;
+    }
+    let entry = |i: usize| {
+        let xyz = [cie::X[i], cie::Y[i], cie::Z[i]];
+        Vec3::from_array(XYZ_TO_SRGB.map(|row| {
+            let r = row[0] * xyz[0];
+            let r = row[1].mul_add(xyz[1], r);
+            row[2].mul_add(xyz[2], r)
+        }))
+    };
+    let t = (nm - cie::MIN_NM as f32)
+        * ((cie::SAMPLES - 1) as f32 / (cie::MAX_NM as f32 - cie::MIN_NM as f32));
+    let i0 = (t as usize).min(cie::SAMPLES - 2);
+    let w1 = t - i0 as f32;
+    let w0 = 1.0 - w1;
+    let (v0, v1) = (entry(i0), entry(i0 + 1));
+    Vec3::new(
+        w0.mul_add(v0.x, w1 * v1.x),
+        w0.mul_add(v0.y, w1 * v1.y),
+        w0.mul_add(v0.z, w1 * v1.z),
+    )
+}
+
 /// Mitsuba's `spectrum_list_to_srgb` (src/core/spectrum.cpp), in its double precision.
 fn sampled_to_rgb(s: &Sampled, kind: SpectrumKind) -> Vec3 {
     let d65 = kind != SpectrumKind::Illuminant;

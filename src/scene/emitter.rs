@@ -1,5 +1,5 @@
 //! Lights that are not shapes, beside point lights: Mitsuba 3's `spot`, `projector`,
-//! `directional`, `constant` and `envmap`, with what their GPU form needs (an environment map's
+//! `directional`, `constant`, `envmap` and `sunsky` (its model in src/scene/sunsky), with what their GPU form needs (an environment map's
 //! texels and its sampling tables) and their power (what photon emission must reproduce).
 
 use std::f32::consts::PI;
@@ -7,6 +7,7 @@ use std::path::PathBuf;
 
 use glam::{Mat3, Vec2, Vec3};
 
+use super::sunsky::SunSkyMap;
 use super::texture::{Texture, luminance};
 
 /// Mitsuba's `spot`: intensity `intensity` along its axis, full out to `beam_width` from it,
@@ -193,23 +194,40 @@ pub enum Environment {
     Constant { radiance: Vec3 },
     /// Mitsuba's `envmap`.
     Map(EnvMap),
+    /// Mitsuba's `sunsky`: the Hosek-Wilkie model and the map baked from it, which is what
+    /// renders (src/scene/sunsky).
+    SunSky(Box<SunSkyMap>),
 }
 
 impl Environment {
-    /// Radiance arriving from world direction `dir` (unit, pointing away from the scene).
+    /// Radiance arriving from world direction `dir` (unit, pointing away from the scene), as
+    /// the renderer sees it (a sunsky's baked map).
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
-        match self {
-            Environment::Constant { radiance } => *radiance,
-            Environment::Map(map) => map.eval(dir),
+        match self.map() {
+            None => match self {
+                Environment::Constant { radiance } => *radiance,
+                _ => unreachable!("every other environment is a map"),
+            },
+            Some(map) => map.eval(dir),
         }
     }
 
     /// The integral of radiance over all directions (W / m^2 / sr x sr per channel): the power
     /// that crosses a disc of area A facing every direction in turn is A times this.
     pub fn radiance_integral(&self) -> Vec3 {
+        match (self, self.map()) {
+            (Environment::Constant { radiance }, _) => *radiance * (4.0 * PI),
+            (_, Some(map)) => map.radiance_integral(),
+            (_, None) => unreachable!("every other environment is a map"),
+        }
+    }
+
+    /// The map the renderer reads (an `envmap`'s, or a `sunsky`'s bake); `None` for a constant.
+    pub fn map(&self) -> Option<&EnvMap> {
         match self {
-            Environment::Constant { radiance } => *radiance * (4.0 * PI),
-            Environment::Map(map) => map.radiance_integral(),
+            Environment::Constant { .. } => None,
+            Environment::Map(map) => Some(map),
+            Environment::SunSky(sunsky) => Some(&sunsky.map),
         }
     }
 }
@@ -282,21 +300,37 @@ impl EnvMap {
         weights
     }
 
-    /// The integral of radiance over the sphere, by the midpoint rule on a grid four times
-    /// finer than the texels in each direction.
-    pub fn radiance_integral(&self) -> Vec3 {
-        let (nu, nv) = (self.width as usize * 4, (self.height as usize - 1) * 4);
-        let mut sum = glam::DVec3::ZERO;
-        for j in 0..nv {
-            let v = (j as f32 + 0.5) / nv as f32;
-            let sin_theta = (v * PI).sin() as f64;
-            for i in 0..nu {
-                let u = (i as f32 + 0.5) / nu as f32;
-                sum += self.eval_uv(Vec2::new(u, v)).as_dvec3() * sin_theta;
+    /// The solid angle of the bilinear hat of a texel of row `y` of a `width` x `height` map:
+    /// the integral over the sphere of the weight [`EnvMap::eval_uv`] gives that texel. Its u
+    /// part integrates to 1 / width of the turn; in theta (rows h = pi / (height - 1) apart)
+    /// the hat against sin theta gives sin(theta_y) 2 (1 - cos h) / h inside and 1 - sin(h) / h
+    /// on a pole row. The hats sum to one everywhere, so these sum to 4 pi.
+    pub fn hat_solid_angle(width: u32, height: u32, y: u32) -> f64 {
+        use std::f64::consts::PI;
+        let h = PI / (height - 1) as f64;
+        let along_theta = if y == 0 || y == height - 1 {
+            // 1 - sin(h) / h, by its series where h is small (cancellation).
+            if h < 1e-2 {
+                h * h / 6.0 * (1.0 - h * h / 20.0)
+            } else {
+                1.0 - h.sin() / h
             }
+        } else {
+            (y as f64 * h).sin() * 4.0 * (0.5 * h).sin().powi(2) / h
+        };
+        2.0 * PI / width as f64 * along_theta
+    }
+
+    /// The integral of radiance over the sphere: exactly, each texel times the solid angle of
+    /// its bilinear hat ([`EnvMap::hat_solid_angle`]).
+    pub fn radiance_integral(&self) -> Vec3 {
+        let w = self.width as usize;
+        let mut sum = glam::DVec3::ZERO;
+        for (y, row) in self.texels.chunks(w).enumerate() {
+            let row_sum: glam::DVec3 = row.iter().map(|t| t.as_dvec3()).sum();
+            sum += row_sum * Self::hat_solid_angle(self.width, self.height, y as u32);
         }
-        let cell = 2.0 * std::f64::consts::PI * std::f64::consts::PI / (nu * nv) as f64;
-        (sum * cell).as_vec3()
+        sum.as_vec3()
     }
 
     /// The map as the GPU reads it, appended to a table of f32 (see `gpu_table`'s layout in

@@ -12,6 +12,7 @@ pub mod grid;
 pub mod medium;
 pub mod mesh;
 pub mod plugin;
+pub mod sunsky;
 
 pub mod texture;
 
@@ -739,14 +740,15 @@ impl Scene {
             }
         }
         if let Some(env) = &self.emitters.environment {
-            let ok = match env {
-                emitter::Environment::Constant { radiance } => finite(*radiance),
-                emitter::Environment::Map(map) => {
+            let ok = match (env, env.map()) {
+                (emitter::Environment::Constant { radiance }, _) => finite(*radiance),
+                (_, Some(map)) => {
                     map.width >= 1
                         && map.height >= 2
                         && map.texels.len() == (map.width * map.height) as usize
                         && map.texels.iter().all(|t| finite(*t))
                 }
+                (_, None) => false,
             };
             if !ok {
                 return fail("the environment light has a non-finite number or a bad size".into());

@@ -1,5 +1,5 @@
 //! Emitters as Mitsuba's src/emitters reads them: area, point, spot, projector, directional,
-//! constant and envmap.
+//! constant, envmap and sunsky.
 
 use super::*;
 
@@ -50,24 +50,26 @@ impl<'a, 'input> Reader<'a, 'input> {
             "spot" => self.read_spot_light(&mut props, node)?,
             "projector" => self.read_projector(&mut props, node)?,
             "directional" => self.read_directional_light(&mut props, node)?,
-            "constant" | "envmap" => {
+            "constant" | "envmap" | "sunsky" => {
                 if self.scene.emitters.environment.is_some() {
                     return Err(self.error(
                         node,
-                        "a second environment emitter (constant or envmap): Mitsuba allows one \
-                         per scene",
+                        "a second environment emitter (constant, envmap or sunsky): Mitsuba \
+                         allows one per scene",
                     ));
                 }
-                let environment = if kind == "constant" {
-                    // A constant light looks the same turned any way.
-                    if let Some(n) = props.take("to_world") {
-                        self.transform(n)?;
+                let environment = match kind.as_str() {
+                    "constant" => {
+                        // A constant light looks the same turned any way.
+                        if let Some(n) = props.take("to_world") {
+                            self.transform(n)?;
+                        }
+                        Environment::Constant {
+                            radiance: self.color_or(&mut props, "radiance", Vec3::ONE)?,
+                        }
                     }
-                    Environment::Constant {
-                        radiance: self.color_or(&mut props, "radiance", Vec3::ONE)?,
-                    }
-                } else {
-                    Environment::Map(self.read_envmap(&mut props, node)?)
+                    "envmap" => Environment::Map(self.read_envmap(&mut props, node)?),
+                    _ => Environment::SunSky(Box::new(self.read_sunsky(&mut props, node)?)),
                 };
                 self.scene.emitters.environment = Some(environment);
             }
@@ -394,5 +396,244 @@ impl<'a, 'input> Reader<'a, 'input> {
             to_world,
             source: file,
         })
+    }
+    /// Mitsuba's `sunsky` (include/mitsuba/render/sunsky.h's `BaseSunskyEmitter` and
+    /// src/emitters/sunsky.cpp's `SunskyEmitter` in Mitsuba 3.9.1): every property it reads,
+    /// checked as Mitsuba checks it (turbidity in [1, 10], albedo a colour in [0, 1] and not a
+    /// texture, non-negative scales, an aperture in (0, 180) degrees, `sun_direction` or place
+    /// and time but not both) and beyond it where Mitsuba computes on with a meaningless value
+    /// (a zero `sun_direction`, latitude past the poles, a month 13, a day 31 in June, a
+    /// `to_world` that is not a rotation, which Mitsuba's sun direction mishandles). The sky
+    /// and sun are baked into an environment map here, at load (src/scene/sunsky).
+    pub(super) fn read_sunsky(
+        &self,
+        props: &mut Props<'a, 'input>,
+        node: Node<'a, 'input>,
+    ) -> Result<SunSkyMap, SceneError> {
+        let number = |props: &mut Props<'a, 'input>,
+                      name: &str,
+                      default: f32,
+                      ok: &dyn Fn(f32) -> bool,
+                      expected: &str|
+         -> Result<f32, SceneError> {
+            let Some(n) = props.take(name) else {
+                return Ok(default);
+            };
+            let v = self.float(n)?;
+            if !ok(v) {
+                return Err(self.attr_error(n, "value", format!("{name} {v}: {expected}")));
+            }
+            Ok(v)
+        };
+        let turbidity = number(
+            props,
+            "turbidity",
+            3.0,
+            &|v| (1.0..=10.0).contains(&v),
+            "Mitsuba's sky model takes a turbidity from 1 to 10",
+        )?;
+        let albedo = match props.take("albedo") {
+            None => Vec3::splat(0.3),
+            Some(n) if n.has_tag_name("texture") || n.has_tag_name("ref") => {
+                return Err(self.error(
+                    n,
+                    "the sunsky's albedo must be a colour, not a texture (Mitsuba: it must not \
+                     vary spatially)",
+                ));
+            }
+            Some(n) => {
+                let c = self.color(n)?;
+                if c.min_element() < 0.0 || c.max_element() > 1.0 {
+                    return Err(self.attr_error(
+                        n,
+                        "value",
+                        format!(
+                            "albedo {} {} {}: each channel must lie in [0, 1], as Mitsuba \
+                             requires",
+                            c.x, c.y, c.z
+                        ),
+                    ));
+                }
+                c
+            }
+        };
+        let non_negative = "must not be negative (0 turns it off)";
+        let sun_scale = number(props, "sun_scale", 1.0, &|v| v >= 0.0, non_negative)?;
+        let sky_scale = number(props, "sky_scale", 1.0, &|v| v >= 0.0, non_negative)?;
+        let sun_aperture = number(
+            props,
+            "sun_aperture",
+            sunsky::DEFAULT_SUN_APERTURE,
+            &|v| v > 0.0 && v < 180.0,
+            "the sun's aperture (its full angle, in degrees) must lie in (0, 180), as Mitsuba \
+             requires",
+        )?;
+        let complex_sun = match props.take("complex_sun") {
+            Some(n) => self.boolean(n)?,
+            None => false,
+        };
+        let to_world = match props.take("to_world") {
+            Some(n) => {
+                let m = Mat3::from_mat4(self.transform(n)?);
+                if !is_similarity(m) || (m.determinant() - 1.0).abs() > 1e-3 {
+                    return Err(self.error(
+                        n,
+                        "a sunsky's to_world must be a rotation (Mitsuba takes the sun's local \
+                         direction through a scaled one inconsistently)",
+                    ));
+                }
+                m
+            }
+            None => Mat3::IDENTITY,
+        };
+
+        // The place and time (Mitsuba's defaults: Tokyo, 2010-07-10 15:00, UTC+9), or a
+        // direction.
+        let defaults = sunsky::PlaceTime::default();
+        let mut given = None;
+        let mut place_number = |props: &mut Props<'a, 'input>,
+                                name: &'static str,
+                                default: f32,
+                                range: (f32, f32),
+                                what: &str|
+         -> Result<f32, SceneError> {
+            let Some(n) = props.take(name) else {
+                return Ok(default);
+            };
+            given.get_or_insert((name, n));
+            let v = self.float(n)?;
+            if !(range.0..=range.1).contains(&v) {
+                return Err(self.attr_error(
+                    n,
+                    "value",
+                    format!("{name} {v}: {what} lies in [{}, {}]", range.0, range.1),
+                ));
+            }
+            Ok(v)
+        };
+        let latitude = place_number(
+            props,
+            "latitude",
+            defaults.latitude,
+            (-90.0, 90.0),
+            "a latitude",
+        )?;
+        let longitude = place_number(
+            props,
+            "longitude",
+            defaults.longitude,
+            (-180.0, 180.0),
+            "a longitude",
+        )?;
+        let timezone = place_number(
+            props,
+            "timezone",
+            defaults.timezone,
+            (-12.0, 14.0),
+            "a timezone",
+        )?;
+        let hour = place_number(props, "hour", defaults.hour, (0.0, 24.0), "an hour")?;
+        let minute = place_number(props, "minute", defaults.minute, (0.0, 60.0), "a minute")?;
+        let second = place_number(props, "second", defaults.second, (0.0, 60.0), "a second")?;
+        let integer = |props: &mut Props<'a, 'input>,
+                       name: &'static str,
+                       default: i32,
+                       range: (i64, i64),
+                       what: &str|
+         -> Result<(i32, Option<Node<'a, 'input>>), SceneError> {
+            let Some(n) = props.take(name) else {
+                return Ok((default, None));
+            };
+            let v = self.integer(n)?;
+            if !(range.0..=range.1).contains(&v) {
+                return Err(self.attr_error(
+                    n,
+                    "value",
+                    format!("{name} {v}: {what} lies in [{}, {}]", range.0, range.1),
+                ));
+            }
+            Ok((v as i32, Some(n)))
+        };
+        let (year, year_node) = integer(props, "year", defaults.year, (1, 9999), "a year")?;
+        let (month, month_node) = integer(props, "month", defaults.month, (1, 12), "a month")?;
+        let leap = year % 4 == 0 && (year % 100 != 0 || year % 400 == 0);
+        let days = [
+            31,
+            if leap { 29 } else { 28 },
+            31,
+            30,
+            31,
+            30,
+            31,
+            31,
+            30,
+            31,
+            30,
+            31,
+        ];
+        let (day, day_node) = integer(
+            props,
+            "day",
+            defaults.day,
+            (1, days[month as usize - 1]),
+            &format!("a day of month {month} of {year}"),
+        )?;
+        for (name, n) in [
+            ("year", year_node),
+            ("month", month_node),
+            ("day", day_node),
+        ] {
+            if let Some(n) = n {
+                given.get_or_insert((name, n));
+            }
+        }
+        let sun = match (props.take("sun_direction"), given) {
+            (Some(n), Some((name, other))) => {
+                return Err(self.error(
+                    n,
+                    format!(
+                        "give the sunsky sun_direction or a place and time, not both \
+                         ({name} at line {}), as Mitsuba requires",
+                        self.location(other).line
+                    ),
+                ));
+            }
+            (Some(n), None) => {
+                let d = self.point(n)?;
+                if d.try_normalize().is_none() {
+                    return Err(self.error(n, "the sun_direction is zero"));
+                }
+                sunsky::SunPosition::Direction(d)
+            }
+            (None, _) => sunsky::SunPosition::PlaceTime(sunsky::PlaceTime {
+                latitude,
+                longitude,
+                timezone,
+                year,
+                month,
+                day,
+                hour,
+                minute,
+                second,
+            }),
+        };
+        let model = sunsky::SunSky::new(sunsky::SunSkyParams {
+            turbidity,
+            albedo,
+            sun,
+            sun_scale,
+            sky_scale,
+            sun_aperture,
+            complex_sun,
+            to_world,
+            rgb_matching: sunsky::WAVELENGTHS.map(spectrum::linear_rgb_rec),
+        });
+        if !model.sun_is_up() {
+            self.warn(
+                node,
+                "the sun is below the horizon: Mitsuba renders this sunsky black, its sky too",
+            );
+        }
+        Ok(SunSkyMap::new(model))
     }
 }

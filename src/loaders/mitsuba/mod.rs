@@ -27,6 +27,7 @@ use crate::scene::filter::{
     DEFAULT_GAUSSIAN_STDDEV, DEFAULT_LANCZOS_LOBES, DEFAULT_MITCHELL_B_C, DEFAULT_TENT_RADIUS,
     PixelFilter,
 };
+use crate::scene::sunsky::{self, SunSkyMap};
 use crate::scene::texture::{self, Bitmap, Filter, Texture, UvTransform, WrapMode};
 use crate::scene::{
     Camera, Crop, Integrator, Lens, Material, PointLight, Scene, SceneError, Sphere, mesh,
