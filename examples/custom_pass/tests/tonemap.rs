@@ -191,7 +191,13 @@ fn hppm_itself_never_names_the_custom_pass() {
         let text = std::fs::read_to_string(&file).unwrap_or_default();
         // What names the pass: its kind, its shaders and their modules, its crate (Mitsuba 0.6's
         // ldrfilm property `tonemap_method`, which hppm's loader reads, does not).
-        let names = ["\"tonemap\"", "tonemap.wgsl", "tonemap::", "tone_curves", "custom_pass"];
+        let names = [
+            "\"tonemap\"",
+            "tonemap.wgsl",
+            "tonemap::",
+            "tone_curves",
+            "custom_pass",
+        ];
         assert!(
             !names.iter().any(|name| text.contains(name)),
             "{} names the custom pass",
