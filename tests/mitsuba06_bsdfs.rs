@@ -1029,14 +1029,17 @@ fn the_gpu_glossy_split_takes_the_lobe_below_the_threshold() {
         ],
     );
     let file = ShaderFile {
-        path: "tests/mitsuba06_bsdfs.rs (glossy kernel)",
+        path: "tests/mitsuba06_bsdfs_glossy_kernel.wgsl",
         source: GLOSSY_KERNEL,
     };
-    // With HPPM_SHADER_DIR set, ShaderFile::text reads `path` from there; this kernel has no file.
-    assert!(
-        std::env::var_os("HPPM_SHADER_DIR").is_none(),
-        "run without HPPM_SHADER_DIR"
-    );
+    // With HPPM_SHADER_DIR set (tests/mutation/run, tests/differential_faults.rs), every module
+    // is read from there, this kernel too: it is written there so that the modules it imports
+    // are the ones under test.
+    if let Some(dir) = std::env::var_os("HPPM_SHADER_DIR") {
+        let path = std::path::Path::new(&dir).join(file.path);
+        std::fs::create_dir_all(path.parent().expect("a folder")).expect("the shader folder");
+        std::fs::write(&path, GLOSSY_KERNEL).expect("the glossy kernel");
+    }
     let pipeline = shaders
         .compute_pipeline_with(
             &gpu,
