@@ -80,6 +80,14 @@ impl<'a> PassHarness<'a> {
             path,
             &[(Access::Read, &input), (Access::ReadWrite, &output)],
         );
+        // With HPPM_SHADER_DIR set (tests/mutation/run), every module is read from there, this
+        // test's kernel too: it is written there so that the modules it imports are the ones
+        // under test.
+        if let Some(dir) = std::env::var_os("HPPM_SHADER_DIR") {
+            let at = std::path::Path::new(&dir).join(path);
+            std::fs::create_dir_all(at.parent().expect("a folder")).expect("the shader folder");
+            std::fs::write(&at, source).expect("the test kernel");
+        }
         let file = hppm::gpu::shaders::ShaderFile { path, source };
         let pipeline = self
             .shaders
