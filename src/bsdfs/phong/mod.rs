@@ -17,7 +17,6 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::bsdfs::shared::microfacet::square_to_cosine_hemisphere;
 use crate::bsdfs::shared::mitsuba06::{DiffuseAndSpecular, coordinate_system, only_in_mitsuba06};
 use crate::bsdfs::{BsdfPlugin, BsdfReader, Glossy, GpuKind, Sides, WgslCall};
 use crate::scene::bsdf::{Bsdf, BsdfModel, GpuMaterial, Lobes, Mode, Sample, sample_from_eval};
@@ -172,32 +171,20 @@ impl BsdfModel for Phong {
     /// `u1` picks the lobe (0.6 reuses its first random number, rescaled, for that: the same
     /// distribution), `u2` the direction within it.
     fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<Sample> {
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let wo = if u1 < self.lobes.specular_weight {
-            let n = self.exponent;
+        let n = self.exponent;
+        let wo = self.lobes.sample_direction(wi, u1, u2, |u2| {
             let cos_alpha = u2.y.powf(1.0 / (n + 1.0));
             let sin_alpha = (1.0 - u2.y.powf(2.0 / (n + 1.0))).max(0.0).sqrt();
             let phi = 2.0 * std::f32::consts::PI * u2.x;
             let r = mirror(wi);
             let (s, t) = coordinate_system(r);
-            let wo = s * (sin_alpha * phi.cos()) + t * (sin_alpha * phi.sin()) + r * cos_alpha;
-            if wo.z <= 0.0 {
-                return None;
-            }
-            wo
-        } else {
-            square_to_cosine_hemisphere(u2)
-        };
+            s * (sin_alpha * phi.cos()) + t * (sin_alpha * phi.sin()) + r * cos_alpha
+        })?;
         sample_from_eval(self, wi, wo, mode)
     }
 
     fn pack(&self, record: &mut GpuMaterial, textures: &SideTextures, tables: &mut Vec<f32>) {
-        record.albedo = self.lobes.diffuse.to_array();
-        record.specular = self.lobes.specular.to_array();
-        record.int_ior = self.lobes.scale;
-        record.specular_weight = self.lobes.specular_weight;
+        self.lobes.pack(record);
         record.eta = [self.exponent, 0.0, 0.0];
         let alpha = equivalent_alpha(self.exponent);
         (record.alpha_u, record.alpha_v) = (alpha, alpha);

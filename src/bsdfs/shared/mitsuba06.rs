@@ -4,9 +4,11 @@
 //! src/librender/bsdf.cpp), the weight `phong` and `ward` pick their specular lobe by, and the
 //! frame 0.6 builds about a direction (`coordinateSystem`, src/libcore/util.cpp).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::bsdfs::BsdfReader;
+use crate::bsdfs::shared::microfacet::square_to_cosine_hemisphere;
+use crate::scene::bsdf::GpuMaterial;
 use crate::scene::texture::luminance;
 use crate::scene::{SceneError, SideTextures};
 
@@ -89,6 +91,35 @@ pub struct DiffuseAndSpecular {
 }
 
 impl DiffuseAndSpecular {
+    /// 0.6's sampling of the two lobes: the specular one (`specular`'s direction, `None` where
+    /// it falls below the surface) with probability `specular_weight`, else the diffuse one,
+    /// cosine-weighted; the direction `wo` drawn.
+    pub fn sample_direction(
+        &self,
+        wi: Vec3,
+        u1: f32,
+        u2: Vec2,
+        specular: impl FnOnce(Vec2) -> Vec3,
+    ) -> Option<Vec3> {
+        if wi.z <= 0.0 {
+            return None;
+        }
+        if u1 < self.specular_weight {
+            Some(specular(u2)).filter(|wo| wo.z > 0.0)
+        } else {
+            Some(square_to_cosine_hemisphere(u2))
+        }
+    }
+
+    /// The lobes into the GPU record: reflectances, 0.6's scale (in `int_ior`) and the
+    /// specular lobe's probability.
+    pub fn pack(&self, record: &mut GpuMaterial) {
+        record.albedo = self.diffuse.to_array();
+        record.specular = self.specular.to_array();
+        record.int_ior = self.scale;
+        record.specular_weight = self.specular_weight;
+    }
+
     /// Reads `diffuse_reflectance` and `specular_reflectance` (textures into the diffuse and
     /// specular slots) and `ensure_energy_conservation`.
     pub fn read(r: &mut dyn BsdfReader, textures: &mut SideTextures) -> Result<Self, SceneError> {

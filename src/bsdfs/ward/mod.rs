@@ -19,7 +19,6 @@
 
 use glam::{Vec2, Vec3};
 
-use crate::bsdfs::shared::microfacet::square_to_cosine_hemisphere;
 use crate::bsdfs::shared::mitsuba06::{DiffuseAndSpecular, only_in_mitsuba06};
 use crate::bsdfs::{BsdfPlugin, BsdfReader, Glossy, GpuKind, Sides, WgslCall};
 use crate::scene::bsdf::{Bsdf, BsdfModel, GpuMaterial, Lobes, Mode, Sample, sample_from_eval};
@@ -237,11 +236,8 @@ impl BsdfModel for Ward {
     /// distribution), `u2` the direction within it: u2.x the half vector's polar angle, u2.y
     /// its azimuth, as 0.6 uses its two numbers.
     fn sample(&self, wi: Vec3, u1: f32, u2: Vec2, mode: Mode) -> Option<Sample> {
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let wo = if u1 < self.lobes.specular_weight {
-            let (au, av) = self.alphas();
+        let (au, av) = self.alphas();
+        let wo = self.lobes.sample_direction(wi, u1, u2, |u2| {
             let pi = std::f32::consts::PI;
             let mut phi_h = (av / au * (2.0 * pi * u2.y).tan()).atan();
             if u2.y > 0.5 {
@@ -257,22 +253,13 @@ impl BsdfModel for Ward {
                 sin_theta * phi_h.sin(),
                 theta_h.cos(),
             );
-            let wo = h * (2.0 * wi.dot(h)) - wi;
-            if wo.z <= 0.0 {
-                return None;
-            }
-            wo
-        } else {
-            square_to_cosine_hemisphere(u2)
-        };
+            h * (2.0 * wi.dot(h)) - wi
+        })?;
         sample_from_eval(self, wi, wo, mode)
     }
 
     fn pack(&self, record: &mut GpuMaterial, _textures: &SideTextures, _tables: &mut Vec<f32>) {
-        record.albedo = self.lobes.diffuse.to_array();
-        record.specular = self.lobes.specular.to_array();
-        record.int_ior = self.lobes.scale;
-        record.specular_weight = self.lobes.specular_weight;
+        self.lobes.pack(record);
         let (au, av) = self.alphas();
         (record.alpha_u, record.alpha_v) = (au, av);
         record.distribution = self.variant as u32;
