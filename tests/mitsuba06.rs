@@ -522,8 +522,7 @@ fn public_06_scenes_load_and_render_as_shipped() {
             / (3 * image.pixels.len()) as f64;
         eprintln!(
             "{file}: {}x{} mean {mean:.4}",
-            camera_size(&scene).0,
-            camera_size(&scene).1
+            scene.camera.width, scene.camera.height
         );
         assert!(
             finite && mean > 1e-4,
@@ -555,10 +554,6 @@ const REFUSED: &[(&str, &str, &str)] = &[
         "id \"Ceiling_mesh\" is declared already",
     ),
 ];
-
-fn camera_size(scene: &Scene) -> (u32, u32) {
-    (scene.camera.width, scene.camera.height)
-}
 
 /// A corpus scene's Mitsuba 3 reference (tests/refs/mitsuba06: render.py made it from the
 /// scene after the hand edits it lists, at the reduced film `size`), and Mitsuba's figures
