@@ -80,8 +80,11 @@ struct RenderArgs {
     /// `<default name="name">` and fills every `$name` (repeat for each).
     #[arg(short = 'D', long = "define", value_name = "NAME=VALUE", value_parser = parse_define)]
     defines: Vec<(String, String)>,
-    /// Render graph: a RON file, or a bundled graph's name (hybrid, pt, hybrid_pppm, ...; the
-    /// files of graphs/); default: graphs/hybrid.ron (the bundled one where that file is absent).
+    /// Render graph: a RON file, a bundled graph's name (hybrid, pt, hybrid_pppm, ...; the
+    /// files of graphs/), or `auto` (the default): short pilots of pt, hybrid and hybrid_pppm
+    /// on the scene, the one whose estimated error at the end of the budget is least renders
+    /// on (docs/auto.md). With --shard the default is the hybrid; with --resume, the graph the
+    /// checkpoint was rendered with.
     #[arg(long)]
     graph: Option<PathBuf>,
     /// Samples per pixel to render.
@@ -173,7 +176,8 @@ struct CompareArgs {
     /// estimated (from the render itself).
     #[arg(long)]
     reference: Option<PathBuf>,
-    /// A graph to render, a RON file or a bundled graph's name (repeat for each).
+    /// A graph to render, a RON file, a bundled graph's name or `auto` (the graph `hppm
+    /// render` chooses, its pilots counted in its time) (repeat for each).
     #[arg(long = "graph", required = true)]
     graphs: Vec<PathBuf>,
     /// Seconds of rendering per graph (readback for the snapshots is not counted).
@@ -347,7 +351,11 @@ fn render(args: RenderArgs, registry: &Registry) -> Result<(), Error> {
             .scene
             .unwrap_or_else(|| bundled("scenes/cornell_box.ron")),
         defines: args.defines,
-        graph: args.graph.unwrap_or_else(|| bundled("graphs/hybrid.ron")),
+        graph: args.graph.unwrap_or_else(|| match args.shard {
+            // Every shard must render the same graph; auto's choice depends on timing.
+            Some(_) => bundled("graphs/hybrid.ron"),
+            None => PathBuf::from(crate::render::auto::AUTO),
+        }),
         out: args.out,
         size: args.size,
         seed: args.seed,

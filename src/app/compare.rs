@@ -12,7 +12,7 @@ use crate::Error;
 use crate::app::plot::{self, Series, SeriesStyle};
 use crate::gpu::GpuContext;
 use crate::image::{ErrorMetrics, Image, Provenance};
-use crate::render::{Budget, NodeTime, Renderer};
+use crate::render::{Budget, NodeTime, Renderer, auto};
 
 /// What to compare (the command line's arguments).
 pub struct CompareOptions {
@@ -250,11 +250,15 @@ pub fn compare(
         Some(path) => read_peer_csv(path)?,
         None => Vec::new(),
     };
-    // Load every graph before rendering any, so a typo fails in a second, not after minutes.
+    // Load every graph before rendering any, so a typo fails in a second, not after minutes;
+    // `auto` chooses its graph once it renders (None here).
     let graphs = options
         .graphs
         .iter()
-        .map(|path| options.registry.load_graph(path))
+        .map(|path| match auto::is_auto(path) {
+            true => Ok(None),
+            false => options.registry.load_graph(path).map(Some),
+        })
         .collect::<Result<Vec<_>, _>>()?;
     std::fs::create_dir_all(&options.out).map_err(|source| Error::Io {
         path: options.out.clone(),
@@ -269,11 +273,34 @@ pub fn compare(
         .zip(labels(&options.graphs))
     {
         progress(&format!("{label}: preparing {}", path.display()));
-        let mut renderer = Renderer::builder(gpu, &scene, graph)
-            .registry(options.registry.clone())
-            .size(width, height)
-            .seed(options.seed)
-            .build()?;
+        let build = |graph| {
+            Renderer::builder(gpu, &scene, graph)
+                .registry(options.registry.clone())
+                .size(width, height)
+                .seed(options.seed)
+                .build()
+        };
+        // An `auto` run's clock starts with its pilots, less its winner's preparation (which
+        // the other graphs' clocks leave out too).
+        let (mut renderer, mut clock) = match graph {
+            Some(graph) => (build(graph)?, 0.0),
+            None => {
+                let timed = Budget {
+                    seconds: Some(options.seconds),
+                    ..Budget::default()
+                };
+                let choice = auto::choose(timed, cancel, |name| {
+                    let (file, text) = crate::graph::bundled::bundled_graph(name)?;
+                    let graph = options.registry.parse_graph(Path::new(file), text)?;
+                    Ok((build(graph)?, ()))
+                })?;
+                let report = choice.report;
+                progress(&format!("{label}: {}", report.summary()));
+                let winner = report.pilots.iter().find(|p| p.graph == report.graph);
+                let prepared = winner.map_or(0.0, |p| p.prepare_seconds);
+                (choice.renderer, report.seconds - prepared)
+            }
+        };
         if let Some(warning) = renderer.unsampled_light_warning() {
             progress(&format!("{label}: {warning}"));
         }
@@ -282,7 +309,6 @@ pub fn compare(
         }
         let mut snapshots = Vec::new();
         let mut last_image = None;
-        let mut clock = 0.0;
         for (index, &at) in times.iter().enumerate() {
             // At least one iteration per snapshot, so seconds strictly increase.
             let budget = if at > clock {

@@ -14,6 +14,7 @@ use crate::graph::ValidGraph;
 use crate::graph::pass::Schedule;
 use crate::image::{Image, OutputFormat, Provenance};
 use crate::passes::Registry;
+use crate::render::auto;
 use crate::render::error_estimate::ErrorEstimate;
 use crate::render::fingerprint::graph_fingerprint;
 use crate::render::state::{Origin, StateFile, checkpoint_file, shard_file};
@@ -83,12 +84,106 @@ pub trait JobWatcher {
     fn image(&mut self, _renderer: &Renderer, _image: &Image) {}
 }
 
-/// Runs `job` with the pass kinds of `registry`: plan, prepare, render, write.
+/// Runs `job` with the pass kinds of `registry`: plan, prepare, render, write. A job whose
+/// graph is `auto` prepares and pilots each candidate graph first ([`crate::render::auto`]) and
+/// goes on with the one chosen.
 pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> Result<(), Error> {
-    let (plan, graph) = plan(job, registry, watch)?;
-    let (mut renderer, origin) = prepare(job, registry, &plan, graph, watch)?;
-    let rendered = render(job, &plan, &mut renderer, &origin, watch)?;
+    let job = &with_graph_named(job)?;
+    if auto::is_auto(&job.graph) {
+        return run_auto(job, registry, watch);
+    }
+    let (plan, graph, graph_text) = plan(job, registry, watch)?;
+    let (mut renderer, origin) = prepare_graph(job, registry, &plan, &graph_text, graph, watch)?;
+    let cancel = watch.cancel_flag();
+    let rendered = render(
+        job,
+        &plan,
+        plan.budget,
+        &mut renderer,
+        &origin,
+        &cancel,
+        watch,
+    )?;
     write(job, &plan, &renderer, &origin, rendered, watch)
+}
+
+/// `job`, where its graph is `auto` and it resumes a checkpoint, with the checkpoint's graph
+/// (the one the render began with); `auto` for a shard is refused, since every shard must
+/// render the same graph and the choice depends on each machine's timing.
+fn with_graph_named(job: &RenderJob) -> Result<RenderJob, Error> {
+    if !auto::is_auto(&job.graph) {
+        return Ok(job.clone());
+    }
+    if let Some(path) = &job.resume {
+        let saved = StateFile::read(path)?;
+        return Ok(RenderJob {
+            graph: PathBuf::from(saved.header.graph),
+            ..job.clone()
+        });
+    }
+    if job.shard.is_some() {
+        return Err(Error::Other(
+            "a shard needs a named graph (--graph hybrid, pt, ...), not auto: every shard must              render the same graph, and auto's choice depends on each machine's timing"
+                .into(),
+        ));
+    }
+    Ok(job.clone())
+}
+
+/// Runs an `auto` job: plans it once, pilots the candidate graphs on its scene, renders the
+/// rest of the budget with the chosen one, from where its pilot ended.
+fn run_auto(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> Result<(), Error> {
+    let plan = plan_scene(job, registry, watch)?;
+    let cancel = watch.cancel_flag();
+    if auto::pilots_for(plan.budget) {
+        watch.note(&format!(
+            "auto: piloting {} on this scene (at most {:.0}% of a time budget) to choose the graph",
+            auto::CANDIDATES.join(", "),
+            auto::PILOT_SHARE * 100.0
+        ));
+    }
+    let choice = auto::choose(plan.budget, &cancel, |name| {
+        let (file, text) = crate::graph::bundled::bundled_graph(name)?;
+        let chosen = RenderJob {
+            graph: PathBuf::from(file),
+            ..job.clone()
+        };
+        let graph = registry.parse_graph(&chosen.graph, text)?;
+        let mut notes = Notes::default();
+        let (renderer, origin) = prepare_graph(&chosen, registry, &plan, text, graph, &mut notes)?;
+        Ok((renderer, (chosen, origin, notes)))
+    })?;
+    let auto::Choice {
+        mut renderer,
+        prepared: (chosen, origin, notes),
+        report,
+    } = choice;
+    for line in &notes.0 {
+        watch.note(line);
+    }
+    watch.note(&report.summary());
+    // The render goes on from the winner's pilot with what the budget has left.
+    let left = Budget {
+        seconds: plan
+            .budget
+            .seconds
+            .map(|s| (s - report.seconds).max(f64::MIN_POSITIVE)),
+        ..plan.budget
+    };
+    let mut rendered = render(&chosen, &plan, left, &mut renderer, &origin, &cancel, watch)?;
+    rendered.summary.seconds += report.seconds;
+    rendered.auto = Some(report);
+    write(&chosen, &plan, &renderer, &origin, rendered, watch)
+}
+
+/// A watcher that keeps the notes of a candidate's preparation, to say only the winner's.
+#[derive(Default)]
+struct Notes(Vec<String>);
+
+impl JobWatcher for Notes {
+    fn note(&mut self, line: &str) {
+        self.0.push(line.to_string());
+    }
 }
 
 /// What a job renders, settled before any GPU work: the scene, the device, the graph file's
@@ -96,7 +191,6 @@ pub fn run(job: &RenderJob, registry: &Registry, watch: &mut dyn JobWatcher) -> 
 struct Plan {
     scene: Scene,
     gpu: GpuContext,
-    graph_text: String,
     width: u32,
     height: u32,
     seed: u64,
@@ -105,17 +199,34 @@ struct Plan {
     resume: Option<(PathBuf, StateFile)>,
 }
 
-/// Checks the job, loads the scene and the graph, opens the device, settles size, seed,
-/// iterations and budget.
+/// Reads the job's graph file (before the scene, so that a mistake in it is found at once), then
+/// plans the rest ([`plan_scene`]); returns the graph and its text too.
 fn plan(
     job: &RenderJob,
     registry: &Registry,
     watch: &mut dyn JobWatcher,
-) -> Result<(Plan, ValidGraph), Error> {
+) -> Result<(Plan, ValidGraph, String), Error> {
+    // A bundled graph's name, or its repository path where the repository is not at hand,
+    // stands for its compiled-in text.
+    let (graph_file, graph_text) = crate::graph::bundled::read_graph(&job.graph)?;
+    let plan = plan_scene(job, registry, watch)?;
+    let graph = registry.parse_graph(&graph_file, &graph_text)?;
+    for warning in &graph.warnings {
+        watch.note(&format!("warning: {warning}"));
+    }
+    Ok((plan, graph, graph_text))
+}
+
+/// Checks the job, loads the scene, opens the device, settles size, seed, iterations and
+/// budget.
+fn plan_scene(
+    job: &RenderJob,
+    registry: &Registry,
+    watch: &mut dyn JobWatcher,
+) -> Result<Plan, Error> {
     use BudgetField::*;
     let name = watch.names();
     let scene_path = &job.scene;
-    let graph_path = &job.graph;
     if job.shard.is_none() {
         OutputFormat::of(&job.out)?;
     }
@@ -135,9 +246,6 @@ fn plan(
         Some(path) => Some((path.clone(), StateFile::read(path)?)),
         None => None,
     };
-    // A bundled graph's name, or its repository path where the repository is not at hand,
-    // stands for its compiled-in text.
-    let (graph_file, graph_text) = crate::graph::bundled::read_graph(graph_path)?;
     let loading = std::time::Instant::now();
     let scene = crate::loaders::load_reporting(scene_path, &job.defines, registry.bsdfs(), |w| {
         watch.note(&format!("warning: {w}"))
@@ -149,10 +257,6 @@ fn plan(
         loading.elapsed().as_secs_f64()
     ));
     if let Some(warning) = scene.no_light_warning() {
-        watch.note(&format!("warning: {warning}"));
-    }
-    let graph = registry.parse_graph(&graph_file, &graph_text)?;
-    for warning in &graph.warnings {
         watch.note(&format!("warning: {warning}"));
     }
     let gpu = GpuContext::new(job.adapter.as_deref())?;
@@ -200,7 +304,6 @@ fn plan(
     let plan = Plan {
         scene,
         gpu,
-        graph_text,
         width,
         height,
         seed,
@@ -208,22 +311,23 @@ fn plan(
         budget,
         resume,
     };
-    Ok((plan, graph))
+    Ok(plan)
 }
 
 /// Builds the renderer (pruned graph, pipelines, buffers) and says what it did; refuses a shard
 /// of a graph that cannot be summed; resumes a saved render; starts profiling.
-fn prepare<'p>(
+fn prepare_graph<'p>(
     job: &RenderJob,
     registry: &Registry,
     plan: &'p Plan,
+    graph_text: &str,
     graph: ValidGraph,
     watch: &mut dyn JobWatcher,
 ) -> Result<(Renderer<'p>, Origin), Error> {
     use BudgetField::*;
     let name = watch.names();
     let (scene_path, graph_path) = (&job.scene, &job.graph);
-    let (gpu, scene, graph_text, resume) = (&plan.gpu, &plan.scene, &plan.graph_text, &plan.resume);
+    let (gpu, scene, resume) = (&plan.gpu, &plan.scene, &plan.resume);
     let &Plan {
         width,
         height,
@@ -328,6 +432,8 @@ struct Rendered {
     /// None for a shard, which writes its accumulators.
     image: Option<Image>,
     estimate: Option<ErrorEstimate>,
+    /// How `auto` chose the graph, where it did.
+    auto: Option<auto::ChoiceReport>,
 }
 
 /// Runs the render to its budget (or Ctrl-C), checkpointing on the way, and takes the image and
@@ -335,19 +441,15 @@ struct Rendered {
 fn render(
     job: &RenderJob,
     plan: &Plan,
+    budget: Budget,
     renderer: &mut Renderer<'_>,
     origin: &Origin,
+    cancel: &AtomicBool,
     watch: &mut dyn JobWatcher,
 ) -> Result<Rendered, Error> {
     let name = watch.names();
     let graph_path = &job.graph;
-    let &Plan {
-        width,
-        height,
-        budget,
-        ..
-    } = plan;
-    let cancel = watch.cancel_flag();
+    let &Plan { width, height, .. } = plan;
     // From here on Ctrl-C stops the render and writes what it has (tests wait for this line).
     watch.note(&format!(
         "rendering {width}x{height} through {} (Ctrl-C stops and writes the image so far)",
@@ -359,7 +461,7 @@ fn render(
     }
     let mut last_checkpoint = 0.0;
     let mut checkpoint_error = None;
-    let summary = renderer.run(budget, &cancel, |r, seconds| {
+    let summary = renderer.run(budget, cancel, |r, seconds| {
         if let Some(path) = &job.checkpoint
             && seconds - last_checkpoint >= job.checkpoint_every
             && checkpoint_error.is_none()
@@ -399,6 +501,7 @@ fn render(
         summary,
         image,
         estimate,
+        auto: None,
     })
 }
 
@@ -426,6 +529,7 @@ fn write(
         summary,
         image,
         estimate,
+        auto,
     } = rendered;
     if let Some(path) = &job.checkpoint {
         checkpoint_file(renderer, origin)?.write(path)?;
@@ -454,6 +558,9 @@ fn write(
             .with("hppm_estimated_relmse", format!("{:.6e}", e.relmse))
             .with("hppm_estimated_variance", format!("{:.6e}", e.variance))
             .with("hppm_estimated_bias", format!("{:.6e}", e.bias));
+    }
+    if let Some(report) = &auto {
+        provenance = provenance.with("hppm_auto", report.summary());
     }
     if !job.defines.is_empty() {
         let defines: Vec<String> = job

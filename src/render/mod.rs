@@ -4,6 +4,7 @@
 //! Python and host programs all render through it.
 
 pub mod adaptive;
+pub mod auto;
 mod budget;
 pub mod error_estimate;
 pub mod fingerprint;
