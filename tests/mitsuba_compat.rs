@@ -818,6 +818,17 @@ fn host(object: &str, kind: &str, property: &str) -> String {
                 r#"<bsdf type="blendbsdf">{weight}{property}<bsdf type="diffuse"/><bsdf type="roughconductor"/></bsdf>"#
             ))
         }
+        "bsdf" if kind == "mixturebsdf" => {
+            // The weights it needs, unless the property under test is those weights.
+            let weights = if property.is_empty() {
+                r#"<string name="weights" value="0.5, 0.5"/>"#
+            } else {
+                ""
+            };
+            on_cube(format!(
+                r#"<bsdf type="mixturebsdf">{weights}{property}<bsdf type="diffuse"/><bsdf type="roughconductor"/></bsdf>"#
+            ))
+        }
         "bsdf" if kind == "mask" => on_cube(format!(
             r#"<bsdf type="mask">{property}<bsdf type="diffuse"/></bsdf>"#
         )),
@@ -893,7 +904,7 @@ fn the_plugin_table_is_what_the_loader_reads() {
             } else {
                 kind
             };
-            // Mitsuba 0.6's plugins that Mitsuba 3 dropped (roughdiffuse, phong, ward) are
+            // Mitsuba 0.6's plugins that Mitsuba 3 dropped (roughdiffuse, phong, ward, ...) are
             // refused in version 3 files, saying so; they are checked in a 0.6.0 file.
             let mut version = "3.0.0";
             let base = check(&host(plugin.object, kind, ""));

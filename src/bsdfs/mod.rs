@@ -20,7 +20,10 @@ pub mod shared;
 pub mod blendbsdf;
 pub mod conductor;
 pub mod dielectric;
+pub mod difftrans;
 pub mod diffuse;
+pub mod hk;
+pub mod mixturebsdf;
 pub mod normalmap;
 pub mod null;
 pub mod phong;
@@ -63,6 +66,9 @@ pub fn builtin() -> &'static [&'static BsdfPlugin] {
         &roughdiffuse::PLUGIN,
         &phong::PLUGIN,
         &ward::PLUGIN,
+        &difftrans::PLUGIN,
+        &mixturebsdf::PLUGIN,
+        &hk::PLUGIN,
     ];
     UNITS
 }

@@ -5,6 +5,7 @@
 use glam::Vec3;
 
 use crate::scene::bsdf::Bsdf;
+use crate::scene::medium::Phase;
 use crate::scene::{Material, MaterialTextures, SceneError};
 
 /// A `<bsdf>` as a shape uses it: the front BSDF and, for `twosided`, the back's, with the
@@ -103,6 +104,24 @@ pub trait BsdfReader {
     /// The BSDFs nested in the element (`<bsdf>` children and `<ref>`s to declared ones), each
     /// read through the registry, in file order.
     fn nested(&mut self) -> Result<Vec<Sides>, SceneError>;
+
+    /// The `<phase>` nested in the element (a unit that lists `phase` among its objects, as
+    /// Mitsuba 0.6's `hk`), read as a medium's; `None` when it has none, an error for two.
+    fn phase(&mut self) -> Result<Option<Phase>, SceneError> {
+        Ok(None)
+    }
+
+    /// Mitsuba 0.6's medium preset `name` (src/medium/materials.h, matched ignoring case):
+    /// sigma_s and sigma_a as 0.6 applies them (times 100) and the anisotropy g; `None` where
+    /// there is no such preset.
+    fn medium_preset(&self, _name: &str) -> Option<(Vec3, Vec3, Vec3)> {
+        None
+    }
+
+    /// The names of 0.6's medium presets, for messages.
+    fn medium_preset_names(&self) -> String {
+        String::new()
+    }
 
     /// Adds a material for a blend to choose (its children come before it); its index.
     fn add_material(&mut self, material: Material) -> u32;

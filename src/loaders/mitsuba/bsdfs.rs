@@ -258,6 +258,36 @@ impl BsdfReader for Element<'_, '_, '_> {
         Ok(nested)
     }
 
+    fn phase(&mut self) -> Result<Option<crate::scene::medium::Phase>, SceneError> {
+        let phases: Vec<Node> = self
+            .objects
+            .iter()
+            .copied()
+            .filter(|n| n.has_tag_name("phase"))
+            .collect();
+        if let Some(second) = phases.get(1) {
+            return Err(self.reader.error(
+                *second,
+                format!(
+                    "{}: a second <phase> (it has one phase function)",
+                    self.kind
+                ),
+            ));
+        }
+        phases
+            .first()
+            .map(|&node| self.reader.read_phase(node))
+            .transpose()
+    }
+
+    fn medium_preset(&self, name: &str) -> Option<(Vec3, Vec3, Vec3)> {
+        super::legacy::medium_preset_with_anisotropy(name)
+    }
+
+    fn medium_preset_names(&self) -> String {
+        super::legacy::medium_preset_names()
+    }
+
     fn add_material(&mut self, material: Material) -> u32 {
         self.reader.add_material(material)
     }

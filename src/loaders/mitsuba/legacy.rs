@@ -136,7 +136,8 @@ pub const RULES: &[(&str, &str)] = &[
     ),
     (
         "plugins",
-        "`roughdiffuse`, `phong` and `ward` (in the table above; files of version 0.x only)",
+        "`roughdiffuse`, `phong`, `ward`, `difftrans`, `mixturebsdf` and `hk` (in the table \
+         above; files of version 0.x only)",
     ),
 ];
 
@@ -366,6 +367,57 @@ pub(super) fn medium_preset(name: &str) -> Option<(Vec3, Vec3)> {
         Vec3::from(entry.sigma_s) * PRESET_UNITS,
         Vec3::from(entry.sigma_a) * PRESET_UNITS,
     ))
+}
+
+/// The presets' anisotropy g per channel where 0.6 lists one (Narasimhan et al.'s measurements;
+/// Jensen et al.'s are 0): its `hk` BSDF multiplies a preset's scattering by 1 - g.
+const PRESET_ANISOTROPY: &[(&str, [f32; 3])] = &[
+    ("Lowfat Milk", [0.93200, 0.90200, 0.85900]),
+    ("Reduced Milk", [0.81900, 0.79700, 0.74600]),
+    ("Regular Milk", [0.75000, 0.71400, 0.68100]),
+    ("Espresso", [0.90700, 0.89600, 0.88000]),
+    ("Mint Mocha Coffee", [0.91000, 0.90700, 0.91400]),
+    ("Lowfat Soy Milk", [0.85000, 0.85300, 0.84200]),
+    ("Regular Soy Milk", [0.87300, 0.85800, 0.83200]),
+    ("Lowfat Chocolate Milk", [0.93400, 0.92700, 0.91600]),
+    ("Regular Chocolate Milk", [0.86200, 0.83800, 0.80600]),
+    ("Coke", [0.96500, 0.97200, 0.00000]),
+    ("Pepsi", [0.92600, 0.97900, 0.00000]),
+    ("Sprite", [0.94300, 0.95300, 0.95200]),
+    ("Gatorade", [0.93300, 0.93300, 0.93500]),
+    ("Chardonnay", [0.91400, 0.95800, 0.97500]),
+    ("White Zinfandel", [0.91900, 0.94300, 0.97200]),
+    ("Merlot", [0.97400, 0.00000, 0.00000]),
+    ("Budweiser Beder", [0.91700, 0.95600, 0.98200]),
+    ("Coors Light Beer", [0.91800, 0.96600, 0.00000]),
+    ("Clorox", [0.91200, 0.90500, 0.89200]),
+    ("Apple Juice", [0.94700, 0.94900, 0.94500]),
+    ("Cranberry Juice", [0.94700, 0.95100, 0.97400]),
+    ("Grape Juice", [0.96100, 0.00000, 0.00000]),
+    ("Ruby Grapefruit Juice", [0.92900, 0.92900, 0.93100]),
+    ("White Grapefruit Juice", [0.54800, 0.54500, 0.56500]),
+    ("Shampoo", [0.91000, 0.90500, 0.92000]),
+    ("Strawberry Shampoo", [0.92700, 0.93500, 0.99400]),
+    ("Head & Shoulders Shampoo", [0.91100, 0.89600, 0.88400]),
+    ("Lemon Tea Powder", [0.94600, 0.94600, 0.94900]),
+    ("Orange Juice Powder", [0.91900, 0.91800, 0.92200]),
+    ("Pink Lemonade Powder", [0.90200, 0.90200, 0.90400]),
+    ("Cappuccino Powder", [0.84900, 0.84300, 0.92600]),
+    ("Salt Powder", [0.80200, 0.79300, 0.82100]),
+    ("Sugar Powder", [0.92100, 0.91900, 0.93100]),
+    ("Suisse Mocha Powder", [0.90700, 0.89400, 0.88800]),
+    ("Pacific Ocean Surface Water", [0.90200, 0.82500, 0.91400]),
+];
+
+/// A preset's (sigma_s, sigma_a, g) as 0.6's `lookupMaterial` gives them to `hk`: the
+/// coefficients of [`medium_preset`] and the anisotropy (0 where 0.6 has none).
+pub(super) fn medium_preset_with_anisotropy(name: &str) -> Option<(Vec3, Vec3, Vec3)> {
+    let (sigma_s, sigma_a) = medium_preset(name)?;
+    let g = PRESET_ANISOTROPY
+        .iter()
+        .find(|(n, _)| n.eq_ignore_ascii_case(name))
+        .map_or(Vec3::ZERO, |(_, g)| Vec3::from(*g));
+    Some((sigma_s, sigma_a, g))
 }
 
 /// The preset names, for messages.

@@ -446,7 +446,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     /// `<phase type=...>`: isotropic, hg (`g`, default 0.8, in (-1, 1)) or rayleigh.
-    fn read_phase(&self, node: Node<'a, 'input>) -> Result<Phase, SceneError> {
+    pub(super) fn read_phase(&self, node: Node<'a, 'input>) -> Result<Phase, SceneError> {
         let kind = self.required_attr(node, "type")?;
         let mut props = self.props(node, &[])?;
         let phase = match kind.as_str() {
