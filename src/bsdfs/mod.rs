@@ -18,6 +18,7 @@ mod registry;
 pub mod shared;
 
 pub mod blendbsdf;
+pub mod coating;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
@@ -63,6 +64,8 @@ pub fn builtin() -> &'static [&'static BsdfPlugin] {
         &roughdiffuse::PLUGIN,
         &phong::PLUGIN,
         &ward::PLUGIN,
+        &coating::PLUGIN,
+        &coating::ROUGH_PLUGIN,
     ];
     UNITS
 }

@@ -136,7 +136,8 @@ pub const RULES: &[(&str, &str)] = &[
     ),
     (
         "plugins",
-        "`roughdiffuse`, `phong` and `ward` (in the table above; files of version 0.x only)",
+        "`roughdiffuse`, `phong`, `ward`, `coating` and `roughcoating` (in the table above; files \
+         of version 0.x only)",
     ),
 ];
 
