@@ -3,38 +3,20 @@
 // Mitsuba 0.6's coating and roughcoating (src/bsdfs/coating.cpp, roughcoating.cpp): a dielectric
 // layer over one nested BSDF, which is evaluated and sampled at the directions refracted into
 // the layer. The nested BSDF is its own record (`materials[m.children.x]`); WGSL has no
-// recursion, so the generated dispatch cannot be called from here, and the nested kinds the
-// loader accepts are dispatched below, each under its unit's def (the scene sets it, since the
-// nested material is among its materials). Record slots: int_ior the relative eta, k sigma_a
-// times thickness, specular the reflection's tint, specular_weight 0.6's lobe weight; the rough
-// coating's alpha_u / alpha_v / distribution and its transmittance table at `table`. The CPU
-// reference is src/bsdfs/coating/mod.rs.
+// recursion, so the generated dispatch cannot be called from here: a Lambertian base is
+// evaluated below (the generated dispatches leave it to their callers), the other nested kinds
+// through common::leaf_material, generated for the kinds of the units before this one (their
+// defs are set, since the nested material is among the scene's materials). Record slots:
+// int_ior the relative eta, k sigma_a times thickness, specular the reflection's tint,
+// specular_weight 0.6's lobe weight; the rough coating's alpha_u / alpha_v / distribution and its
+// transmittance table at `table`. The CPU reference is src/bsdfs/coating/mod.rs.
 
 #import common::sampling::{INV_PI, square_to_cosine_hemisphere}
 #import common::scene::{Material, materials, bsdf_tables, MATERIAL_DIFFUSE}
 #import common::bsdf::{BsdfEval, BsdfSample, no_sample, mirror_local}
 #import common::fresnel::fresnel_full
 #import common::microfacet::{Microfacet, microfacet_d, microfacet_g1, microfacet_sample}
-#ifdef CONDUCTOR
-#import common::scene::MATERIAL_ROUGHCONDUCTOR
-#import bsdfs::roughconductor::{roughconductor_eval, roughconductor_sample}
-#endif
-#ifdef PLASTIC
-#import common::scene::MATERIAL_ROUGHPLASTIC
-#import bsdfs::roughplastic::{rough_plastic_eval, rough_plastic_sample}
-#endif
-#ifdef ROUGH_DIFFUSE
-#import common::scene::MATERIAL_ROUGHDIFFUSE
-#import bsdfs::roughdiffuse::{rough_diffuse_eval, rough_diffuse_sample}
-#endif
-#ifdef PHONG
-#import common::scene::MATERIAL_PHONG
-#import bsdfs::phong::{phong_eval, phong_sample}
-#endif
-#ifdef WARD
-#import common::scene::MATERIAL_WARD
-#import bsdfs::ward::{ward_eval, ward_sample}
-#endif
+#import common::leaf_material::{leaf_material_eval, leaf_material_sample}
 
 const TRANSMITTANCE_RES: u32 = 100u;
 
@@ -45,32 +27,7 @@ fn nested_eval(n: Material, wi: vec3<f32>, wo: vec3<f32>, radiance: bool) -> Bsd
         }
         return BsdfEval(n.albedo * (wo.z * INV_PI), wo.z * INV_PI);
     }
-#ifdef CONDUCTOR
-    if n.kind == MATERIAL_ROUGHCONDUCTOR {
-        return roughconductor_eval(n, wi, wo, radiance);
-    }
-#endif
-#ifdef PLASTIC
-    if n.kind == MATERIAL_ROUGHPLASTIC {
-        return rough_plastic_eval(n, wi, wo, radiance);
-    }
-#endif
-#ifdef ROUGH_DIFFUSE
-    if n.kind == MATERIAL_ROUGHDIFFUSE {
-        return rough_diffuse_eval(n, wi, wo, radiance);
-    }
-#endif
-#ifdef PHONG
-    if n.kind == MATERIAL_PHONG {
-        return phong_eval(n, wi, wo, radiance);
-    }
-#endif
-#ifdef WARD
-    if n.kind == MATERIAL_WARD {
-        return ward_eval(n, wi, wo, radiance);
-    }
-#endif
-    return BsdfEval(vec3<f32>(0.0), 0.0);
+    return leaf_material_eval(n, wi, wo, radiance);
 }
 
 fn nested_sample(n: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: bool) -> BsdfSample {
@@ -84,32 +41,7 @@ fn nested_sample(n: Material, wi: vec3<f32>, u1: f32, u2: vec2<f32>, radiance: b
         }
         return BsdfSample(wo, n.albedo, wo.z * INV_PI, false, true);
     }
-#ifdef CONDUCTOR
-    if n.kind == MATERIAL_ROUGHCONDUCTOR {
-        return roughconductor_sample(n, wi, u1, u2, radiance);
-    }
-#endif
-#ifdef PLASTIC
-    if n.kind == MATERIAL_ROUGHPLASTIC {
-        return rough_plastic_sample(n, wi, u1, u2, radiance);
-    }
-#endif
-#ifdef ROUGH_DIFFUSE
-    if n.kind == MATERIAL_ROUGHDIFFUSE {
-        return rough_diffuse_sample(n, wi, u1, u2, radiance);
-    }
-#endif
-#ifdef PHONG
-    if n.kind == MATERIAL_PHONG {
-        return phong_sample(n, wi, u1, u2, radiance);
-    }
-#endif
-#ifdef WARD
-    if n.kind == MATERIAL_WARD {
-        return ward_sample(n, wi, u1, u2, radiance);
-    }
-#endif
-    return no_sample();
+    return leaf_material_sample(n, wi, u1, u2, radiance);
 }
 
 // A direction refracted through the smooth interface (relative index `eta` as seen from its

@@ -12,11 +12,12 @@
 //!
 //! The nested BSDF is a material of its own (added before the coating, as a blend's children
 //! are), and the coating's GPU record points at it (`children.x`): `coating.wgsl` reads that
-//! record and calls the nested kind's WGSL through a small dispatch of its own (WGSL has no
-//! recursion, so the generated dispatch cannot call itself). The nested kinds it handles are
-//! the one-sided, non-delta, non-transmitting ones that need no texture: `diffuse`,
-//! `roughconductor`, `roughplastic`, `roughdiffuse`, `phong`, `ward`; the others are refused at
-//! the element.
+//! record and calls the nested kind's WGSL through `common::leaf_material`, the dispatch the
+//! registry generates for kinds that nest ([`GpuKind::nests`]; WGSL has no recursion, so the
+//! main dispatch cannot call itself). The nested kinds accepted are the one-sided, non-delta,
+//! non-transmitting ones that need no texture: `diffuse` (Lambertian, which the coating's WGSL
+//! evaluates itself, as the passes do), `roughconductor`, `roughplastic`, `roughdiffuse`,
+//! `phong`, `ward`; the others are refused at the element.
 //!
 //! For the light-transport partition the smooth coating's reflection is a delta lobe (an S
 //! vertex when sampled) and the nested lobe seen through the interface is continuous (path
@@ -90,6 +91,7 @@ pub static PLUGIN: BsdfPlugin = BsdfPlugin {
     kinds: &[GpuKind {
         eval: Some(WgslCall::new(MODULE, "coating_eval")),
         sample: Some(WgslCall::new(MODULE, "coating_sample")),
+        nests: true,
         ..GpuKind::inline("coating", SMOOTH_LOBES)
     }],
     def: Some("COATING"),
@@ -130,6 +132,7 @@ pub static ROUGH_PLUGIN: BsdfPlugin = BsdfPlugin {
             eval: WgslCall::new(MODULE, "rough_coating_reflection"),
             share: WgslCall::new(MODULE, "rough_coating_reflection_share"),
         },
+        nests: true,
         ..GpuKind::inline("roughcoating", ROUGH_LOBES)
     }],
     def: Some("COATING"),
