@@ -1723,3 +1723,139 @@ fn hybrid_equals_pt_through_coatings() {
         .unwrap_or_else(|e| panic!("{e}"));
     common::convergence::hybrid_equals_pt("coated_box", "graphs/hybrid.ron", &scene);
 }
+
+/// The rough coating's glossy split on the GPU (`GLOSSY`, threshold 0.2): at alpha 0.1 its
+/// reflection lobe is specular, so the split gives the CPU model's reflection alone and its
+/// share of f per channel (coloured nested base, tinted reflection); at alpha 0.3 it gives
+/// nothing, and the smooth coating's continuous part is never split. 400 pairs each, half near
+/// the mirror direction. Catches a split that returns the whole BSDF or the nested lobe, and
+/// alpha packed where the threshold test does not read it.
+#[test]
+fn the_gpu_glossy_split_takes_the_rough_coatings_reflection() {
+    use hppm::gpu::binding::{Access, bind_buffers};
+    use hppm::gpu::shaders::ShaderFile;
+    use hppm::gpu_scene::{GpuScene, SceneResources};
+
+    let gpu = common::gpu();
+    let threshold = 0.2f32;
+    let bsdfs = [
+        r#"<bsdf type="roughcoating"><float name="alpha" value="0.1"/><rgb name="specularReflectance" value="0.9 0.6 0.3"/><bsdf type="diffuse"><rgb name="reflectance" value="0.2, 0.5, 0.8"/></bsdf></bsdf>"#,
+        r#"<bsdf type="roughcoating"><float name="alpha" value="0.3"/><bsdf type="roughconductor"/></bsdf>"#,
+        r#"<bsdf type="coating"><bsdf type="roughconductor"><float name="alpha" value="0.05"/></bsdf></bsdf>"#,
+    ];
+    let scene = scene_with("0.6.0", &bsdfs).unwrap_or_else(|e| panic!("{e}"));
+    // The coatings' materials (their nested ones come before each).
+    let coatings: Vec<usize> = (0..scene.materials.len())
+        .filter(|&i| scene.materials[i].bsdf.kind().contains("coating"))
+        .collect();
+    assert_eq!(coatings.len(), 3);
+    let registry = hppm::passes::Registry::builtin();
+    let gpu_scene = GpuScene::with_bsdfs(&scene, 4, 4, registry.bsdfs()).expect("layout");
+    let resources = SceneResources::for_adapter(&gpu, &gpu_scene).expect("resources");
+    let shaders = registry
+        .shader_library(gpu.has_float_atomics(), &scene, &resources.placement)
+        .expect("library");
+    let mut rng = Rng(78);
+    let mut queries: Vec<[f32; 4]> = Vec::new();
+    let mut pairs = Vec::new();
+    for &material in &coatings {
+        for _ in 0..400 {
+            let mut wi = rng.direction();
+            wi.z = wi.z.abs().max(0.05);
+            let wi = wi.normalize();
+            let mut wo = if rng.unit() < 0.5 {
+                (Vec3::new(-wi.x, -wi.y, wi.z) + 0.1 * rng.direction()).normalize()
+            } else {
+                rng.direction()
+            };
+            wo.z = wo.z.abs().max(0.01);
+            let wo = wo.normalize();
+            queries.push([wi.x, wi.y, wi.z, material as f32]);
+            queries.push([wo.x, wo.y, wo.z, threshold]);
+            pairs.push((material, wi, wo));
+        }
+    }
+    let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let query_buffer = gpu
+        .create_buffer_init("queries", bytemuck::cast_slice(&queries), storage)
+        .expect("queries");
+    let answer_buffer = gpu
+        .create_buffer("answers", (queries.len() * 16) as u64, storage)
+        .expect("answers");
+    let (layout, group) = bind_buffers(
+        &gpu,
+        "coating glossy split check",
+        &[
+            (Access::Read, &query_buffer),
+            (Access::ReadWrite, &answer_buffer),
+        ],
+    );
+    let file = ShaderFile {
+        path: "tests/mitsuba06_bsdfs_glossy_kernel.wgsl",
+        source: GLOSSY_KERNEL,
+    };
+    if let Some(dir) = std::env::var_os("HPPM_SHADER_DIR") {
+        let path = std::path::Path::new(&dir).join(file.path);
+        std::fs::create_dir_all(path.parent().expect("a folder")).expect("the shader folder");
+        std::fs::write(&path, GLOSSY_KERNEL).expect("the glossy kernel");
+    }
+    let pipeline = shaders
+        .compute_pipeline_with(
+            &gpu,
+            &file,
+            "main",
+            &[&resources.layout, &layout],
+            &["GLOSSY"],
+        )
+        .expect("glossy kernel");
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &resources.bind_group, &[]);
+        pass.set_bind_group(1, &group, &[]);
+        pass.dispatch_workgroups((pairs.len() as u32).div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    gpu.check_errors().expect("kernel");
+    let answers: Vec<[f32; 4]> = gpu
+        .read_pod(&answer_buffer, queries.len())
+        .expect("readback");
+
+    let mut failures = Vec::new();
+    let mut lobe_seen = 0;
+    for (i, (material, wi, wo)) in pairs.iter().enumerate() {
+        let bsdf = &scene.materials[*material].bsdf;
+        let full = bsdf.eval(*wi, *wo, Mode::Radiance);
+        let (want_spec, want_share) = match bsdf.get::<RoughCoating>() {
+            Some(rc) if rc.microfacet.alpha_u < threshold => {
+                let lobe = rc.reflection(*wi, *wo);
+                lobe_seen += (lobe.max_element() > 1e-3 * full.max_element()) as usize;
+                let share = Vec3::select(full.cmpgt(Vec3::ZERO), lobe / full, Vec3::ZERO);
+                (lobe, share)
+            }
+            _ => (Vec3::ZERO, Vec3::ZERO),
+        };
+        let got_spec = Vec3::from_slice(&answers[2 * i][..3]);
+        let got_share = Vec3::from_slice(&answers[2 * i + 1][..3]);
+        let near = |a: Vec3, b: Vec3| {
+            (a - b).abs().max_element() <= 2e-3 * a.abs().max(b.abs()).max_element() + 1e-5
+        };
+        if !near(got_spec, want_spec) || !near(got_share, want_share) {
+            failures.push(format!(
+                "material {material} wi {wi} wo {wo}: GPU lobe {got_spec} share {got_share}, \
+                 expected {want_spec} {want_share}"
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} differ:\n{}",
+        failures.len(),
+        pairs.len(),
+        failures[..failures.len().min(20)].join("\n")
+    );
+    assert!(lobe_seen > 100, "{lobe_seen}");
+}
