@@ -829,6 +829,9 @@ fn host(object: &str, kind: &str, property: &str) -> String {
                 r#"<bsdf type="mixturebsdf">{weights}{property}<bsdf type="diffuse"/><bsdf type="roughconductor"/></bsdf>"#
             ))
         }
+        "bsdf" if kind == "coating" || kind == "roughcoating" => on_cube(format!(
+            r#"<bsdf type="{kind}">{property}<bsdf type="diffuse"/></bsdf>"#
+        )),
         "bsdf" if kind == "mask" => on_cube(format!(
             r#"<bsdf type="mask">{property}<bsdf type="diffuse"/></bsdf>"#
         )),
@@ -904,8 +907,9 @@ fn the_plugin_table_is_what_the_loader_reads() {
             } else {
                 kind
             };
-            // Mitsuba 0.6's plugins that Mitsuba 3 dropped (roughdiffuse, phong, ward, ...) are
-            // refused in version 3 files, saying so; they are checked in a 0.6.0 file.
+            // Mitsuba 0.6's plugins that Mitsuba 3 dropped (roughdiffuse, phong, ward, difftrans,
+            // mixturebsdf, hk, coating, roughcoating) are refused in version 3 files, saying so;
+            // they are checked in a 0.6.0 file.
             let mut version = "3.0.0";
             let base = check(&host(plugin.object, kind, ""));
             let base = if base

@@ -18,6 +18,7 @@ mod registry;
 pub mod shared;
 
 pub mod blendbsdf;
+pub mod coating;
 pub mod conductor;
 pub mod dielectric;
 pub mod difftrans;
@@ -69,6 +70,8 @@ pub fn builtin() -> &'static [&'static BsdfPlugin] {
         &difftrans::PLUGIN,
         &mixturebsdf::PLUGIN,
         &hk::PLUGIN,
+        &coating::PLUGIN,
+        &coating::ROUGH_PLUGIN,
     ];
     UNITS
 }

@@ -57,6 +57,12 @@ pub struct GpuKind {
     /// A scene with this kind needs its unit's WGSL, so its def is set; false for a kind the
     /// passes handle with none of it (a perfect mirror, which the conductor unit reads).
     pub needs_wgsl: bool,
+    /// Its WGSL evaluates and samples a BSDF nested in it (Mitsuba 0.6's coatings) through
+    /// `common::leaf_material` (`leaf_material_eval`, `leaf_material_sample`), which the registry
+    /// generates from the kinds of the units registered before the first such unit and composes
+    /// just before that unit's WGSL: WGSL has no recursion, so it cannot call the dispatch that
+    /// calls it.
+    pub nests: bool,
 }
 
 impl GpuKind {
@@ -70,6 +76,7 @@ impl GpuKind {
             glossy: Glossy::None,
             alpha_floor: 1e-4,
             needs_wgsl: true,
+            nests: false,
         }
     }
 

@@ -136,8 +136,8 @@ pub const RULES: &[(&str, &str)] = &[
     ),
     (
         "plugins",
-        "`roughdiffuse`, `phong`, `ward`, `difftrans`, `mixturebsdf` and `hk` (in the table \
-         above; files of version 0.x only)",
+        "`roughdiffuse`, `phong`, `ward`, `difftrans`, `mixturebsdf`, `hk`, `coating` and \
+         `roughcoating` (in the table above; files of version 0.x only)",
     ),
 ];
 
