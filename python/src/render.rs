@@ -2,12 +2,12 @@
 //! `hppm.Renderer` (iterate, look at the image, go on). Arrays are float32 numpy arrays of
 //! shape (height, width, 3), linear RGB.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
 use hppm::passes::Registry;
-use hppm::render::{Budget, BudgetField, Renderer, RunSummary, Stop};
+use hppm::render::{Budget, BudgetField, Renderer, RunSummary, Stop, auto};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -94,6 +94,58 @@ fn build(
         gpu,
         scene_spp: scene.spp_hint,
     })
+}
+
+/// The renderer `auto` chooses for `scene` and `budget` (its pilots rendered, the winner's kept),
+/// and what is left of the budget; the choice is logged on the `hppm` logger.
+fn build_auto(
+    py: Python<'_>,
+    scene: SceneArg<'_>,
+    budget: Budget,
+    size: Option<(u32, u32)>,
+    seed: u64,
+) -> PyResult<(PyRenderer, Budget)> {
+    let registry = Registry::builtin();
+    let scene = match scene {
+        SceneArg::Loaded(s) => s.scene.clone(),
+        SceneArg::File(path) => crate::load_scene(py, path, None)?.scene,
+    };
+    let budget = budget.or_scene_spp(scene.spp_hint);
+    budget.check_named(keyword).map_err(to_py)?;
+    let (width, height) = size.unwrap_or((scene.camera.width, scene.camera.height));
+    let gpu = crate::gpu(None)?;
+    if let Some(warning) = scene.no_light_warning() {
+        crate::warn(py, &warning)?;
+    }
+    let cancel = AtomicBool::new(false);
+    let choice = py
+        .allow_threads(|| {
+            auto::choose(budget, &cancel, |name| {
+                let (file, text) = hppm::graph::bundled::bundled_graph(name)?;
+                let graph = registry.parse_graph(Path::new(file), text)?;
+                let renderer = Renderer::builder(gpu, &scene, graph)
+                    .registry(registry.clone())
+                    .size(width, height)
+                    .seed(seed)
+                    .build()?;
+                Ok((renderer, ()))
+            })
+        })
+        .map_err(to_py)?;
+    let logger = py.import("logging")?.call_method1("getLogger", ("hppm",))?;
+    logger.call_method1("info", (choice.report.summary(),))?;
+    let left = Budget {
+        seconds: budget
+            .seconds
+            .map(|s| (s - choice.report.seconds).max(f64::MIN_POSITIVE)),
+        ..budget
+    };
+    let renderer = PyRenderer {
+        renderer: Mutex::new(choice.renderer),
+        gpu,
+        scene_spp: scene.spp_hint,
+    };
+    Ok((renderer, left))
 }
 
 /// A panic inside a call (a bug) leaves the renderer unusable rather than half-updated.
@@ -365,9 +417,10 @@ impl PyRenderer {
     }
 }
 
-/// Renders `scene` (a `hppm.Scene` or a file) through `graph` (a `hppm.Graph`, a RON file or a
-/// bundled graph's name; default: the bundled hybrid) as `hppm render` does with the same
-/// budget, seed and size, and returns the image as a (height, width, 3) float32 array; with
+/// Renders `scene` (a `hppm.Scene` or a file) through `graph` (a `hppm.Graph`, a RON file, a
+/// bundled graph's name, or "auto": the graph `hppm render` would choose, by the same pilots,
+/// reported on the `hppm` logger; default: the bundled hybrid) as `hppm render` does with the
+/// same budget, seed and size, and returns the image as a (height, width, 3) float32 array; with
 /// `aovs=True`, a pair (image, dict) whose dict holds the output node's other images and
 /// `error`, the per-pixel error estimate. Budgets, the default budget and `progress` are those
 /// of `Renderer.run`.
@@ -389,10 +442,29 @@ pub fn render<'py>(
     progress: Option<PyObject>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let graph = graph.unwrap_or(GraphArg::NameOrFile(PathBuf::from("hybrid")));
-    let mut renderer = build(py, scene, graph, size, seed)?;
-    // As `hppm render`: the estimate is made as it renders (a target error needs it).
-    renderer.inner_mut()?.watch_error();
-    renderer.run(py, spp, time, photons, target_error, adaptive, progress)?;
+    let budget = Budget {
+        spp,
+        seconds: time,
+        photons,
+        target_error,
+        adaptive,
+    };
+    let mut renderer = match graph {
+        GraphArg::NameOrFile(path) if auto::is_auto(&path) => {
+            let (renderer, left) = build_auto(py, scene, budget, size, seed)?;
+            let mut renderer = renderer;
+            renderer.inner_mut()?.watch_error();
+            renderer.run_to(py, left, progress)?;
+            renderer
+        }
+        graph => {
+            let mut renderer = build(py, scene, graph, size, seed)?;
+            // As `hppm render`: the estimate is made as it renders (a target error needs it).
+            renderer.inner_mut()?.watch_error();
+            renderer.run(py, spp, time, photons, target_error, adaptive, progress)?;
+            renderer
+        }
+    };
     let inner = renderer.inner_mut()?;
     let (image, estimate) = py
         .allow_threads(move || inner.image_and_error_estimate())
