@@ -954,51 +954,36 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 "#;
 
-/// The glossy split on the GPU (`GLOSSY`, a `glossy_threshold` of 0.2, hybrid.ron's): a Phong
-/// lobe of exponent 200 (Beckmann-equivalent alpha 0.0995) and a Ward lobe of alphas 0.05 and
-/// 0.08 are specular there, so the split gives their lobe's f |cos wo| (the CPU model's lobe
-/// alone) and its share of f, per channel; exponent 30 (alpha 0.25) and a Ward lobe of alphas
-/// 0.1 and 0.3 (the larger counts) are not, and give nothing. 500 random pairs each. Catches a
-/// split that returns the whole BSDF or the wrong lobe, a roughness packed where the threshold
-/// test does not read it (the exponent itself in alpha_u), or a Ward lobe judged by its smaller
-/// alpha.
-#[test]
-fn the_gpu_glossy_split_takes_the_lobe_below_the_threshold() {
+/// A glossy-split query: the material's index, wi and wo.
+type SplitQuery = (usize, Vec3, Vec3);
+
+/// Runs GLOSSY_KERNEL (the dispatch's glossy split under `GLOSSY`) on `per_material` random
+/// (wi, wo) pairs for each of `materials` of `scene`, half of them near the mirror direction
+/// where a lobe has most of f; returns the pairs and the kernel's answers (two per pair).
+fn glossy_split_on_gpu(
+    gpu: &hppm::gpu::GpuContext,
+    scene: &Scene,
+    materials: &[usize],
+    per_material: usize,
+    seed: u64,
+    threshold: f32,
+) -> (Vec<SplitQuery>, Vec<[f32; 4]>) {
     use hppm::gpu::binding::{Access, bind_buffers};
     use hppm::gpu::shaders::ShaderFile;
     use hppm::gpu_scene::{GpuScene, SceneResources};
 
-    let gpu = common::gpu();
-    let threshold = 0.2f32;
-    let bsdfs = [
-        (
-            r#"<bsdf type="phong"><float name="exponent" value="200"/><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/><rgb name="specular_reflectance" value="0.3, 0.2, 0.1"/></bsdf>"#,
-            true,
-        ),
-        (r#"<bsdf type="phong"/>"#, false),
-        (
-            r#"<bsdf type="ward"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.08"/><rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/></bsdf>"#,
-            true,
-        ),
-        (
-            r#"<bsdf type="ward"><string name="variant" value="ward"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
-            false,
-        ),
-    ];
-    let xmls: Vec<&str> = bsdfs.iter().map(|(x, _)| *x).collect();
-    let scene = scene_with("0.6.0", &xmls).unwrap_or_else(|e| panic!("{e}"));
     let registry = hppm::passes::Registry::builtin();
-    let gpu_scene = GpuScene::with_bsdfs(&scene, 4, 4, registry.bsdfs()).expect("layout");
-    let resources = SceneResources::for_adapter(&gpu, &gpu_scene).expect("resources");
+    let gpu_scene = GpuScene::with_bsdfs(scene, 4, 4, registry.bsdfs()).expect("layout");
+    let resources = SceneResources::for_adapter(gpu, &gpu_scene).expect("resources");
     let shaders = registry
-        .shader_library(gpu.has_float_atomics(), &scene, &resources.placement)
+        .shader_library(gpu.has_float_atomics(), scene, &resources.placement)
         .expect("library");
 
-    let mut rng = Rng(77);
+    let mut rng = Rng(seed);
     let mut queries: Vec<[f32; 4]> = Vec::new();
     let mut pairs = Vec::new();
-    for material in 0..bsdfs.len() {
-        for _ in 0..500 {
+    for &material in materials {
+        for _ in 0..per_material {
             // Near the mirror direction half the time, where the lobe has most of f.
             let mut wi = rng.direction();
             wi.z = wi.z.abs().max(0.05);
@@ -1023,7 +1008,7 @@ fn the_gpu_glossy_split_takes_the_lobe_below_the_threshold() {
         .create_buffer("answers", (queries.len() * 16) as u64, storage)
         .expect("answers");
     let (layout, group) = bind_buffers(
-        &gpu,
+        gpu,
         "glossy split check",
         &[
             (Access::Read, &query_buffer),
@@ -1044,7 +1029,7 @@ fn the_gpu_glossy_split_takes_the_lobe_below_the_threshold() {
     }
     let pipeline = shaders
         .compute_pipeline_with(
-            &gpu,
+            gpu,
             &file,
             "main",
             &[&resources.layout, &layout],
@@ -1066,6 +1051,41 @@ fn the_gpu_glossy_split_takes_the_lobe_below_the_threshold() {
     let answers: Vec<[f32; 4]> = gpu
         .read_pod(&answer_buffer, queries.len())
         .expect("readback");
+
+    (pairs, answers)
+}
+
+/// The glossy split on the GPU (`GLOSSY`, a `glossy_threshold` of 0.2, hybrid.ron's): a Phong
+/// lobe of exponent 200 (Beckmann-equivalent alpha 0.0995) and a Ward lobe of alphas 0.05 and
+/// 0.08 are specular there, so the split gives their lobe's f |cos wo| (the CPU model's lobe
+/// alone) and its share of f, per channel; exponent 30 (alpha 0.25) and a Ward lobe of alphas
+/// 0.1 and 0.3 (the larger counts) are not, and give nothing. 500 random pairs each. Catches a
+/// split that returns the whole BSDF or the wrong lobe, a roughness packed where the threshold
+/// test does not read it (the exponent itself in alpha_u), or a Ward lobe judged by its smaller
+/// alpha.
+#[test]
+fn the_gpu_glossy_split_takes_the_lobe_below_the_threshold() {
+    let gpu = common::gpu();
+    let threshold = 0.2f32;
+    let bsdfs = [
+        (
+            r#"<bsdf type="phong"><float name="exponent" value="200"/><rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/><rgb name="specular_reflectance" value="0.3, 0.2, 0.1"/></bsdf>"#,
+            true,
+        ),
+        (r#"<bsdf type="phong"/>"#, false),
+        (
+            r#"<bsdf type="ward"><float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.08"/><rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/></bsdf>"#,
+            true,
+        ),
+        (
+            r#"<bsdf type="ward"><string name="variant" value="ward"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
+            false,
+        ),
+    ];
+    let xmls: Vec<&str> = bsdfs.iter().map(|(x, _)| *x).collect();
+    let scene = scene_with("0.6.0", &xmls).unwrap_or_else(|e| panic!("{e}"));
+    let materials: Vec<usize> = (0..bsdfs.len()).collect();
+    let (pairs, answers) = glossy_split_on_gpu(&gpu, &scene, &materials, 500, 77, threshold);
 
     let mut failures = Vec::new();
     let mut lobe_seen = [0usize; 4];
@@ -2715,10 +2735,6 @@ fn hybrid_equals_pt_through_coatings() {
 /// alpha packed where the threshold test does not read it.
 #[test]
 fn the_gpu_glossy_split_takes_the_rough_coatings_reflection() {
-    use hppm::gpu::binding::{Access, bind_buffers};
-    use hppm::gpu::shaders::ShaderFile;
-    use hppm::gpu_scene::{GpuScene, SceneResources};
-
     let gpu = common::gpu();
     let threshold = 0.2f32;
     let bsdfs = [
@@ -2732,80 +2748,7 @@ fn the_gpu_glossy_split_takes_the_rough_coatings_reflection() {
         .filter(|&i| scene.materials[i].bsdf.kind().contains("coating"))
         .collect();
     assert_eq!(coatings.len(), 3);
-    let registry = hppm::passes::Registry::builtin();
-    let gpu_scene = GpuScene::with_bsdfs(&scene, 4, 4, registry.bsdfs()).expect("layout");
-    let resources = SceneResources::for_adapter(&gpu, &gpu_scene).expect("resources");
-    let shaders = registry
-        .shader_library(gpu.has_float_atomics(), &scene, &resources.placement)
-        .expect("library");
-    let mut rng = Rng(78);
-    let mut queries: Vec<[f32; 4]> = Vec::new();
-    let mut pairs = Vec::new();
-    for &material in &coatings {
-        for _ in 0..400 {
-            let mut wi = rng.direction();
-            wi.z = wi.z.abs().max(0.05);
-            let wi = wi.normalize();
-            let mut wo = if rng.unit() < 0.5 {
-                (Vec3::new(-wi.x, -wi.y, wi.z) + 0.1 * rng.direction()).normalize()
-            } else {
-                rng.direction()
-            };
-            wo.z = wo.z.abs().max(0.01);
-            let wo = wo.normalize();
-            queries.push([wi.x, wi.y, wi.z, material as f32]);
-            queries.push([wo.x, wo.y, wo.z, threshold]);
-            pairs.push((material, wi, wo));
-        }
-    }
-    let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-    let query_buffer = gpu
-        .create_buffer_init("queries", bytemuck::cast_slice(&queries), storage)
-        .expect("queries");
-    let answer_buffer = gpu
-        .create_buffer("answers", (queries.len() * 16) as u64, storage)
-        .expect("answers");
-    let (layout, group) = bind_buffers(
-        &gpu,
-        "coating glossy split check",
-        &[
-            (Access::Read, &query_buffer),
-            (Access::ReadWrite, &answer_buffer),
-        ],
-    );
-    let file = ShaderFile {
-        path: "tests/mitsuba06_bsdfs_glossy_kernel.wgsl",
-        source: GLOSSY_KERNEL,
-    };
-    if let Some(dir) = std::env::var_os("HPPM_SHADER_DIR") {
-        let path = std::path::Path::new(&dir).join(file.path);
-        std::fs::create_dir_all(path.parent().expect("a folder")).expect("the shader folder");
-        std::fs::write(&path, GLOSSY_KERNEL).expect("the glossy kernel");
-    }
-    let pipeline = shaders
-        .compute_pipeline_with(
-            &gpu,
-            &file,
-            "main",
-            &[&resources.layout, &layout],
-            &["GLOSSY"],
-        )
-        .expect("glossy kernel");
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &resources.bind_group, &[]);
-        pass.set_bind_group(1, &group, &[]);
-        pass.dispatch_workgroups((pairs.len() as u32).div_ceil(64), 1, 1);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    gpu.check_errors().expect("kernel");
-    let answers: Vec<[f32; 4]> = gpu
-        .read_pod(&answer_buffer, queries.len())
-        .expect("readback");
+    let (pairs, answers) = glossy_split_on_gpu(&gpu, &scene, &coatings, 400, 78, threshold);
 
     let mut failures = Vec::new();
     let mut lobe_seen = 0;

@@ -54,6 +54,14 @@ pub struct PyRenderer {
     scene_spp: Option<u32>,
 }
 
+/// The scene a call was given, loaded where it is a file.
+fn loaded(py: Python<'_>, scene: SceneArg<'_>) -> PyResult<std::sync::Arc<hppm::scene::Scene>> {
+    Ok(match scene {
+        SceneArg::Loaded(s) => s.scene.clone(),
+        SceneArg::File(path) => crate::load_scene(py, path, None)?.scene,
+    })
+}
+
 /// Builds a renderer of `scene` through `graph` on the process's device.
 fn build(
     py: Python<'_>,
@@ -63,10 +71,7 @@ fn build(
     seed: u64,
 ) -> PyResult<PyRenderer> {
     let registry = Registry::builtin();
-    let scene = match scene {
-        SceneArg::Loaded(s) => s.scene.clone(),
-        SceneArg::File(path) => crate::load_scene(py, path, None)?.scene,
-    };
+    let scene = loaded(py, scene)?;
     let graph = match graph {
         GraphArg::Loaded(g) => g.instance(&registry)?,
         GraphArg::NameOrFile(path) => PyGraph::load(&registry, &path)?.1,
@@ -106,10 +111,7 @@ fn build_auto(
     seed: u64,
 ) -> PyResult<(PyRenderer, Budget)> {
     let registry = Registry::builtin();
-    let scene = match scene {
-        SceneArg::Loaded(s) => s.scene.clone(),
-        SceneArg::File(path) => crate::load_scene(py, path, None)?.scene,
-    };
+    let scene = loaded(py, scene)?;
     let budget = budget.or_scene_spp(scene.spp_hint);
     budget.check_named(keyword).map_err(to_py)?;
     let (width, height) = size.unwrap_or((scene.camera.width, scene.camera.height));

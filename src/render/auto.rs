@@ -20,14 +20,17 @@ use crate::render::{Budget, ErrorReport, Renderer};
 /// The name that asks for the choice, where a graph is named.
 pub const AUTO: &str = "auto";
 
-/// The bundled graphs `auto` chooses among: path tracing, the hybrid (the default before
-/// `auto`) and the hybrid with probabilistic PPM at the first diffuse vertex.
-pub const CANDIDATES: &[&str] = &["pt", "hybrid", "hybrid_pppm"];
+/// The bundled graphs `auto` chooses among, in the order they are piloted: the hybrid (the
+/// default before `auto`, so that where a time budget's share for pilots is spent on the first
+/// one, what renders is what rendered before), path tracing, and the hybrid with probabilistic
+/// PPM at the first diffuse vertex.
+pub const CANDIDATES: &[&str] = &["hybrid", "pt", "hybrid_pppm"];
 
 /// The candidate rendered when none can be judged (every estimate missing).
 pub const FALLBACK: &str = "hybrid";
 
-/// The share of a time budget the pilots take together, their preparation included.
+/// The share of a time budget the pilots take together, their preparation and shader
+/// compilation included: once it is spent, the candidates not yet piloted are left out.
 pub const PILOT_SHARE: f64 = 0.1;
 
 /// Least iterations of a pilot: two halves of four, as a target error needs before it may end a
@@ -130,7 +133,7 @@ pub fn predicted_error(e: &ErrorReport, seconds: f64, horizon: f64) -> f64 {
 }
 
 /// How long each pilot renders: with a time budget, its share of [`PILOT_SHARE`] of it less its
-/// own preparation; otherwise [`MIN_PILOT_ITERATIONS`] or a tenth of the iterations the budget
+/// own preparation, and no more than that share has left; otherwise [`MIN_PILOT_ITERATIONS`] or a tenth of the iterations the budget
 /// counts, whichever is more. Never past what the budget allows.
 #[derive(Debug, Clone, Copy)]
 struct PilotLength {
@@ -138,15 +141,21 @@ struct PilotLength {
     iterations: u64,
 }
 
-fn pilot_length(budget: Budget, renderer: &Renderer<'_>, prepare_seconds: f64) -> PilotLength {
+fn pilot_length(
+    budget: Budget,
+    renderer: &Renderer<'_>,
+    prepare_seconds: f64,
+    share_left: Option<f64>,
+) -> PilotLength {
     let total = renderer.total_iterations(budget);
     let counted = total.map_or(0, |t| (t as f64 * PILOT_SHARE).ceil() as u64);
     let iterations = MIN_PILOT_ITERATIONS
         .max(counted)
         .min(total.unwrap_or(u64::MAX));
-    let seconds = budget
-        .seconds
-        .map(|s| (s * PILOT_SHARE / CANDIDATES.len() as f64 - prepare_seconds).max(0.0));
+    let seconds = budget.seconds.map(|s| {
+        let own = s * PILOT_SHARE / CANDIDATES.len() as f64 - prepare_seconds;
+        own.min(share_left.unwrap_or(own)).max(0.0)
+    });
     PilotLength {
         seconds,
         iterations,
@@ -251,6 +260,13 @@ pub fn choose<'a, X>(
     let mut fallback: Option<(&'static str, Renderer<'a>, X)> = None;
     let mut first_error = None;
     for &graph in CANDIDATES {
+        let spent = start.elapsed().as_secs_f64();
+        if best.is_some() && budget.seconds.is_some_and(|s| spent >= s * PILOT_SHARE) {
+            let why = "the pilots' share of the time budget was spent (preparing and compiling \
+                       the graphs before it)";
+            pilots.push(left_out(graph, 0.0, why.into()));
+            continue;
+        }
         let preparing = Instant::now();
         let (mut renderer, extra) = match prepare(graph) {
             Ok(prepared) => prepared,
@@ -265,6 +281,9 @@ pub fn choose<'a, X>(
             }
         };
         let prepare_seconds = preparing.elapsed().as_secs_f64();
+        let share_left = budget
+            .seconds
+            .map(|s| s * PILOT_SHARE - start.elapsed().as_secs_f64());
         if renderer.unsampled_light_warning().is_some() {
             let why = "the scene has caustics from point, spot or directional lights, which it \
                        never samples and its estimate cannot see";
@@ -277,7 +296,7 @@ pub fn choose<'a, X>(
             pilots.push(left_out(graph, prepare_seconds, why.into()));
             continue;
         }
-        let length = pilot_length(budget, &renderer, prepare_seconds);
+        let length = pilot_length(budget, &renderer, prepare_seconds, share_left);
         let (render_seconds, paced_seconds) = match run_pilot(&mut renderer, length, budget, cancel)
         {
             Ok(seconds) => seconds,
