@@ -70,7 +70,7 @@ pub struct Pilot {
     pub iterations: u64,
     /// Its estimate at the pilot's end.
     pub estimate: Option<ErrorReport>,
-    /// Its estimate carried to the horizon ([`Choice::horizon`]).
+    /// Its estimate carried to the horizon ([`ChoiceReport::horizon`]).
     pub predicted: Option<f64>,
     /// Why it cannot be chosen, where it cannot.
     pub excluded: Option<String>,
