@@ -451,22 +451,19 @@ pub fn render<'py>(
         target_error,
         adaptive,
     };
-    let mut renderer = match graph {
+    let (mut renderer, budget) = match graph {
         GraphArg::NameOrFile(path) if auto::is_auto(&path) => {
-            let (renderer, left) = build_auto(py, scene, budget, size, seed)?;
-            let mut renderer = renderer;
-            renderer.inner_mut()?.watch_error();
-            renderer.run_to(py, left, progress)?;
-            renderer
+            build_auto(py, scene, budget, size, seed)?
         }
         graph => {
-            let mut renderer = build(py, scene, graph, size, seed)?;
-            // As `hppm render`: the estimate is made as it renders (a target error needs it).
-            renderer.inner_mut()?.watch_error();
-            renderer.run(py, spp, time, photons, target_error, adaptive, progress)?;
-            renderer
+            let renderer = build(py, scene, graph, size, seed)?;
+            let budget = budget.or_scene_spp(renderer.scene_spp);
+            (renderer, budget)
         }
     };
+    // As `hppm render`: the estimate is made as it renders (a target error needs it).
+    renderer.inner_mut()?.watch_error();
+    renderer.run_to(py, budget, progress)?;
     let inner = renderer.inner_mut()?;
     let (image, estimate) = py
         .allow_threads(move || inner.image_and_error_estimate())
